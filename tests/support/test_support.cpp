@@ -1,0 +1,110 @@
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <stdexcept>
+
+#include "heatcvt/mesh.h"
+
+namespace heatcvt::test {
+
+std::string data_path(const std::string& relative) {
+  const std::filesystem::path dir(HEATCVT_DATA_DIR);
+  if (!std::filesystem::is_directory(dir)) {
+    ADD_FAILURE() << "test data directory missing: " << dir
+                  << " (expected ../shared/data beside the repository; configure with -DHEATCVT_DATA_DIR=...)";
+    throw std::runtime_error("missing test data directory " + dir.string());
+  }
+  const auto path = dir / relative;
+  if (!std::filesystem::exists(path)) {
+    ADD_FAILURE() << "test data file missing: " << path;
+    throw std::runtime_error("missing test data file " + path.string());
+  }
+  return path.string();
+}
+
+TriangleMesh icosphere(int subdivisions) {
+  const double p = (1.0 + std::sqrt(5.0)) / 2.0;
+  std::vector<Eigen::Vector3d> v = {{-1, p, 0}, {1, p, 0}, {-1, -p, 0}, {1, -p, 0}, {0, -1, p}, {0, 1, p},
+                                    {0, -1, -p}, {0, 1, -p}, {p, 0, -1}, {p, 0, 1}, {-p, 0, -1}, {-p, 0, 1}};
+  std::vector<Eigen::Vector3i> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                                    {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                                    {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                                    {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  for (auto& x : v) x.normalize();
+  for (int s = 0; s < subdivisions; ++s) {
+    std::map<std::pair<int, int>, int> mid;
+    auto midpoint = [&](int a, int b) {
+      auto key = std::minmax(a, b);
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      v.push_back((v[a] + v[b]).normalized());
+      return mid[key] = static_cast<int>(v.size()) - 1;
+    };
+    std::vector<Eigen::Vector3i> nf;
+    for (const auto& t : f) {
+      int a = midpoint(t[0], t[1]), b = midpoint(t[1], t[2]), c = midpoint(t[2], t[0]);
+      nf.push_back({t[0], a, c});
+      nf.push_back({t[1], b, a});
+      nf.push_back({t[2], c, b});
+      nf.push_back({a, b, c});
+    }
+    f = nf;
+  }
+  TriangleMesh m;
+  m.V.resize(v.size(), 3);
+  m.F.resize(f.size(), 3);
+  for (size_t i = 0; i < v.size(); ++i) m.V.row(i) = v[i];
+  for (size_t i = 0; i < f.size(); ++i) m.F.row(i) = f[i];
+  return m;
+}
+
+TriangleMesh grid(int n, double x0, double x1, double y0, double y1, bool alternate) {
+  TriangleMesh m;
+  m.V.resize((n + 1) * (n + 1), 3);
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i)
+      m.V.row(j * (n + 1) + i) << x0 + (x1 - x0) * i / n, y0 + (y1 - y0) * j / n, 0.0;
+  m.F.resize(2 * n * n, 3);
+  int f = 0;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      int a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+      if (!alternate || (i + j) % 2 == 0) {
+        m.F.row(f++) << a, b, d;
+        m.F.row(f++) << a, d, c;
+      } else {
+        m.F.row(f++) << a, b, c;
+        m.F.row(f++) << b, d, c;
+      }
+    }
+  return m;
+}
+
+TriangleMesh torus(int n, int m, double R, double r) {
+  TriangleMesh t;
+  t.V.resize(n * m, 3);
+  t.F.resize(2 * n * m, 3);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) {
+      double u = 2 * M_PI * i / n, v = 2 * M_PI * j / m;
+      t.V.row(i * m + j) << (R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v);
+    }
+  int f = 0;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) {
+      int a = i * m + j, b = ((i + 1) % n) * m + j, c = ((i + 1) % n) * m + (j + 1) % m, d = i * m + (j + 1) % m;
+      t.F.row(f++) << a, b, c;
+      t.F.row(f++) << a, c, d;
+    }
+  return t;
+}
+
+void scale_to_area(TriangleMesh& mesh, double area) {
+  mesh.V *= std::sqrt(area / surface_area(mesh.V, mesh.F));
+}
+
+}  // namespace heatcvt::test

@@ -1,0 +1,59 @@
+#include "cli_common.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <exception>
+#include <iostream>
+
+namespace heatcvt::cli {
+
+Progress::Progress(std::string label, long total, bool quiet)
+    : label_(std::move(label)), total_(total), quiet_(quiet), tty_(isatty(fileno(stderr)) != 0),
+      start_(std::chrono::steady_clock::now()), last_(start_) {}
+
+void Progress::update(long done) {
+  if (quiet_ || total_ <= 0) return;
+  const auto now = std::chrono::steady_clock::now();
+  const double since_last = std::chrono::duration<double>(now - last_).count();
+  if (tty_ ? since_last < 0.1 : since_last < 5.0) return;
+  last_ = now;
+  const double elapsed = std::chrono::duration<double>(now - start_).count();
+  const double frac = static_cast<double>(done) / static_cast<double>(total_);
+  const double eta = frac > 0 ? elapsed * (1 - frac) / frac : 0;
+  if (tty_) {
+    const int width = 30, filled = static_cast<int>(frac * width);
+    std::fprintf(stderr, "\r%s [%s%s] %ld/%ld  %.1fs, ETA %.1fs ", label_.c_str(), std::string(filled, '#').c_str(),
+                 std::string(width - filled, '.').c_str(), done, total_, elapsed, eta);
+  } else {
+    std::fprintf(stderr, "%s: %ld/%ld (%.0f%%), %.1fs elapsed, ETA %.1fs\n", label_.c_str(), done, total_, 100 * frac,
+                 elapsed, eta);
+  }
+  std::fflush(stderr);
+}
+
+void Progress::finish() {
+  if (quiet_ || finished_ || total_ <= 0) return;
+  finished_ = true;
+  const double elapsed = seconds_since(start_);
+  if (tty_) std::fprintf(stderr, "\r%s [%s] %ld/%ld  %.1fs%20s\n", label_.c_str(), std::string(30, '#').c_str(), total_, total_, elapsed, "");
+  else std::fprintf(stderr, "%s: done, %ld in %.1fs\n", label_.c_str(), total_, elapsed);
+}
+
+int run_tool(const std::string& tool, const std::function<int()>& body) {
+  try {
+    return body();
+  } catch (const std::exception& e) {
+    std::cerr << tool << ": error: " << e.what() << std::endl;
+    return 1;
+  } catch (...) {
+    std::cerr << tool << ": error: unknown failure" << std::endl;
+    return 1;
+  }
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace heatcvt::cli

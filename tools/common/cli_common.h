@@ -1,0 +1,32 @@
+#pragma once
+// Shared glue for the command-line tools: progress reporting on stderr, atomic output
+// files, and the uniform "one clear error line, non-zero exit" behaviour.
+#include <chrono>
+#include <functional>
+#include <string>
+
+namespace heatcvt::cli {
+
+/// Progress on stderr: a bar with ETA when stderr is a terminal, a line every few seconds
+/// otherwise, nothing when quiet.
+class Progress {
+ public:
+  Progress(std::string label, long total, bool quiet);
+  void update(long done);
+  void finish();
+ private:
+  std::string label_;
+  long total_;
+  bool quiet_, tty_;
+  std::chrono::steady_clock::time_point start_, last_;
+  bool finished_ = false;
+};
+
+/// Runs the body of a tool: catches every exception, prints "<tool>: error: <message>" as one
+/// line on stderr and returns 1 (2 for command-line errors from CLI11).
+int run_tool(const std::string& tool, const std::function<int()>& body);
+
+/// Seconds elapsed since `start`.
+double seconds_since(std::chrono::steady_clock::time_point start);
+
+}  // namespace heatcvt::cli
