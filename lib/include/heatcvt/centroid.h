@@ -1,0 +1,46 @@
+#pragma once
+/// \file centroid.h
+/// Heat centroids (paper §5): diffuse heat from the whole cell (area source, eq. 10–11); the
+/// hottest point is the centroid. Sub-vertex accuracy by the quadratic fit of §7.1
+/// ("Centroids on faces").
+#include <Eigen/Core>
+#include <vector>
+
+#include "heatcvt/heat_solver.h"
+#include "heatcvt/mesh.h"
+#include "heatcvt/voronoi.h"
+
+namespace heatcvt {
+
+/// Options of heat_centroids().
+struct CentroidOptions {
+  /// Implicit steps (h ← u, repeated) to mimic a larger time (Fig. 4). Default 1.
+  int steps = 1;
+  /// Refine the hottest vertex by the local quadratic fit of §7.1. Default true.
+  bool quadratic_refinement = true;
+  /// Threads (parallel over cells); 0 = all. Default 0.
+  int threads = 0;
+};
+
+/// Given heat values at the vertices (dense #V; only the neighbourhood of `hottest_vertex`
+/// is read), refines the hottest vertex to a surface point: project the one-ring (incident
+/// faces) to the tangent plane of the area-weighted normal, fit a bivariate quadratic to the
+/// heat, take its maximiser, locate it in the incident faces (closest point if outside).
+/// Falls back to the vertex itself when the fit has no interior maximum.
+SurfacePoint refine_hottest_vertex(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
+                                   const std::vector<std::vector<int>>& vertex_faces,
+                                   const Eigen::MatrixX3d& vertex_normals, const Eigen::VectorXd& heat,
+                                   int hottest_vertex);
+
+/// Heat centroid of every cell of the diagram with full solves: one area-source diffusion per
+/// cell (batched), hottest vertex among the vertices of the cell's faces, optional refinement.
+std::vector<SurfacePoint> heat_centroids(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
+                                         const HeatSolver& solver, const VoronoiDiagram& diagram,
+                                         const CentroidOptions& options = {});
+
+/// Heat centroid of an arbitrary set of whole faces (area source on them), e.g. the polygons of
+/// the Fig. 4 experiment. The hottest vertex is searched over all vertices.
+SurfacePoint heat_centroid_of_faces(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const HeatSolver& solver,
+                                    const std::vector<int>& faces, const CentroidOptions& options = {});
+
+}  // namespace heatcvt

@@ -1,0 +1,702 @@
+// Heat Voronoi diagrams (paper §4): labels, tie-break of eq. 19, exact cutting along the
+// bisectors of eq. 20, and the bookkeeping of the refined mesh.
+//
+// Inside one original face every heat function u_s is linear (vertex values interpolated with
+// barycentric coordinates), so the part of a cell inside a face is the convex region where u_s
+// is the largest. We obtain it by clipping the face with the half-planes u_s − u_r ≥ 0 (the
+// bisector lines of eq. 20); this yields exactly the pieces of the recursive triangle/quad cut
+// of Fig. 2 and terminates by construction. Points on original edges are computed only from the
+// edge's own data (a 1D upper envelope walked in a canonical orientation), so both faces of an
+// edge produce bit-identical points that are welded into one refined vertex: the refined mesh is
+// conforming and the cell boundaries form polylines.
+#include "heatcvt/voronoi.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numeric>
+#include <string>
+
+#include "heatcvt/errors.h"
+#include "heatcvt/parallel.h"
+
+namespace heatcvt {
+
+// ---------------------------------------------------------------------------------------------
+// Heat fields
+// ---------------------------------------------------------------------------------------------
+
+namespace {
+
+struct SiteHeat {
+  int site;
+  double heat;
+};
+
+// Sorts by decreasing heat, ties by increasing site index, and truncates to `keep`.
+void keep_hottest(std::vector<SiteHeat>& row, int keep) {
+  std::sort(row.begin(), row.end(), [](const SiteHeat& x, const SiteHeat& y) {
+    if (x.heat != y.heat) return x.heat > y.heat;
+    return x.site < y.site;
+  });
+  if (static_cast<int>(row.size()) > keep) row.resize(keep);
+}
+
+}  // namespace
+
+HeatField heat_field_from_dense(const Eigen::MatrixXd& U, int keep) {
+  if (keep < 1) throw InvalidInputError("heat_field_from_dense: keep must be >= 1, got " + std::to_string(keep));
+  if (!U.allFinite()) throw InvalidInputError("heat_field_from_dense: the heat matrix has NaN or infinite entries");
+  HeatField field;
+  field.num_sites = static_cast<int>(U.cols());
+  const int n = static_cast<int>(U.rows());
+  field.offsets.assign(n + 1, 0);
+  std::vector<SiteHeat> row;
+  for (int v = 0; v < n; ++v) {
+    row.clear();
+    for (int s = 0; s < U.cols(); ++s) row.push_back({s, U(v, s)});
+    keep_hottest(row, keep);
+    for (const SiteHeat& e : row) {
+      field.site.push_back(e.site);
+      field.heat.push_back(e.heat);
+    }
+    field.offsets[v + 1] = static_cast<int>(field.site.size());
+  }
+  return field;
+}
+
+HeatField heat_field_from_sparse(int num_vertices, const std::vector<std::vector<int>>& indices,
+                                 const std::vector<std::vector<double>>& values, int keep) {
+  if (keep < 1) throw InvalidInputError("heat_field_from_sparse: keep must be >= 1, got " + std::to_string(keep));
+  if (indices.size() != values.size())
+    throw InvalidInputError("heat_field_from_sparse: indices and values have different numbers of sites");
+  std::vector<std::vector<SiteHeat>> rows(std::max(num_vertices, 0));
+  for (size_t s = 0; s < indices.size(); ++s) {
+    if (indices[s].size() != values[s].size())
+      throw InvalidInputError("heat_field_from_sparse: site " + std::to_string(s) +
+                              " has different numbers of indices and values");
+    for (size_t k = 0; k < indices[s].size(); ++k) {
+      const int v = indices[s][k];
+      if (v < 0 || v >= num_vertices)
+        throw InvalidInputError("heat_field_from_sparse: site " + std::to_string(s) + " has vertex index " +
+                                std::to_string(v) + " out of range [0, " + std::to_string(num_vertices) + ")");
+      if (!std::isfinite(values[s][k]))
+        throw InvalidInputError("heat_field_from_sparse: site " + std::to_string(s) + " has a non-finite value");
+      rows[v].push_back({static_cast<int>(s), values[s][k]});
+    }
+  }
+  HeatField field;
+  field.num_sites = static_cast<int>(indices.size());
+  field.offsets.assign(rows.size() + 1, 0);
+  for (size_t v = 0; v < rows.size(); ++v) {
+    keep_hottest(rows[v], keep);
+    for (const SiteHeat& e : rows[v]) {
+      field.site.push_back(e.site);
+      field.heat.push_back(e.heat);
+    }
+    field.offsets[v + 1] = static_cast<int>(field.site.size());
+  }
+  return field;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Per-face tessellation
+// ---------------------------------------------------------------------------------------------
+
+namespace {
+
+double field_value(const HeatField& field, int v, int s) {
+  for (int k = field.offsets[v]; k < field.offsets[v + 1]; ++k)
+    if (field.site[k] == s) return field.heat[k];
+  return 0.0;
+}
+
+// A switch point of the upper envelope along the canonical edge a → b (a < b): at parameter
+// t the hottest site changes between p and q (p < q). Position (1−t)·V_a + t·V_b.
+struct EdgePoint {
+  double t;
+  int p, q;
+};
+
+// 1D upper envelope of the sites known at a or b, walked from a to b. Deterministic function
+// of (a, b, field) only, so both faces of the edge obtain identical points.
+std::vector<EdgePoint> edge_switch_points(const HeatField& field, int a, int b) {
+  std::vector<int> sites;
+  for (int k = field.offsets[a]; k < field.offsets[a + 1]; ++k) sites.push_back(field.site[k]);
+  for (int k = field.offsets[b]; k < field.offsets[b + 1]; ++k) sites.push_back(field.site[k]);
+  std::sort(sites.begin(), sites.end());
+  sites.erase(std::unique(sites.begin(), sites.end()), sites.end());
+  std::vector<EdgePoint> out;
+  if (sites.size() < 2) return out;
+  const int m = static_cast<int>(sites.size());
+  std::vector<double> ua(m), ub(m);
+  for (int i = 0; i < m; ++i) {
+    ua[i] = field_value(field, a, sites[i]);
+    ub[i] = field_value(field, b, sites[i]);
+  }
+  // winner at t = 0: largest value, then largest slope (toward the edge interior), then index
+  int w = 0;
+  for (int i = 1; i < m; ++i) {
+    const double si = ub[i] - ua[i], sw = ub[w] - ua[w];
+    if (ua[i] > ua[w] || (ua[i] == ua[w] && si > sw)) w = i;
+  }
+  double tcur = 0.0;
+  const double merge_tol = 1e-12;
+  for (int guard = 0; guard < m; ++guard) {
+    int best = -1;
+    double best_t = std::numeric_limits<double>::infinity();
+    for (int r = 0; r < m; ++r) {
+      if (r == w) continue;
+      const double slope_gain = (ub[r] - ua[r]) - (ub[w] - ua[w]);
+      if (!(slope_gain > 0)) continue;
+      const int p = std::min(r, w), q = std::max(r, w);
+      const double da = ua[p] - ua[q], db = ub[p] - ub[q];
+      const double t = da / (da - db);
+      if (!(t > tcur) || !(t < 1.0)) continue;
+      if (t < best_t || (t == best_t && (ub[r] - ua[r]) > (ub[best] - ua[best]))) {
+        best_t = t;
+        best = r;
+      }
+    }
+    if (best < 0) break;
+    const int p = std::min(sites[best], sites[w]), q = std::max(sites[best], sites[w]);
+    if (out.empty() ? best_t > merge_tol : best_t - out.back().t > merge_tol) {
+      if (1.0 - best_t > merge_tol) out.push_back({best_t, p, q});
+    }
+    tcur = best_t;
+    w = best;
+  }
+  return out;
+}
+
+// A point of the refined mesh produced by one face.
+struct LocalPoint {
+  enum Kind { Corner, OnEdge, Interior } kind;
+  int vertex = -1;                 // Corner: original vertex
+  std::array<int, 4> key{};        // OnEdge: (a, b, p, q), a < b
+  double t = 0;                    // OnEdge: parameter from a to b
+  Eigen::Vector3d bary;            // in the parent face
+};
+
+struct FaceResult {
+  std::vector<LocalPoint> points;
+  std::vector<std::array<int, 3>> tris;
+  std::vector<int> cells;
+};
+
+// Label of corner c (eq. 19): largest heat; ties broken by the heat at the face's other two
+// corners (a perturbation toward the face interior), then by the smaller site index.
+int corner_label(const std::vector<int>& sites, const std::vector<std::array<double, 3>>& U, int c) {
+  int best = -1;
+  for (int i = 0; i < static_cast<int>(sites.size()); ++i) {
+    if (best < 0) {
+      best = i;
+      continue;
+    }
+    const double vi = U[i][c], vb = U[best][c];
+    if (vi > vb) {
+      best = i;
+    } else if (vi == vb) {
+      const double pi = U[i][(c + 1) % 3] + U[i][(c + 2) % 3];
+      const double pb = U[best][(c + 1) % 3] + U[best][(c + 2) % 3];
+      if (pi > pb) best = i;
+    }
+  }
+  return best;
+}
+
+double bary_det(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1, const Eigen::Vector3d& x2) {
+  return (x1[1] - x0[1]) * (x2[2] - x0[2]) - (x2[1] - x0[1]) * (x1[2] - x0[2]);
+}
+
+FaceResult tessellate_face(const Eigen::MatrixX3i& F, const HeatField& field, int f,
+                           const std::vector<std::vector<EdgePoint>>* edge_points_of_face, const VoronoiOptions& opt) {
+  FaceResult res;
+  const int vtx[3] = {F(f, 0), F(f, 1), F(f, 2)};
+  // candidate sites: union of the three rows
+  std::vector<int> sites;
+  for (int c = 0; c < 3; ++c)
+    for (int k = field.offsets[vtx[c]]; k < field.offsets[vtx[c] + 1]; ++k) sites.push_back(field.site[k]);
+  std::sort(sites.begin(), sites.end());
+  sites.erase(std::unique(sites.begin(), sites.end()), sites.end());
+  std::vector<std::array<double, 3>> U(sites.size());
+  for (size_t i = 0; i < sites.size(); ++i)
+    for (int c = 0; c < 3; ++c) U[i][c] = field_value(field, vtx[c], sites[i]);
+
+  auto add_corners = [&]() {
+    for (int c = 0; c < 3; ++c) {
+      LocalPoint p;
+      p.kind = LocalPoint::Corner;
+      p.vertex = vtx[c];
+      p.bary = Eigen::Vector3d::Unit(c);
+      res.points.push_back(p);
+    }
+  };
+
+  if (sites.empty()) {
+    add_corners();
+    res.tris.push_back({0, 1, 2});
+    res.cells.push_back(-1);
+    return res;
+  }
+
+  if (!opt.exact) {
+    // label of the face centroid (mean of the corner values), ties by smaller site index
+    int best = 0;
+    for (size_t i = 1; i < sites.size(); ++i)
+      if (U[i][0] + U[i][1] + U[i][2] > U[best][0] + U[best][1] + U[best][2]) best = static_cast<int>(i);
+    add_corners();
+    res.tris.push_back({0, 1, 2});
+    res.cells.push_back(sites[best]);
+    return res;
+  }
+
+  const int l0 = corner_label(sites, U, 0), l1 = corner_label(sites, U, 1), l2 = corner_label(sites, U, 2);
+  if (l0 == l1 && l1 == l2) {
+    // u_l is the largest at all three corners, hence (linear functions) on the whole face
+    add_corners();
+    res.tris.push_back({0, 1, 2});
+    res.cells.push_back(sites[l0]);
+    return res;
+  }
+
+  // Guard: keep the max_cut_depth hottest candidates.
+  std::vector<int> cand(sites.size());
+  std::iota(cand.begin(), cand.end(), 0);
+  const int limit = std::max(opt.max_cut_depth, 2);
+  if (static_cast<int>(cand.size()) > limit) {
+    auto peak = [&](int i) { return std::max({U[i][0], U[i][1], U[i][2]}); };
+    std::stable_sort(cand.begin(), cand.end(), [&](int x, int y) { return peak(x) > peak(y); });
+    cand.resize(limit);
+    std::sort(cand.begin(), cand.end());
+  }
+
+  // Canonical points: corners, then the switch points of each edge (edge k = corners k, k+1).
+  add_corners();
+  std::array<std::vector<int>, 3> edge_point_ids;  // ordered from the canonical a to b
+  for (int k = 0; k < 3; ++k) {
+    const int ca = k, cb = (k + 1) % 3;
+    const int a = std::min(vtx[ca], vtx[cb]), b = std::max(vtx[ca], vtx[cb]);
+    const int corner_a = vtx[ca] == a ? ca : cb, corner_b = corner_a == ca ? cb : ca;
+    for (const EdgePoint& e : (*edge_points_of_face)[k]) {
+      LocalPoint p;
+      p.kind = LocalPoint::OnEdge;
+      p.key = {a, b, e.p, e.q};
+      p.t = e.t;
+      p.bary = Eigen::Vector3d::Zero();
+      p.bary[corner_a] = 1.0 - e.t;
+      p.bary[corner_b] = e.t;
+      edge_point_ids[k].push_back(static_cast<int>(res.points.size()));
+      res.points.push_back(p);
+    }
+  }
+  const int num_canonical = static_cast<int>(res.points.size());
+
+  // Maps a clipped polygon vertex to a local point index (snap / weld).
+  const double weld_tol = 1e-10;
+  auto point_id = [&](const Eigen::Vector3d& x) -> int {
+    int zeros = 0, zero_c = -1;
+    for (int c = 0; c < 3; ++c)
+      if (x[c] == 0.0) {
+        ++zeros;
+        zero_c = c;
+      }
+    if (zeros >= 2) {
+      int c = 0;
+      x.maxCoeff(&c);
+      return c;
+    }
+    if (zeros == 1) {
+      // on the edge opposite corner zero_c, i.e. edge k = (zero_c + 1) % 3
+      const int k = (zero_c + 1) % 3;
+      const int ca = k, cb = (k + 1) % 3;
+      const int a = std::min(vtx[ca], vtx[cb]);
+      const int corner_a = vtx[ca] == a ? ca : cb, corner_b = corner_a == ca ? cb : ca;
+      const double t = x[corner_b] / (x[corner_a] + x[corner_b]);
+      int best = corner_a;
+      double best_d = t;
+      if (1.0 - t < best_d) {
+        best = corner_b;
+        best_d = 1.0 - t;
+      }
+      for (int id : edge_point_ids[k]) {
+        const double d = std::abs(res.points[id].t - t);
+        if (d < best_d) {
+          best = id;
+          best_d = d;
+        }
+      }
+      return best;
+    }
+    for (int i = 0; i < static_cast<int>(res.points.size()); ++i)
+      if ((res.points[i].bary - x).cwiseAbs().maxCoeff() < weld_tol) return i;
+    LocalPoint p;
+    p.kind = LocalPoint::Interior;
+    p.bary = x;
+    res.points.push_back(p);
+    return static_cast<int>(res.points.size()) - 1;
+  };
+  (void)num_canonical;
+
+  std::vector<Eigen::Vector3d> poly, next;
+  std::vector<double> g;
+  for (int s : cand) {
+    poly = {Eigen::Vector3d::Unit(0), Eigen::Vector3d::Unit(1), Eigen::Vector3d::Unit(2)};
+    for (int r : cand) {
+      if (r == s) continue;
+      const Eigen::Vector3d d(U[s][0] - U[r][0], U[s][1] - U[r][1], U[s][2] - U[r][2]);
+      g.resize(poly.size());
+      bool all_in = true, all_out = true;
+      for (size_t i = 0; i < poly.size(); ++i) {
+        g[i] = d.dot(poly[i]);
+        if (g[i] < 0) all_in = false;
+        if (g[i] >= 0) all_out = false;
+      }
+      if (all_in) continue;
+      if (all_out) {
+        poly.clear();
+        break;
+      }
+      next.clear();
+      for (size_t i = 0; i < poly.size(); ++i) {
+        const size_t j = (i + 1) % poly.size();
+        const bool in_i = g[i] >= 0, in_j = g[j] >= 0;
+        if (in_i) next.push_back(poly[i]);
+        if (in_i != in_j) {
+          const double lambda = g[i] / (g[i] - g[j]);
+          Eigen::Vector3d x = poly[i] + lambda * (poly[j] - poly[i]);
+          // exact zeros stay zero on edges of the face
+          for (int c = 0; c < 3; ++c)
+            if (poly[i][c] == 0.0 && poly[j][c] == 0.0) x[c] = 0.0;
+          next.push_back(x);
+        }
+      }
+      poly.swap(next);
+      if (poly.size() < 3) {
+        poly.clear();
+        break;
+      }
+    }
+    if (poly.size() < 3) continue;
+    std::vector<int> ids;
+    for (const Eigen::Vector3d& x : poly) {
+      const int id = point_id(x);
+      if (ids.empty() || ids.back() != id) ids.push_back(id);
+    }
+    while (ids.size() > 1 && ids.back() == ids.front()) ids.pop_back();
+    if (ids.size() < 3) continue;
+    for (size_t i = 1; i + 1 < ids.size(); ++i) {
+      if (ids[0] == ids[i] || ids[i] == ids[i + 1] || ids[0] == ids[i + 1]) continue;
+      res.tris.push_back({ids[0], ids[i], ids[i + 1]});
+      res.cells.push_back(sites[s]);
+    }
+  }
+  if (res.tris.empty()) {
+    // cannot happen for finite input (some site is the largest somewhere); keep the face whole
+    res.tris.push_back({0, 1, 2});
+    res.cells.push_back(sites[l0]);
+  }
+  return res;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Assembly and bookkeeping
+// ---------------------------------------------------------------------------------------------
+
+namespace {
+
+// Adjacency, Voronoi vertices, edges and areas of a refined mesh whose faces carry cells.
+void finish_diagram(VoronoiDiagram& d, int num_sites) {
+  const int nrv = static_cast<int>(d.V.rows()), nrf = static_cast<int>(d.F.rows());
+  d.cell_area = Eigen::VectorXd::Zero(num_sites);
+  for (int r = 0; r < nrf; ++r)
+    if (d.face_cell[r] >= 0) d.cell_area[d.face_cell[r]] += d.face_area[r];
+
+  // incident refined faces per refined vertex
+  std::vector<int> inc_off(nrv + 1, 0), inc;
+  for (int r = 0; r < nrf; ++r)
+    for (int k = 0; k < 3; ++k) ++inc_off[d.F(r, k) + 1];
+  for (int v = 0; v < nrv; ++v) inc_off[v + 1] += inc_off[v];
+  inc.resize(inc_off[nrv]);
+  {
+    std::vector<int> fill(inc_off.begin(), inc_off.end() - 1);
+    for (int r = 0; r < nrf; ++r)
+      for (int k = 0; k < 3; ++k) inc[fill[d.F(r, k)]++] = r;
+  }
+  d.voronoi_vertices.clear();
+  std::vector<char> is_vvertex(nrv, 0);
+  for (int v = 0; v < nrv; ++v) {
+    std::vector<int> cells;
+    for (int i = inc_off[v]; i < inc_off[v + 1]; ++i)
+      if (d.face_cell[inc[i]] >= 0) cells.push_back(d.face_cell[inc[i]]);
+    std::sort(cells.begin(), cells.end());
+    cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+    if (cells.size() < 3) continue;
+    is_vvertex[v] = 1;
+    VoronoiVertex vv;
+    vv.position = d.V.row(v).transpose();
+    const int r = inc[inc_off[v]];
+    int k = 0;
+    while (d.F(r, k) != v) ++k;
+    vv.location.face = d.face_parent[r];
+    vv.location.bary = d.face_bary.row(3 * r + k).transpose();
+    vv.cells = std::move(cells);
+    d.voronoi_vertices.push_back(std::move(vv));
+  }
+
+  // refined edges: (min, max, face)
+  std::vector<std::array<int, 3>> half;
+  half.reserve(3 * nrf);
+  for (int r = 0; r < nrf; ++r)
+    for (int k = 0; k < 3; ++k) {
+      const int a = d.F(r, k), b = d.F(r, (k + 1) % 3);
+      half.push_back({std::min(a, b), std::max(a, b), r});
+    }
+  std::sort(half.begin(), half.end());
+  d.cell_adjacency.assign(num_sites, {});
+  std::map<std::pair<int, int>, std::vector<std::pair<int, int>>> separating;  // (cell a, cell b) → edges
+  for (size_t i = 0; i < half.size();) {
+    size_t j = i;
+    while (j < half.size() && half[j][0] == half[i][0] && half[j][1] == half[i][1]) ++j;
+    std::vector<int> cells;
+    for (size_t k = i; k < j; ++k)
+      if (d.face_cell[half[k][2]] >= 0) cells.push_back(d.face_cell[half[k][2]]);
+    std::sort(cells.begin(), cells.end());
+    cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+    for (size_t x = 0; x < cells.size(); ++x)
+      for (size_t y = x + 1; y < cells.size(); ++y) {
+        d.cell_adjacency[cells[x]].push_back(cells[y]);
+        d.cell_adjacency[cells[y]].push_back(cells[x]);
+        separating[{cells[x], cells[y]}].push_back({half[i][0], half[i][1]});
+      }
+    i = j;
+  }
+  for (auto& adj : d.cell_adjacency) {
+    std::sort(adj.begin(), adj.end());
+    adj.erase(std::unique(adj.begin(), adj.end()), adj.end());
+  }
+
+  // chain the separating edges of each pair of cells into polylines
+  d.edges.clear();
+  for (auto& [pair, edges] : separating) {
+    std::map<int, std::vector<int>> graph;
+    for (auto& e : edges) {
+      graph[e.first].push_back(e.second);
+      graph[e.second].push_back(e.first);
+    }
+    for (auto& [v, nb] : graph) std::sort(nb.begin(), nb.end());
+    std::map<std::pair<int, int>, bool> used;
+    auto is_end = [&](int v) { return graph[v].size() != 2 || is_vvertex[v]; };
+    auto walk = [&](int start, int first_next) {
+      VoronoiEdge e;
+      e.cell_a = pair.first;
+      e.cell_b = pair.second;
+      e.polyline.push_back(start);
+      int prev = start, cur = first_next;
+      used[{std::min(prev, cur), std::max(prev, cur)}] = true;
+      while (true) {
+        e.polyline.push_back(cur);
+        if (cur == start || is_end(cur)) break;
+        int nxt = -1;
+        for (int w : graph[cur])
+          if (!used[{std::min(cur, w), std::max(cur, w)}]) {
+            nxt = w;
+            break;
+          }
+        if (nxt < 0) break;
+        used[{std::min(cur, nxt), std::max(cur, nxt)}] = true;
+        prev = cur;
+        cur = nxt;
+      }
+      d.edges.push_back(std::move(e));
+    };
+    for (auto& [v, nb] : graph)
+      if (is_end(v))
+        for (int w : nb)
+          if (!used[{std::min(v, w), std::max(v, w)}]) walk(v, w);
+    for (auto& [v, nb] : graph)  // closed loops
+      for (int w : nb)
+        if (!used[{std::min(v, w), std::max(v, w)}]) walk(v, w);
+  }
+}
+
+}  // namespace
+
+VoronoiDiagram tessellate(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const HeatField& field,
+                          const VoronoiOptions& options) {
+  validate_mesh(V, F, "tessellate: mesh");
+  const int nv = static_cast<int>(V.rows()), nf = static_cast<int>(F.rows());
+  if (field.num_vertices() != nv)
+    throw InvalidInputError("tessellate: the heat field has " + std::to_string(field.num_vertices()) +
+                            " vertices but the mesh has " + std::to_string(nv));
+  if (field.num_sites < 0 || static_cast<int>(field.site.size()) != field.offsets.back() ||
+      field.heat.size() != field.site.size())
+    throw InvalidInputError("tessellate: inconsistent heat field arrays");
+  for (size_t k = 0; k < field.site.size(); ++k) {
+    if (field.site[k] < 0 || field.site[k] >= field.num_sites)
+      throw InvalidInputError("tessellate: heat field site index " + std::to_string(field.site[k]) +
+                              " out of range [0, " + std::to_string(field.num_sites) + ")");
+    if (!std::isfinite(field.heat[k])) throw InvalidInputError("tessellate: heat field has a non-finite value");
+  }
+  const int threads = resolve_threads(options.threads);
+
+  std::vector<FaceResult> results(nf);
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 256)
+  for (int f = 0; f < nf; ++f) {
+    std::vector<std::vector<EdgePoint>> edge_points(3);
+    if (options.exact)
+      for (int k = 0; k < 3; ++k) {
+        const int a = F(f, k), b = F(f, (k + 1) % 3);
+        edge_points[k] = edge_switch_points(field, std::min(a, b), std::max(a, b));
+      }
+    results[f] = tessellate_face(F, field, f, &edge_points, options);
+  }
+
+  // assemble in face order (deterministic)
+  VoronoiDiagram d;
+  size_t num_tris = 0, num_new = 0;
+  for (const FaceResult& r : results) {
+    num_tris += r.tris.size();
+    for (const LocalPoint& p : r.points) num_new += p.kind != LocalPoint::Corner;
+  }
+  std::vector<Eigen::Vector3d> new_points;
+  new_points.reserve(num_new);
+  std::map<std::array<int, 4>, int> edge_ids;
+  d.F.resize(num_tris, 3);
+  d.face_cell.resize(num_tris);
+  d.face_parent.resize(num_tris);
+  d.face_bary.resize(3 * num_tris, 3);
+  d.face_area.resize(num_tris);
+  const Eigen::VectorXd parent_area = face_areas(V, F);
+  int row = 0;
+  std::vector<int> gid;
+  for (int f = 0; f < nf; ++f) {
+    const FaceResult& r = results[f];
+    gid.resize(r.points.size());
+    for (size_t i = 0; i < r.points.size(); ++i) {
+      const LocalPoint& p = r.points[i];
+      if (p.kind == LocalPoint::Corner) {
+        gid[i] = p.vertex;
+      } else if (p.kind == LocalPoint::OnEdge) {
+        auto it = edge_ids.find(p.key);
+        if (it != edge_ids.end()) {
+          gid[i] = it->second;
+        } else {
+          gid[i] = nv + static_cast<int>(new_points.size());
+          edge_ids.emplace(p.key, gid[i]);
+          new_points.push_back((1.0 - p.t) * V.row(p.key[0]).transpose() + p.t * V.row(p.key[1]).transpose());
+        }
+      } else {
+        gid[i] = nv + static_cast<int>(new_points.size());
+        new_points.push_back(p.bary[0] * V.row(F(f, 0)).transpose() + p.bary[1] * V.row(F(f, 1)).transpose() +
+                             p.bary[2] * V.row(F(f, 2)).transpose());
+      }
+    }
+    for (size_t k = 0; k < r.tris.size(); ++k, ++row) {
+      for (int c = 0; c < 3; ++c) {
+        d.F(row, c) = gid[r.tris[k][c]];
+        d.face_bary.row(3 * row + c) = r.points[r.tris[k][c]].bary.transpose();
+      }
+      d.face_cell[row] = r.cells[k];
+      d.face_parent[row] = f;
+      d.face_area[row] = parent_area[f] * bary_det(r.points[r.tris[k][0]].bary, r.points[r.tris[k][1]].bary,
+                                                   r.points[r.tris[k][2]].bary);
+    }
+  }
+  d.V.resize(nv + new_points.size(), 3);
+  d.V.topRows(nv) = V;
+  for (size_t i = 0; i < new_points.size(); ++i) d.V.row(nv + i) = new_points[i].transpose();
+
+  // components without any site
+  Eigen::VectorXi comp;
+  const int ncomp = connected_components(nv, F, comp);
+  std::vector<char> has_face(ncomp, 0), reached(ncomp, 0);
+  for (int f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) has_face[comp[F(f, k)]] = 1;
+  for (int v = 0; v < nv; ++v)
+    if (field.offsets[v + 1] > field.offsets[v]) reached[comp[v]] = 1;
+  for (int c = 0; c < ncomp; ++c)
+    if (has_face[c] && !reached[c]) d.unreached_components.push_back(c);
+
+  finish_diagram(d, field.num_sites);
+  return d;
+}
+
+VoronoiDiagram heat_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const HeatSolver& solver,
+                            const std::vector<SurfacePoint>& sites, const VoronoiOptions& options) {
+  validate_mesh(V, F, "heat_voronoi: mesh");
+  if (sites.empty()) throw InvalidInputError("heat_voronoi: no sites given");
+  if (solver.num_vertices() != V.rows())
+    throw InvalidInputError("heat_voronoi: the solver has " + std::to_string(solver.num_vertices()) +
+                            " vertices but the mesh has " + std::to_string(V.rows()));
+  if (options.keep_sites_per_vertex < 1)
+    throw InvalidInputError("heat_voronoi: keep_sites_per_vertex must be >= 1");
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(V.rows(), static_cast<Eigen::Index>(sites.size()));
+  for (size_t s = 0; s < sites.size(); ++s) {
+    const SurfacePoint& p = sites[s];
+    if (p.face < 0 || p.face >= F.rows())
+      throw InvalidInputError("heat_voronoi: site " + std::to_string(s) + " has face index " + std::to_string(p.face) +
+                              " out of range [0, " + std::to_string(F.rows()) + ")");
+    if (!p.bary.allFinite())
+      throw InvalidInputError("heat_voronoi: site " + std::to_string(s) + " has non-finite barycentric coordinates");
+    for (int k = 0; k < 3; ++k) rhs(F(p.face, k), static_cast<Eigen::Index>(s)) += p.bary[k];  // eq. 8
+  }
+  const Eigen::MatrixXd U = solver.solve(rhs);
+  return tessellate(V, F, heat_field_from_dense(U, options.keep_sites_per_vertex), options);
+}
+
+std::vector<std::vector<std::pair<int, double>>> cell_load_vectors(const VoronoiDiagram& diagram,
+                                                                    const Eigen::MatrixX3i& F) {
+  const int nc = diagram.num_cells();
+  std::vector<std::map<int, double>> acc(nc);
+  for (int r = 0; r < diagram.F.rows(); ++r) {
+    const int c = diagram.face_cell[r];
+    if (c < 0 || c >= nc) continue;
+    const int parent = diagram.face_parent[r];
+    if (parent < 0 || parent >= F.rows())
+      throw InvalidInputError("cell_load_vectors: F does not match the diagram (parent face out of range)");
+    const double A = diagram.face_area[r];
+    for (int k = 0; k < 3; ++k) {
+      const double w = diagram.face_bary(3 * r, k) + diagram.face_bary(3 * r + 1, k) + diagram.face_bary(3 * r + 2, k);
+      acc[c][F(parent, k)] += A * w / 3.0;
+    }
+  }
+  std::vector<std::vector<std::pair<int, double>>> out(nc);
+  for (int c = 0; c < nc; ++c) out[c].assign(acc[c].begin(), acc[c].end());
+  return out;
+}
+
+std::vector<std::pair<int, double>> cell_load_vector(const VoronoiDiagram& diagram, const Eigen::MatrixX3i& F,
+                                                      int cell) {
+  if (cell < 0 || cell >= diagram.num_cells())
+    throw InvalidInputError("cell_load_vector: cell " + std::to_string(cell) + " out of range [0, " +
+                            std::to_string(diagram.num_cells()) + ")");
+  std::map<int, double> acc;
+  for (int r = 0; r < diagram.F.rows(); ++r) {
+    if (diagram.face_cell[r] != cell) continue;
+    const int parent = diagram.face_parent[r];
+    if (parent < 0 || parent >= F.rows())
+      throw InvalidInputError("cell_load_vector: F does not match the diagram (parent face out of range)");
+    const double A = diagram.face_area[r];
+    for (int k = 0; k < 3; ++k) {
+      const double w = diagram.face_bary(3 * r, k) + diagram.face_bary(3 * r + 1, k) + diagram.face_bary(3 * r + 2, k);
+      acc[F(parent, k)] += A * w / 3.0;
+    }
+  }
+  return {acc.begin(), acc.end()};
+}
+
+std::vector<std::vector<int>> cell_faces(const VoronoiDiagram& diagram) {
+  std::vector<std::vector<int>> out(diagram.num_cells());
+  for (int r = 0; r < diagram.F.rows(); ++r) {
+    const int c = diagram.face_cell[r];
+    if (c >= 0 && c < diagram.num_cells()) out[c].push_back(r);
+  }
+  return out;
+}
+
+}  // namespace heatcvt

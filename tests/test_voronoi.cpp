@@ -1,0 +1,296 @@
+// Heat Voronoi diagrams (paper §4): bookkeeping of the exact tessellation, conformity of the
+// refined mesh, unreached components, and the bisector convergence of Fig. 3 (plane and sphere).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <random>
+#include <set>
+
+#include "heatcvt/errors.h"
+#include "heatcvt/heat_solver.h"
+#include "heatcvt/laplacian.h"
+#include "heatcvt/mesh_io.h"
+#include "heatcvt/shapes.h"
+#include "heatcvt/voronoi.h"
+#include "test_support.h"
+
+using namespace heatcvt;
+
+namespace {
+
+// Random sites: random faces, random barycentric coordinates (seeded).
+std::vector<SurfacePoint> random_sites(const Eigen::MatrixX3i& F, int count, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> face(0, static_cast<int>(F.rows()) - 1);
+  std::uniform_real_distribution<double> unit(0.05, 1.0);
+  std::vector<SurfacePoint> sites(count);
+  for (auto& s : sites) {
+    s.face = face(rng);
+    s.bary = Eigen::Vector3d(unit(rng), unit(rng), unit(rng));
+    s.bary /= s.bary.sum();
+  }
+  return sites;
+}
+
+// Every invariant of a diagram that must hold for any input.
+void check_diagram(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const VoronoiDiagram& d, bool closed,
+                   bool all_reached = true) {
+  const int nv = static_cast<int>(V.rows());
+  const int nrf = static_cast<int>(d.F.rows());
+  ASSERT_GE(d.V.rows(), V.rows());
+  EXPECT_EQ((d.V.topRows(nv) - V).cwiseAbs().maxCoeff(), 0.0) << "original vertices keep their indices";
+  ASSERT_EQ(d.face_cell.size(), nrf);
+  ASSERT_EQ(d.face_parent.size(), nrf);
+  ASSERT_EQ(d.face_bary.rows(), 3 * nrf);
+  ASSERT_EQ(d.face_area.size(), nrf);
+  const double area = surface_area(V, F);
+
+  // every refined face has one cell; parent faces valid; bary coords consistent with positions
+  double max_pos_err = 0;
+  for (int r = 0; r < nrf; ++r) {
+    if (all_reached) {
+      ASSERT_GE(d.face_cell[r], 0);
+    }
+    ASSERT_LT(d.face_cell[r], d.num_cells());
+    ASSERT_GE(d.face_parent[r], 0);
+    ASSERT_LT(d.face_parent[r], F.rows());
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d b = d.face_bary.row(3 * r + k).transpose();
+      EXPECT_NEAR(b.sum(), 1.0, 1e-12);
+      EXPECT_GE(b.minCoeff(), -1e-12);
+      SurfacePoint p{d.face_parent[r], b};
+      max_pos_err = std::max(max_pos_err, (position(V, F, p) - d.V.row(d.F(r, k)).transpose()).norm());
+    }
+    EXPECT_GE(d.face_area[r], -1e-14 * area);
+  }
+  EXPECT_LT(max_pos_err, 1e-12);
+
+  // total refined area equals the original, per parent face too; cell areas sum to the mesh area
+  EXPECT_NEAR(d.face_area.sum(), area, 1e-9 * area);
+  Eigen::VectorXd per_parent = Eigen::VectorXd::Zero(F.rows());
+  for (int r = 0; r < nrf; ++r) per_parent[d.face_parent[r]] += d.face_area[r];
+  EXPECT_LT((per_parent - face_areas(V, F)).cwiseAbs().maxCoeff(), 1e-12 * area);
+  EXPECT_NEAR(face_areas(d.V, d.F).sum(), area, 1e-9 * area);
+  if (all_reached) {
+    EXPECT_NEAR(d.cell_area.sum(), area, 1e-9 * area);
+  }
+
+  // conforming refined mesh: same topology as the input (no cracks, no T-junctions)
+  const MeshTopology t0 = mesh_topology(F, nv), t1 = mesh_topology(d.F, static_cast<int>(d.V.rows()));
+  EXPECT_EQ(t1.boundary_edges == 0, t0.boundary_edges == 0);
+  EXPECT_EQ(t1.nonmanifold_edges, 0);
+  EXPECT_EQ(t1.inconsistent_edges, 0);
+  EXPECT_EQ(t1.euler_characteristic(), t0.euler_characteristic());
+  EXPECT_EQ(t1.components, t0.components);
+  if (closed) EXPECT_EQ(t1.boundary_edges, 0);
+
+  // load vectors integrate to the cell areas
+  const auto loads = cell_load_vectors(d, F);
+  for (int c = 0; c < d.num_cells(); ++c) {
+    double s = 0;
+    for (auto& [v, w] : loads[c]) s += w;
+    EXPECT_NEAR(s, d.cell_area[c], 1e-12 * area);
+  }
+  const auto single = cell_load_vector(d, F, 0);
+  ASSERT_EQ(single.size(), loads[0].size());
+  for (size_t i = 0; i < single.size(); ++i) {
+    EXPECT_EQ(single[i].first, loads[0][i].first);
+    EXPECT_NEAR(single[i].second, loads[0][i].second, 1e-15 * area);
+  }
+
+  // Voronoi vertices: ≥ 3 distinct cells, located in an original face
+  std::vector<std::set<int>> cells_at(d.V.rows());
+  for (int r = 0; r < nrf; ++r)
+    for (int k = 0; k < 3; ++k)
+      if (d.face_cell[r] >= 0) cells_at[d.F(r, k)].insert(d.face_cell[r]);
+  int expected_vv = 0;
+  for (auto& s : cells_at) expected_vv += s.size() >= 3;
+  EXPECT_EQ(static_cast<int>(d.voronoi_vertices.size()), expected_vv);
+  for (const VoronoiVertex& vv : d.voronoi_vertices) {
+    EXPECT_GE(vv.cells.size(), 3u);
+    EXPECT_TRUE(std::is_sorted(vv.cells.begin(), vv.cells.end()));
+    EXPECT_LT((position(V, F, vv.location) - vv.position).norm(), 1e-12);
+  }
+
+  // adjacency symmetric; every edge polyline runs along refined edges separating its two cells
+  std::map<std::pair<int, int>, std::set<int>> edge_cells;
+  for (int r = 0; r < nrf; ++r)
+    for (int k = 0; k < 3; ++k) {
+      int a = d.F(r, k), b = d.F(r, (k + 1) % 3);
+      edge_cells[{std::min(a, b), std::max(a, b)}].insert(d.face_cell[r]);
+    }
+  for (int c = 0; c < d.num_cells(); ++c)
+    for (int n : d.cell_adjacency[c]) {
+      EXPECT_NE(n, c);
+      EXPECT_TRUE(std::binary_search(d.cell_adjacency[n].begin(), d.cell_adjacency[n].end(), c));
+    }
+  size_t separating = 0;
+  for (auto& [e, cs] : edge_cells) separating += cs.size() >= 2;
+  size_t chained = 0;
+  for (const VoronoiEdge& e : d.edges) {
+    EXPECT_LT(e.cell_a, e.cell_b);
+    ASSERT_GE(e.polyline.size(), 2u);
+    EXPECT_TRUE(std::binary_search(d.cell_adjacency[e.cell_a].begin(), d.cell_adjacency[e.cell_a].end(), e.cell_b));
+    for (size_t i = 0; i + 1 < e.polyline.size(); ++i) {
+      const int a = e.polyline[i], b = e.polyline[i + 1];
+      auto it = edge_cells.find({std::min(a, b), std::max(a, b)});
+      ASSERT_NE(it, edge_cells.end()) << "polyline step is not a refined edge";
+      EXPECT_TRUE(it->second.count(e.cell_a) && it->second.count(e.cell_b));
+      ++chained;
+    }
+  }
+  EXPECT_EQ(chained, separating) << "every separating edge lies on exactly one polyline";
+}
+
+}  // namespace
+
+TEST(HeatField, DenseKeepsHottestSorted) {
+  Eigen::MatrixXd U(2, 4);
+  U << 0.1, 0.5, 0.3, 0.5, 1, 2, 3, 4;
+  HeatField h = heat_field_from_dense(U, 3);
+  ASSERT_EQ(h.num_vertices(), 2);
+  EXPECT_EQ(h.num_sites, 4);
+  EXPECT_EQ(std::vector<int>(h.site.begin(), h.site.begin() + 3), (std::vector<int>{1, 3, 2}));
+  EXPECT_EQ(std::vector<int>(h.site.begin() + 3, h.site.end()), (std::vector<int>{3, 2, 1}));
+  HeatField s = heat_field_from_sparse(2, {{0}, {0, 1}, {1}}, {{0.2}, {0.7, 0.1}, {0.4}}, 8);
+  EXPECT_EQ(s.offsets, (std::vector<int>{0, 2, 4}));
+  EXPECT_EQ(s.site, (std::vector<int>{1, 0, 2, 1}));
+  EXPECT_THROW(heat_field_from_sparse(2, {{5}}, {{1.0}}, 8), InvalidInputError);
+}
+
+TEST(HeatVoronoi, InvalidInputIsRejected) {
+  auto m = test::icosphere(1);
+  HeatSolver solver(cotan_laplacian(m.V, m.F));
+  EXPECT_THROW(heat_voronoi(m.V, m.F, solver, {}), InvalidInputError);
+  EXPECT_THROW(heat_voronoi(m.V, m.F, solver, {SurfacePoint{static_cast<int>(m.F.rows()), {1, 0, 0}}}),
+               InvalidInputError);
+  EXPECT_THROW(heat_voronoi(m.V, m.F, solver, {SurfacePoint{0, {NAN, 0, 1}}}), InvalidInputError);
+  HeatField wrong = heat_field_from_dense(Eigen::MatrixXd::Ones(3, 2));
+  EXPECT_THROW(tessellate(m.V, m.F, wrong), InvalidInputError);
+}
+
+TEST(HeatVoronoi, BookkeepingOnIcosphere) {
+  auto m = test::icosphere(3);
+  HeatSolver solver(cotan_laplacian(m.V, m.F));
+  const auto sites = random_sites(m.F, 25, 7);
+  VoronoiDiagram d = heat_voronoi(m.V, m.F, solver, sites);
+  SCOPED_TRACE("icosphere exact");
+  check_diagram(m.V, m.F, d, true);
+  EXPECT_EQ(d.num_cells(), 25);
+  EXPECT_GT(d.F.rows(), m.F.rows());
+  EXPECT_TRUE(d.unreached_components.empty());
+  for (int c = 0; c < 25; ++c) EXPECT_GT(d.cell_area[c], 0.0);
+  // a site's own face lies (mostly) in its cell: the cell containing the site position
+  // sphere: V − E + F = 2 for the cell complex (every cell a disk here)
+  size_t adj = 0;
+  for (auto& a : d.cell_adjacency) adj += a.size();
+  EXPECT_EQ(static_cast<int>(d.num_cells()) - static_cast<int>(adj / 2) + static_cast<int>(d.voronoi_vertices.size()),
+            2)
+      << "Euler characteristic of the dual (sites, adjacencies, Voronoi vertices)";
+  // deterministic: same result with one thread
+  VoronoiOptions one;
+  one.threads = 1;
+  VoronoiDiagram d1 = heat_voronoi(m.V, m.F, solver, sites, one);
+  EXPECT_EQ(d1.F, d.F);
+  EXPECT_EQ(d1.V, d.V);
+  EXPECT_EQ(d1.face_cell, d.face_cell);
+
+  // the cheap labelling: one cell per original face, areas still partition the surface
+  VoronoiOptions cheap;
+  cheap.exact = false;
+  VoronoiDiagram c = heat_voronoi(m.V, m.F, solver, sites, cheap);
+  SCOPED_TRACE("icosphere cheap");
+  EXPECT_EQ(c.F, m.F);
+  check_diagram(m.V, m.F, c, true);
+  // the cheap cells agree with the exact ones on most of the area
+  double agree = 0;
+  for (int r = 0; r < d.F.rows(); ++r)
+    if (d.face_cell[r] == c.face_cell[d.face_parent[r]]) agree += d.face_area[r];
+  EXPECT_GT(agree / surface_area(m.V, m.F), 0.9);
+}
+
+TEST(HeatVoronoi, BookkeepingOnTorusFile) {
+  TriangleMesh m = read_mesh(test::data_path("meshes/torus.obj"));
+  HeatSolver solver(cotan_laplacian(m.V, m.F));
+  const auto sites = random_sites(m.F, 40, 11);
+  VoronoiDiagram d = heat_voronoi(m.V, m.F, solver, sites);
+  check_diagram(m.V, m.F, d, mesh_topology(m.F, static_cast<int>(m.V.rows())).boundary_edges == 0);
+  EXPECT_TRUE(d.unreached_components.empty());
+}
+
+TEST(HeatVoronoi, BookkeepingOnGridWithTiesAndFewSitesPerVertex) {
+  // symmetric sites on a regular grid: many exact ties at vertices (eq. 19 tie-break)
+  auto m = test::grid(20, -1, 1, -1, 1);
+  HeatSolver solver(cotan_laplacian(m.V, m.F));
+  std::vector<SurfacePoint> sites;
+  for (int v : {0, 20, 440, 420, 220}) {  // the four corners and the centre vertex
+    for (int f = 0; f < m.F.rows(); ++f)
+      for (int k = 0; k < 3; ++k)
+        if (m.F(f, k) == v && (sites.empty() || position(m.V, m.F, sites.back()) != m.V.row(v).transpose())) {
+          SurfacePoint p;
+          p.face = f;
+          p.bary = Eigen::Vector3d::Unit(k);
+          sites.push_back(p);
+        }
+  }
+  ASSERT_EQ(sites.size(), 5u);
+  for (int keep : {2, 8}) {
+    VoronoiOptions opt;
+    opt.keep_sites_per_vertex = keep;
+    VoronoiDiagram d = heat_voronoi(m.V, m.F, solver, sites, opt);
+    SCOPED_TRACE("keep " + std::to_string(keep));
+    check_diagram(m.V, m.F, d, false);
+    // four-fold symmetry: the corner cells have equal areas (when no site is truncated away;
+    // with keep = 2 the truncation of tied sites by index breaks the symmetry)
+    if (keep >= 5)
+      for (int c = 1; c < 4; ++c) EXPECT_NEAR(d.cell_area[c], d.cell_area[0], 1e-9);
+  }
+}
+
+TEST(HeatVoronoi, UnreachedComponentIsReported) {
+  auto a = test::icosphere(2);
+  TriangleMesh m;
+  m.V.resize(2 * a.V.rows(), 3);
+  m.V << a.V, (a.V.rowwise() + Eigen::RowVector3d(5, 0, 0));
+  m.F.resize(2 * a.F.rows(), 3);
+  m.F << a.F, (a.F.array() + static_cast<int>(a.V.rows())).matrix();
+  HeatSolver solver(cotan_laplacian(m.V, m.F));
+  const auto sites = random_sites(a.F, 6, 3);  // faces of the first sphere only
+  // the dense solve gives exactly zero heat on the second component
+  VoronoiDiagram d = heat_voronoi(m.V, m.F, solver, sites);
+  // zero heat is still "known" in a dense field; a field without entries is the unreached case
+  std::vector<std::vector<int>> idx(6);
+  std::vector<std::vector<double>> val(6);
+  const Eigen::VectorXd dummy;
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(m.V.rows(), 6);
+  for (int s = 0; s < 6; ++s)
+    for (int k = 0; k < 3; ++k) rhs(m.F(sites[s].face, k), s) += sites[s].bary[k];
+  const Eigen::MatrixXd U = solver.solve(rhs);
+  for (int s = 0; s < 6; ++s)
+    for (int v = 0; v < m.V.rows(); ++v)
+      if (U(v, s) != 0.0) {
+        idx[s].push_back(v);
+        val[s].push_back(U(v, s));
+      }
+  VoronoiDiagram sparse = tessellate(m.V, m.F, heat_field_from_sparse(static_cast<int>(m.V.rows()), idx, val));
+  for (const VoronoiDiagram* dd : {&sparse}) {
+    ASSERT_EQ(dd->unreached_components.size(), 1u);
+    check_diagram(m.V, m.F, *dd, true, false);
+    double unreached_area = 0;
+    for (int r = 0; r < dd->F.rows(); ++r) {
+      const bool second = dd->face_parent[r] >= a.F.rows();
+      EXPECT_EQ(dd->face_cell[r] < 0, second);
+      if (second) unreached_area += dd->face_area[r];
+    }
+    EXPECT_NEAR(dd->cell_area.sum(), surface_area(a.V, a.F), 1e-9);
+    EXPECT_NEAR(unreached_area, surface_area(a.V, a.F), 1e-9);
+  }
+  // the dense diagram covers the first sphere with the same cells
+  double first = 0;
+  for (int r = 0; r < d.F.rows(); ++r)
+    if (d.face_parent[r] < a.F.rows()) first += d.face_area[r];
+  EXPECT_NEAR(first, surface_area(a.V, a.F), 1e-9);
+}
