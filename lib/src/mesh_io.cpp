@@ -1,0 +1,928 @@
+// Mesh readers/writers: OBJ, OFF, PLY (ascii / binary LE / binary BE), STL (ascii / binary).
+// Parsing works on the whole file held in memory; every count from a header is checked against
+// the bytes actually present before anything is allocated.
+#include "heatcvt/mesh_io.h"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <ostream>
+#include <sstream>
+#include <string_view>
+
+#include "heatcvt/atomic_file.h"
+#include "heatcvt/errors.h"
+
+namespace heatcvt {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// ------------------------------------------------------------------------------------------
+// Small utilities
+
+[[noreturn]] void fail(const std::string& path, const std::string& problem) { throw IOError(path + ": " + problem); }
+
+std::string lower(std::string s) {
+  for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+std::string extension_of(const std::string& path) { return lower(fs::path(path).extension().string()); }
+
+std::string read_whole_file(const std::string& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) fail(path, "file does not exist");
+  if (fs::is_directory(path, ec)) fail(path, "is a directory, not a file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, std::string("cannot open file: ") + std::strerror(errno));
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  if (size < 0) fail(path, "cannot determine file size");
+  in.seekg(0, std::ios::beg);
+  std::string data(static_cast<size_t>(size), '\0');
+  if (size > 0 && !in.read(data.data(), size)) fail(path, "read error");
+  return data;
+}
+
+std::string quote(std::string_view s) {
+  std::string t(s.substr(0, 40));
+  for (auto& c : t)
+    if (!std::isprint(static_cast<unsigned char>(c))) c = '?';
+  return "'" + t + (s.size() > 40 ? "...'" : "'");
+}
+
+// Parses a whole token as a double; '+' prefix allowed. Returns false if not a number.
+bool parse_double(std::string_view tok, double& out) {
+  if (!tok.empty() && tok.front() == '+') tok.remove_prefix(1);
+  if (tok.empty()) return false;
+  const auto res = std::from_chars(tok.data(), tok.data() + tok.size(), out);
+  return res.ec == std::errc() && res.ptr == tok.data() + tok.size();
+}
+
+bool parse_int(std::string_view tok, long long& out) {
+  if (!tok.empty() && tok.front() == '+') tok.remove_prefix(1);
+  if (tok.empty()) return false;
+  const auto res = std::from_chars(tok.data(), tok.data() + tok.size(), out);
+  return res.ec == std::errc() && res.ptr == tok.data() + tok.size();
+}
+
+inline bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
+
+// Splits a line into whitespace-separated tokens (reuses `tokens`).
+void split(std::string_view line, std::vector<std::string_view>& tokens) {
+  tokens.clear();
+  size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && is_space(line[i])) ++i;
+    size_t j = i;
+    while (j < line.size() && !is_space(line[j])) ++j;
+    if (j > i) tokens.push_back(line.substr(i, j - i));
+    i = j;
+  }
+}
+
+// Iterates over the lines of a buffer.
+class LineReader {
+ public:
+  explicit LineReader(std::string_view data, size_t start = 0) : data_(data), pos_(start) {}
+  bool next(std::string_view& line) {
+    if (pos_ >= data_.size()) return false;
+    const size_t end = data_.find('\n', pos_);
+    const size_t stop = end == std::string_view::npos ? data_.size() : end;
+    line = data_.substr(pos_, stop - pos_);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    pos_ = stop + 1;
+    ++line_no_;
+    return true;
+  }
+  long line_no() const { return line_no_; }
+  size_t pos() const { return std::min(pos_, data_.size()); }
+
+ private:
+  std::string_view data_;
+  size_t pos_;
+  long line_no_ = 0;
+};
+
+void push_polygon(PolygonSoup& soup, const std::vector<int>& poly) {
+  soup.polygon_index.insert(soup.polygon_index.end(), poly.begin(), poly.end());
+  soup.polygon_start.push_back(static_cast<int>(soup.polygon_index.size()));
+}
+
+constexpr long long kMaxCount = 2000000000LL;  // counts beyond int range are rejected
+
+// ------------------------------------------------------------------------------------------
+// OBJ
+
+PolygonSoup read_obj(const std::string& path, const std::string& data, MeshReadReport& rep) {
+  PolygonSoup soup;
+  std::vector<Eigen::Vector3d> verts;
+  verts.reserve(std::min<size_t>(data.size() / 24 + 16, 1u << 24));
+  LineReader lines(data);
+  std::string_view line;
+  std::vector<std::string_view> tok;
+  std::vector<int> poly;
+  const std::string where = path + ": line ";
+  while (lines.next(line)) {
+    size_t i = 0;
+    while (i < line.size() && is_space(line[i])) ++i;
+    if (i == line.size() || line[i] == '#') continue;
+    split(line, tok);
+    const std::string_view key = tok[0];
+    if (key == "v") {
+      if (tok.size() < 4) throw IOError(where + std::to_string(lines.line_no()) + ": vertex needs 3 coordinates");
+      Eigen::Vector3d p;
+      for (int k = 0; k < 3; ++k)
+        if (!parse_double(tok[k + 1], p[k]))
+          throw IOError(where + std::to_string(lines.line_no()) + ": malformed number " + quote(tok[k + 1]));
+      verts.push_back(p);
+    } else if (key == "f") {
+      poly.clear();
+      for (size_t k = 1; k < tok.size(); ++k) {
+        std::string_view t = tok[k];
+        const size_t slash = t.find('/');
+        if (slash != std::string_view::npos) t = t.substr(0, slash);
+        long long idx = 0;
+        if (!parse_int(t, idx) || idx == 0)
+          throw IOError(where + std::to_string(lines.line_no()) + ": malformed face index " + quote(tok[k]));
+        const long long nv = static_cast<long long>(verts.size());
+        const long long resolved = idx > 0 ? idx - 1 : nv + idx;
+        if (resolved < 0 || resolved >= nv)
+          throw IOError(where + std::to_string(lines.line_no()) + ": face index " + std::to_string(idx) +
+                        " out of range (" + std::to_string(nv) + " vertices defined so far)");
+        poly.push_back(static_cast<int>(resolved));
+      }
+      push_polygon(soup, poly);
+    } else if (key == "vn") {
+      rep.has_vertex_normals = true;
+    }
+    // vt, vp, l, p, g, o, s, usemtl, mtllib, ... are ignored.
+  }
+  soup.V.resize(static_cast<Eigen::Index>(verts.size()), 3);
+  for (size_t k = 0; k < verts.size(); ++k) soup.V.row(static_cast<Eigen::Index>(k)) = verts[k].transpose();
+  rep.format = "obj";
+  return soup;
+}
+
+// ------------------------------------------------------------------------------------------
+// OFF
+
+PolygonSoup read_off(const std::string& path, const std::string& data, MeshReadReport& rep) {
+  LineReader lines(data);
+  std::string_view line;
+  std::vector<std::string_view> tok;
+  // next non-empty line with '#' comments removed
+  auto next_tokens = [&]() -> bool {
+    while (lines.next(line)) {
+      const size_t hash = line.find('#');
+      if (hash != std::string_view::npos) line = line.substr(0, hash);
+      split(line, tok);
+      if (!tok.empty()) return true;
+    }
+    return false;
+  };
+  auto at = [&](const std::string& problem) {
+    // A short last line means the file was cut off.
+    const bool last = lines.pos() >= data.size();
+    return IOError(path + ": line " + std::to_string(lines.line_no()) + ": " + (last ? "truncated: " : "") + problem);
+  };
+  if (!next_tokens()) fail(path, "empty OFF file");
+  const std::string head(tok[0]);
+  size_t first_count = 1;
+  if (head.size() < 3 || head.compare(head.size() - 3, 3, "OFF") != 0) fail(path, "missing OFF header (found " + quote(head) + ")");
+  if (head.find('4') != std::string::npos || (head.size() > 3 && head[head.size() - 4] == 'n'))
+    fail(path, "unsupported OFF variant " + quote(head) + " (only 3D OFF/COFF/NOFF/STOFF)");
+  if (tok.size() > 1 && tok[1] == "BINARY") fail(path, "binary OFF is not supported");
+  std::vector<std::string_view> counts(tok.begin() + static_cast<long>(first_count), tok.end());
+  if (counts.empty()) {
+    if (!next_tokens()) fail(path, "truncated: missing vertex/face counts");
+    counts = tok;
+  }
+  long long nv = -1, nf = -1;
+  if (counts.size() < 2 || !parse_int(counts[0], nv) || !parse_int(counts[1], nf) || nv < 0 || nf < 0 || nv > kMaxCount ||
+      nf > kMaxCount)
+    throw at("malformed vertex/face counts");
+  // Every vertex line needs at least 6 bytes ("0 0 0\n"), every face line at least 2 ("0\n").
+  const long long remaining = static_cast<long long>(data.size() - lines.pos());
+  if (nv * 6 + nf * 2 > remaining + 1)
+    fail(path, "truncated: header announces " + std::to_string(nv) + " vertices and " + std::to_string(nf) +
+                   " faces but only " + std::to_string(remaining) + " bytes follow");
+  PolygonSoup soup;
+  soup.V.resize(nv, 3);
+  for (long long i = 0; i < nv; ++i) {
+    if (!next_tokens())
+      fail(path, "truncated: header announces " + std::to_string(nv) + " vertices, file ends after " + std::to_string(i));
+    if (tok.size() < 3) throw at("vertex needs 3 coordinates");
+    for (int k = 0; k < 3; ++k)
+      if (!parse_double(tok[k], soup.V(i, k))) throw at("malformed number " + quote(tok[k]));
+  }
+  soup.polygon_index.reserve(static_cast<size_t>(std::min<long long>(nf * 3, remaining)));
+  std::vector<int> poly;
+  for (long long f = 0; f < nf; ++f) {
+    if (!next_tokens())
+      fail(path, "truncated: header announces " + std::to_string(nf) + " faces, file ends after " + std::to_string(f));
+    long long n = 0;
+    if (!parse_int(tok[0], n) || n < 0) throw at("malformed face size " + quote(tok[0]));
+    if (static_cast<long long>(tok.size()) < n + 1)
+      throw at("face announces " + std::to_string(n) + " corners but lists " + std::to_string(tok.size() - 1));
+    poly.clear();
+    for (long long k = 1; k <= n; ++k) {
+      long long idx = 0;
+      if (!parse_int(tok[static_cast<size_t>(k)], idx)) throw at("malformed face index " + quote(tok[static_cast<size_t>(k)]));
+      if (idx < 0 || idx >= nv)
+        throw at("face index " + std::to_string(idx) + " out of range (" + std::to_string(nv) + " vertices)");
+      poly.push_back(static_cast<int>(idx));
+    }
+    push_polygon(soup, poly);  // trailing colour columns ignored
+  }
+  rep.format = "off";
+  if (head.find('N') != std::string::npos) rep.has_vertex_normals = true;
+  return soup;
+}
+
+// ------------------------------------------------------------------------------------------
+// PLY
+
+enum class PlyType { i8, u8, i16, u16, i32, u32, f32, f64 };
+
+bool ply_type_from_name(std::string_view n, PlyType& t) {
+  static const std::pair<const char*, PlyType> table[] = {
+      {"char", PlyType::i8},    {"int8", PlyType::i8},     {"uchar", PlyType::u8},   {"uint8", PlyType::u8},
+      {"short", PlyType::i16},  {"int16", PlyType::i16},   {"ushort", PlyType::u16}, {"uint16", PlyType::u16},
+      {"int", PlyType::i32},    {"int32", PlyType::i32},   {"uint", PlyType::u32},   {"uint32", PlyType::u32},
+      {"float", PlyType::f32},  {"float32", PlyType::f32}, {"double", PlyType::f64}, {"float64", PlyType::f64}};
+  for (const auto& e : table)
+    if (n == e.first) {
+      t = e.second;
+      return true;
+    }
+  return false;
+}
+
+size_t ply_size(PlyType t) {
+  switch (t) {
+    case PlyType::i8: case PlyType::u8: return 1;
+    case PlyType::i16: case PlyType::u16: return 2;
+    case PlyType::i32: case PlyType::u32: case PlyType::f32: return 4;
+    case PlyType::f64: return 8;
+  }
+  return 1;
+}
+
+bool ply_is_integer(PlyType t) { return t != PlyType::f32 && t != PlyType::f64; }
+
+struct PlyProperty {
+  std::string name;
+  bool is_list = false;
+  PlyType type = PlyType::f32;        // scalar type or list item type
+  PlyType count_type = PlyType::u8;   // list count type
+};
+
+struct PlyElement {
+  std::string name;
+  long long count = 0;
+  std::vector<PlyProperty> props;
+};
+
+template <typename T>
+T load_raw(const char* p, bool swap) {
+  unsigned char b[sizeof(T)];
+  std::memcpy(b, p, sizeof(T));
+  if (swap) std::reverse(b, b + sizeof(T));
+  T v;
+  std::memcpy(&v, b, sizeof(T));
+  return v;
+}
+
+double load_value(const char* p, PlyType t, bool swap) {
+  switch (t) {
+    case PlyType::i8: return static_cast<double>(static_cast<int8_t>(*p));
+    case PlyType::u8: return static_cast<double>(static_cast<uint8_t>(*p));
+    case PlyType::i16: return load_raw<int16_t>(p, swap);
+    case PlyType::u16: return load_raw<uint16_t>(p, swap);
+    case PlyType::i32: return load_raw<int32_t>(p, swap);
+    case PlyType::u32: return load_raw<uint32_t>(p, swap);
+    case PlyType::f32: return load_raw<float>(p, swap);
+    case PlyType::f64: return load_raw<double>(p, swap);
+  }
+  return 0;
+}
+
+bool host_is_little_endian() {
+  const uint16_t one = 1;
+  unsigned char b;
+  std::memcpy(&b, &one, 1);
+  return b == 1;
+}
+
+// Sequential value source over the PLY body: binary (with optional byte swap) or ascii tokens.
+class PlyBody {
+ public:
+  PlyBody(const std::string& path, std::string_view data, size_t start, bool ascii, bool swap)
+      : path_(path), data_(data), pos_(start), ascii_(ascii), swap_(swap) {}
+  size_t remaining() const { return data_.size() - std::min(pos_, data_.size()); }
+  bool ascii() const { return ascii_; }
+
+  // Reads one value; `context` describes the position for error messages.
+  template <typename Context>
+  double read(PlyType t, const Context& context) {
+    if (ascii_) {
+      while (pos_ < data_.size() && is_space(data_[pos_])) ++pos_;
+      if (pos_ >= data_.size()) fail(path_, "truncated: data ends in " + context());
+      size_t end = pos_;
+      while (end < data_.size() && !is_space(data_[end])) ++end;
+      const std::string_view tok = data_.substr(pos_, end - pos_);
+      pos_ = end;
+      double v = 0;
+      if (!parse_double(tok, v)) fail(path_, "malformed number " + quote(tok) + " in " + context());
+      if (ply_is_integer(t) && v != std::floor(v)) fail(path_, "non-integer value " + quote(tok) + " for an integer property in " + context());
+      return v;
+    }
+    const size_t n = ply_size(t);
+    if (remaining() < n) fail(path_, "truncated: binary data ends in " + context());
+    const double v = load_value(data_.data() + pos_, t, swap_);
+    pos_ += n;
+    return v;
+  }
+
+ private:
+  const std::string& path_;
+  std::string_view data_;
+  size_t pos_;
+  bool ascii_;
+  bool swap_;
+};
+
+PolygonSoup read_ply(const std::string& path, const std::string& data, MeshReadReport& rep) {
+  LineReader lines(data);
+  std::string_view line;
+  std::vector<std::string_view> tok;
+  if (!lines.next(line) || lower(std::string(line.substr(0, 3))) != "ply" ||
+      (line.size() > 3 && !is_space(line[3])))
+    fail(path, "not a PLY file (missing 'ply' magic line)");
+  std::string format;
+  std::vector<PlyElement> elements;
+  bool header_done = false;
+  while (lines.next(line)) {
+    split(line, tok);
+    if (tok.empty()) continue;
+    const auto key = tok[0];
+    auto hdr = [&](const std::string& problem) {
+      return IOError(path + ": PLY header line " + std::to_string(lines.line_no()) + ": " + problem);
+    };
+    if (key == "end_header") {
+      header_done = true;
+      break;
+    } else if (key == "format") {
+      if (tok.size() < 2) throw hdr("format line without a format");
+      format = std::string(tok[1]);
+      if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
+        throw hdr("unknown PLY format " + quote(format));
+    } else if (key == "comment" || key == "obj_info") {
+      continue;
+    } else if (key == "element") {
+      long long count = -1;
+      if (tok.size() < 3 || !parse_int(tok[2], count) || count < 0 || count > kMaxCount)
+        throw hdr("malformed element line");
+      elements.push_back({std::string(tok[1]), count, {}});
+    } else if (key == "property") {
+      if (elements.empty()) throw hdr("property before any element");
+      PlyProperty p;
+      if (tok.size() >= 2 && tok[1] == "list") {
+        if (tok.size() < 5) throw hdr("malformed list property");
+        p.is_list = true;
+        if (!ply_type_from_name(tok[2], p.count_type) || !ply_is_integer(p.count_type))
+          throw hdr("bad list count type " + quote(tok[2]));
+        if (!ply_type_from_name(tok[3], p.type)) throw hdr("unknown property type " + quote(tok[3]));
+        p.name = std::string(tok[4]);
+      } else {
+        if (tok.size() < 3) throw hdr("malformed property line");
+        if (!ply_type_from_name(tok[1], p.type)) throw hdr("unknown property type " + quote(tok[1]));
+        p.name = std::string(tok[2]);
+      }
+      elements.back().props.push_back(p);
+    } else {
+      throw hdr("unexpected keyword " + quote(key));
+    }
+  }
+  if (!header_done) fail(path, "truncated PLY header (no end_header)");
+  if (format.empty()) fail(path, "PLY header has no format line");
+  const bool ascii = format == "ascii";
+  const bool file_little = format == "binary_little_endian";
+  const bool swap = !ascii && (file_little != host_is_little_endian());
+  PlyBody body(path, data, lines.pos(), ascii, swap);
+  rep.format = "ply-" + format;
+
+  PolygonSoup soup;
+  bool have_vertices = false;
+  long long num_vertices = -1;
+  for (const auto& el : elements) {
+    if (el.name == "vertex" && num_vertices < 0) num_vertices = el.count;
+  }
+  for (const auto& el : elements) {
+    // Minimal bytes per instance, checked before any allocation.
+    size_t min_bytes = 0;
+    for (const auto& p : el.props) min_bytes += ascii ? 2 : (p.is_list ? ply_size(p.count_type) : ply_size(p.type));
+    if (el.count > 0 && min_bytes > 0 &&
+        static_cast<double>(el.count) * static_cast<double>(min_bytes) > static_cast<double>(body.remaining()) + 1)
+      fail(path, "truncated: header announces " + std::to_string(el.count) + " " + el.name + " elements but only " +
+                     std::to_string(body.remaining()) + " bytes of data remain");
+    const bool is_vertex = el.name == "vertex" && !have_vertices;
+    const bool is_face = el.name == "face";
+    int col[6] = {-1, -1, -1, -1, -1, -1};
+    int face_list = -1;
+    if (is_vertex) {
+      static const char* names[6] = {"x", "y", "z", "nx", "ny", "nz"};
+      for (int k = 0; k < 6; ++k)
+        for (size_t j = 0; j < el.props.size(); ++j)
+          if (!el.props[j].is_list && el.props[j].name == names[k]) col[k] = static_cast<int>(j);
+      if (col[0] < 0 || col[1] < 0 || col[2] < 0) fail(path, "PLY vertex element lacks x, y or z");
+      have_vertices = true;
+      soup.V.resize(el.count, 3);
+      if (col[3] >= 0 && col[4] >= 0 && col[5] >= 0) {
+        soup.N.resize(el.count, 3);
+        rep.has_vertex_normals = true;
+      }
+    }
+    if (is_face) {
+      for (size_t j = 0; j < el.props.size(); ++j)
+        if (el.props[j].is_list && (el.props[j].name == "vertex_indices" || el.props[j].name == "vertex_index"))
+          face_list = static_cast<int>(j);
+      if (face_list < 0) fail(path, "PLY face element has no vertex_indices/vertex_index list");
+      soup.polygon_index.reserve(static_cast<size_t>(std::min<long long>(el.count * 3, 1 << 26)));
+    }
+    std::vector<int> poly;
+    if (el.props.empty()) continue;  // occupies no bytes, whatever its count
+    for (long long i = 0; i < el.count; ++i) {
+      for (size_t j = 0; j < el.props.size(); ++j) {
+        const auto& p = el.props[j];
+        auto context = [&]() { return el.name + " " + std::to_string(i) + " of " + std::to_string(el.count) + " (property " + p.name + ")"; };
+        if (!p.is_list) {
+          const double v = body.read(p.type, context);
+          if (is_vertex) {
+            for (int k = 0; k < 6; ++k)
+              if (col[k] == static_cast<int>(j)) {
+                if (k < 3) soup.V(i, k) = v;
+                else if (soup.N.rows() > 0) soup.N(i, k - 3) = v;
+              }
+          }
+          continue;
+        }
+        const double cnt = body.read(p.count_type, context);
+        if (cnt < 0) fail(path, "negative list length in " + context());
+        const size_t n = static_cast<size_t>(cnt);
+        if (!ascii && n * ply_size(p.type) > body.remaining())
+          fail(path, "truncated: binary data ends in " + context());
+        if (is_face && static_cast<int>(j) == face_list) {
+          poly.clear();
+          for (size_t k = 0; k < n; ++k) {
+            const double idx = body.read(p.type, context);
+            if (idx < 0 || (num_vertices >= 0 && idx >= static_cast<double>(num_vertices)))
+              fail(path, "face " + std::to_string(i) + ": vertex index " + format_double(idx) + " out of range (" +
+                             std::to_string(std::max<long long>(num_vertices, 0)) + " vertices)");
+            poly.push_back(static_cast<int>(idx));
+          }
+          push_polygon(soup, poly);
+        } else {
+          for (size_t k = 0; k < n; ++k) body.read(p.type, context);
+        }
+      }
+      if (!ascii && body.remaining() == 0 && i + 1 < el.count && min_bytes > 0)
+        fail(path, "truncated: binary data ends after " + std::to_string(i + 1) + " of " + std::to_string(el.count) + " " +
+                       el.name + " elements");
+    }
+  }
+  if (!have_vertices) fail(path, "PLY file has no vertex element");
+  return soup;
+}
+
+// ------------------------------------------------------------------------------------------
+// STL
+
+struct Vec3Less {
+  bool operator()(const std::array<double, 3>& a, const std::array<double, 3>& b) const {
+    return a < b;  // -0.0 == 0.0 under operator<, so signed zeros weld
+  }
+};
+
+PolygonSoup read_stl(const std::string& path, const std::string& data, MeshReadReport& rep) {
+  std::vector<std::array<double, 3>> corners;
+  std::vector<int> loop_sizes;
+  bool binary = false;
+  if (data.size() >= 84) {
+    const uint32_t n = load_raw<uint32_t>(data.data() + 80, !host_is_little_endian());
+    if (84 + 50ull * n == data.size()) binary = true;
+  }
+  const bool starts_solid = data.size() >= 5 && lower(data.substr(0, 5)) == "solid";
+  if (binary) {
+    const uint32_t n = load_raw<uint32_t>(data.data() + 80, !host_is_little_endian());
+    corners.reserve(3ull * n);
+    for (uint32_t t = 0; t < n; ++t) {
+      const char* rec = data.data() + 84 + 50ull * t + 12;
+      for (int c = 0; c < 3; ++c) {
+        std::array<double, 3> p;
+        for (int k = 0; k < 3; ++k) p[k] = load_raw<float>(rec + 12 * c + 4 * k, !host_is_little_endian());
+        corners.push_back(p);
+      }
+      loop_sizes.push_back(3);
+    }
+    rep.format = "stl-binary";
+  } else if (starts_solid) {
+    LineReader lines(data);
+    std::string_view line;
+    std::vector<std::string_view> tok;
+    int in_loop = -1;
+    while (lines.next(line)) {
+      split(line, tok);
+      if (tok.empty()) continue;
+      const std::string key = lower(std::string(tok[0]));
+      auto at = [&](const std::string& problem) {
+        return IOError(path + ": line " + std::to_string(lines.line_no()) + ": " + problem);
+      };
+      if (key == "vertex") {
+        if (in_loop < 0) throw at("vertex outside 'outer loop'");
+        if (tok.size() < 4) throw at("vertex needs 3 coordinates");
+        std::array<double, 3> p;
+        for (int k = 0; k < 3; ++k)
+          if (!parse_double(tok[k + 1], p[k])) throw at("malformed number " + quote(tok[k + 1]));
+        corners.push_back(p);
+        ++in_loop;
+      } else if (key == "outer") {
+        in_loop = 0;
+      } else if (key == "endloop") {
+        if (in_loop < 0) throw at("endloop without outer loop");
+        loop_sizes.push_back(in_loop);
+        in_loop = -1;
+      }
+    }
+    if (in_loop >= 0) fail(path, "truncated: file ends inside a facet");
+    rep.format = "stl-ascii";
+  } else {
+    if (data.size() < 84) fail(path, "truncated: binary STL shorter than its 84-byte header");
+    const uint32_t n = load_raw<uint32_t>(data.data() + 80, !host_is_little_endian());
+    fail(path, "truncated or corrupt binary STL: header announces " + std::to_string(n) + " triangles (" +
+                   std::to_string(84 + 50ull * n) + " bytes) but the file has " + std::to_string(data.size()) + " bytes");
+  }
+  PolygonSoup soup;
+  std::map<std::array<double, 3>, int, Vec3Less> weld;
+  std::vector<std::array<double, 3>> unique;
+  soup.polygon_index.reserve(corners.size());
+  for (const auto& p : corners) {
+    auto [it, inserted] = weld.emplace(p, static_cast<int>(unique.size()));
+    if (inserted) unique.push_back(p);
+    else ++rep.welded_vertices;
+    soup.polygon_index.push_back(it->second);
+  }
+  int offset = 0;
+  for (int s : loop_sizes) {
+    offset += s;
+    soup.polygon_start.push_back(offset);
+  }
+  soup.V.resize(static_cast<Eigen::Index>(unique.size()), 3);
+  for (size_t i = 0; i < unique.size(); ++i)
+    for (int k = 0; k < 3; ++k) soup.V(static_cast<Eigen::Index>(i), k) = unique[i][k];
+  rep.vertices_in_file = static_cast<int>(corners.size());
+  return soup;
+}
+
+// ------------------------------------------------------------------------------------------
+// Triangulation
+
+// Ear clipping of one polygon (distinct consecutive corners) in its Newell plane; fan fallback.
+void triangulate_polygon(const Eigen::MatrixX3d& V, const std::vector<int>& poly, std::vector<Eigen::Vector3i>& out) {
+  const size_t n = poly.size();
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d a = V.row(poly[i]).transpose();
+    const Eigen::Vector3d b = V.row(poly[(i + 1) % n]).transpose();
+    normal += a.cross(b);
+  }
+  auto fan = [&](const std::vector<int>& p) {
+    for (size_t i = 1; i + 1 < p.size(); ++i) out.emplace_back(p[0], p[i], p[i + 1]);
+  };
+  if (!(normal.norm() > 0) || !std::isfinite(normal.norm())) {
+    fan(poly);
+    return;
+  }
+  normal.normalize();
+  Eigen::Vector3d u = std::abs(normal.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  u = (u - u.dot(normal) * normal).normalized();
+  const Eigen::Vector3d w = normal.cross(u);
+  std::vector<Eigen::Vector2d> q(n);
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d p = V.row(poly[i]).transpose();
+    q[i] = Eigen::Vector2d(p.dot(u), p.dot(w));
+  }
+  auto cross2 = [](const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+    return (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
+  };
+  std::vector<size_t> rem(n);
+  for (size_t i = 0; i < n; ++i) rem[i] = i;
+  while (rem.size() > 3) {
+    bool clipped = false;
+    const size_t m = rem.size();
+    for (size_t s = 0; s < m && !clipped; ++s) {
+      const size_t i = (s + 1) % m;  // start at the second corner: convex polygons give the fan
+      const size_t a = rem[(i + m - 1) % m], b = rem[i], c = rem[(i + 1) % m];
+      if (cross2(q[a], q[b], q[c]) <= 0) continue;  // reflex or flat corner
+      bool empty = true;
+      for (size_t j = 0; j < m && empty; ++j) {
+        const size_t d = rem[j];
+        if (d == a || d == b || d == c) continue;
+        if (cross2(q[a], q[b], q[d]) >= 0 && cross2(q[b], q[c], q[d]) >= 0 && cross2(q[c], q[a], q[d]) >= 0) empty = false;
+      }
+      if (!empty) continue;
+      out.emplace_back(poly[a], poly[b], poly[c]);
+      rem.erase(rem.begin() + static_cast<long>(i));
+      clipped = true;
+    }
+    if (!clipped) break;
+  }
+  std::vector<int> rest;
+  for (size_t r : rem) rest.push_back(poly[r]);
+  fan(rest);
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------------------------------
+// Public readers
+
+PolygonSoup read_polygon_soup(const std::string& path, MeshReadReport* report) {
+  MeshReadReport local;
+  MeshReadReport& rep = report ? *report : local;
+  rep = MeshReadReport();
+  const std::string ext = extension_of(path);
+  if (ext != ".obj" && ext != ".off" && ext != ".ply" && ext != ".stl")
+    fail(path, "unknown mesh format '" + ext + "' (expected .obj, .off, .ply or .stl)");
+  const std::string data = read_whole_file(path);
+  if (data.empty()) fail(path, "file is empty");
+  PolygonSoup soup;
+  if (ext == ".obj") soup = read_obj(path, data, rep);
+  else if (ext == ".off") soup = read_off(path, data, rep);
+  else if (ext == ".ply") soup = read_ply(path, data, rep);
+  else soup = read_stl(path, data, rep);
+  if (ext != ".stl") rep.vertices_in_file = static_cast<int>(soup.V.rows());
+  rep.polygons_in_file = soup.num_polygons();
+  return soup;
+}
+
+TriangleMesh read_mesh(const std::string& path, MeshReadReport* report) {
+  MeshReadReport local;
+  MeshReadReport& rep = report ? *report : local;
+  const PolygonSoup soup = read_polygon_soup(path, &rep);
+  const Eigen::MatrixX3d& V = soup.V;
+  for (Eigen::Index i = 0; i < V.rows(); ++i)
+    if (!V.row(i).allFinite())
+      throw InvalidInputError(path + ": vertex " + std::to_string(i) + " has a non-finite coordinate (" +
+                              format_double(V(i, 0)) + " " + format_double(V(i, 1)) + " " + format_double(V(i, 2)) + ")");
+  std::vector<Eigen::Vector3i> tris;
+  tris.reserve(soup.polygon_index.size() / 3 + 1);
+  std::vector<int> poly;
+  for (int f = 0; f < soup.num_polygons(); ++f) {
+    poly.clear();
+    for (int k = soup.polygon_start[f]; k < soup.polygon_start[f + 1]; ++k) {
+      const int v = soup.polygon_index[k];
+      if (poly.empty() || poly.back() != v) poly.push_back(v);
+    }
+    while (poly.size() > 1 && poly.front() == poly.back()) poly.pop_back();
+    std::vector<int> sorted = poly;
+    std::sort(sorted.begin(), sorted.end());
+    const bool repeated = std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end();
+    if (poly.size() < 3 || (poly.size() == 3 && repeated)) {
+      ++rep.degenerate_faces_dropped;
+      continue;
+    }
+    if (poly.size() == 3) {
+      tris.emplace_back(poly[0], poly[1], poly[2]);
+      continue;
+    }
+    const size_t before = tris.size();
+    triangulate_polygon(V, poly, tris);
+    ++rep.polygons_triangulated;
+    // A polygon that revisits a vertex can yield triangles with a repeated corner: drop them.
+    size_t kept = before;
+    for (size_t t = before; t < tris.size(); ++t) {
+      const auto& tri = tris[t];
+      if (tri[0] != tri[1] && tri[1] != tri[2] && tri[0] != tri[2]) tris[kept++] = tri;
+      else ++rep.degenerate_faces_dropped;
+    }
+    tris.resize(kept);
+    rep.triangles_from_polygons += static_cast<int>(kept - before);
+  }
+  if (tris.empty()) throw InvalidInputError(path + ": no faces (the file contains no usable triangles or polygons)");
+  // Drop unreferenced vertices, keeping the order of the others.
+  std::vector<int> remap(static_cast<size_t>(V.rows()), -1);
+  for (const auto& t : tris)
+    for (int k = 0; k < 3; ++k) remap[static_cast<size_t>(t[k])] = 0;
+  int next = 0;
+  for (auto& r : remap)
+    if (r == 0) r = next++;
+  rep.unreferenced_vertices_dropped = static_cast<int>(V.rows()) - next;
+  TriangleMesh mesh;
+  mesh.V.resize(next, 3);
+  for (Eigen::Index i = 0; i < V.rows(); ++i)
+    if (remap[static_cast<size_t>(i)] >= 0) mesh.V.row(remap[static_cast<size_t>(i)]) = V.row(i);
+  mesh.F.resize(static_cast<Eigen::Index>(tris.size()), 3);
+  for (size_t t = 0; t < tris.size(); ++t) {
+    for (int k = 0; k < 3; ++k) mesh.F(static_cast<Eigen::Index>(t), k) = remap[static_cast<size_t>(tris[t][k])];
+    const Eigen::Vector3d a = mesh.V.row(mesh.F(static_cast<Eigen::Index>(t), 0));
+    const Eigen::Vector3d b = mesh.V.row(mesh.F(static_cast<Eigen::Index>(t), 1));
+    const Eigen::Vector3d c = mesh.V.row(mesh.F(static_cast<Eigen::Index>(t), 2));
+    if ((b - a).cross(c - a).squaredNorm() == 0.0) ++rep.zero_area_triangles;
+  }
+  return mesh;
+}
+
+// ------------------------------------------------------------------------------------------
+// Writers
+
+namespace {
+
+void check_mesh_for_writing(const std::string& path, const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
+                            const MeshAttributes& attr) {
+  if (F.size() > 0 && (F.minCoeff() < 0 || F.maxCoeff() >= V.rows()))
+    throw InvalidInputError(path + ": cannot write, face index out of range (" + std::to_string(V.rows()) + " vertices)");
+  if (attr.face_int.size() > 0 && attr.face_int.size() != F.rows())
+    throw InvalidInputError(path + ": cannot write, face_int has " + std::to_string(attr.face_int.size()) + " entries for " +
+                            std::to_string(F.rows()) + " faces");
+  if (attr.face_color.rows() > 0 && attr.face_color.rows() != F.rows())
+    throw InvalidInputError(path + ": cannot write, face_color has " + std::to_string(attr.face_color.rows()) +
+                            " rows for " + std::to_string(F.rows()) + " faces");
+  if (attr.vertex_color.rows() > 0 && attr.vertex_color.rows() != V.rows())
+    throw InvalidInputError(path + ": cannot write, vertex_color has " + std::to_string(attr.vertex_color.rows()) +
+                            " rows for " + std::to_string(V.rows()) + " vertices");
+}
+
+unsigned char to_byte(double c) {
+  if (!std::isfinite(c)) return 0;
+  return static_cast<unsigned char>(std::lround(std::clamp(c, 0.0, 1.0) * 255.0));
+}
+
+class BinaryWriter {
+ public:
+  explicit BinaryWriter(bool big_endian) : swap_(big_endian == host_is_little_endian()) {}
+  template <typename T>
+  void put(T v) {
+    unsigned char b[sizeof(T)];
+    std::memcpy(b, &v, sizeof(T));
+    if (swap_) std::reverse(b, b + sizeof(T));
+    buf_.append(reinterpret_cast<const char*>(b), sizeof(T));
+  }
+  std::string& buffer() { return buf_; }
+
+ private:
+  bool swap_;
+  std::string buf_;
+};
+
+void write_ply(std::ostream& out, const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const MeshAttributes& attr,
+               PlyEncoding enc) {
+  const bool vcol = attr.vertex_color.rows() > 0, fcol = attr.face_color.rows() > 0, fint = attr.face_int.size() > 0;
+  std::ostringstream h;
+  h << "ply\nformat "
+    << (enc == PlyEncoding::ascii ? "ascii" : enc == PlyEncoding::binary_big_endian ? "binary_big_endian" : "binary_little_endian")
+    << " 1.0\ncomment written by heatcvt\nelement vertex " << V.rows()
+    << "\nproperty double x\nproperty double y\nproperty double z\n";
+  if (vcol) h << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  h << "element face " << F.rows() << "\nproperty list uchar int vertex_indices\n";
+  if (fint) h << "property int " << attr.face_int_name << "\n";
+  if (fcol) h << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  h << "end_header\n";
+  out << h.str();
+  if (enc == PlyEncoding::ascii) {
+    std::string s;
+    for (Eigen::Index i = 0; i < V.rows(); ++i) {
+      s = format_double(V(i, 0)) + " " + format_double(V(i, 1)) + " " + format_double(V(i, 2));
+      if (vcol)
+        for (int k = 0; k < 3; ++k) s += " " + std::to_string(to_byte(attr.vertex_color(i, k)));
+      out << s << '\n';
+    }
+    for (Eigen::Index f = 0; f < F.rows(); ++f) {
+      out << "3 " << F(f, 0) << ' ' << F(f, 1) << ' ' << F(f, 2);
+      if (fint) out << ' ' << attr.face_int[f];
+      if (fcol)
+        for (int k = 0; k < 3; ++k) out << ' ' << static_cast<int>(to_byte(attr.face_color(f, k)));
+      out << '\n';
+    }
+    return;
+  }
+  BinaryWriter w(enc == PlyEncoding::binary_big_endian);
+  for (Eigen::Index i = 0; i < V.rows(); ++i) {
+    for (int k = 0; k < 3; ++k) w.put<double>(V(i, k));
+    if (vcol)
+      for (int k = 0; k < 3; ++k) w.put<unsigned char>(to_byte(attr.vertex_color(i, k)));
+  }
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    w.put<unsigned char>(3);
+    for (int k = 0; k < 3; ++k) w.put<int32_t>(F(f, k));
+    if (fint) w.put<int32_t>(attr.face_int[f]);
+    if (fcol)
+      for (int k = 0; k < 3; ++k) w.put<unsigned char>(to_byte(attr.face_color(f, k)));
+  }
+  out.write(w.buffer().data(), static_cast<std::streamsize>(w.buffer().size()));
+}
+
+void write_obj(std::ostream& out, const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const MeshAttributes& attr) {
+  out << "# written by heatcvt\n";
+  for (Eigen::Index i = 0; i < V.rows(); ++i) {
+    out << "v " << format_double(V(i, 0)) << ' ' << format_double(V(i, 1)) << ' ' << format_double(V(i, 2));
+    if (attr.vertex_color.rows() > 0)
+      for (int k = 0; k < 3; ++k) out << ' ' << format_double(attr.vertex_color(i, k));
+    out << '\n';
+  }
+  for (Eigen::Index f = 0; f < F.rows(); ++f) out << "f " << F(f, 0) + 1 << ' ' << F(f, 1) + 1 << ' ' << F(f, 2) + 1 << '\n';
+}
+
+void write_off(std::ostream& out, const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const MeshAttributes& attr) {
+  out << "OFF\n" << V.rows() << ' ' << F.rows() << " 0\n";
+  for (Eigen::Index i = 0; i < V.rows(); ++i)
+    out << format_double(V(i, 0)) << ' ' << format_double(V(i, 1)) << ' ' << format_double(V(i, 2)) << '\n';
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    out << "3 " << F(f, 0) << ' ' << F(f, 1) << ' ' << F(f, 2);
+    if (attr.face_color.rows() > 0)
+      for (int k = 0; k < 3; ++k) out << ' ' << format_double(std::clamp(attr.face_color(f, k), 0.0, 1.0));
+    out << '\n';
+  }
+}
+
+void write_stl(std::ostream& out, const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F) {
+  BinaryWriter w(false);
+  std::string header = "binary STL written by heatcvt";
+  header.resize(80, ' ');
+  w.buffer() = header;
+  w.put<uint32_t>(static_cast<uint32_t>(F.rows()));
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const Eigen::Vector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
+    Eigen::Vector3d n = (b - a).cross(c - a);
+    if (n.norm() > 0) n.normalize();
+    for (int k = 0; k < 3; ++k) w.put<float>(static_cast<float>(n[k]));
+    for (const Eigen::Vector3d* p : {&a, &b, &c})
+      for (int k = 0; k < 3; ++k) w.put<float>(static_cast<float>((*p)[k]));
+    w.put<uint16_t>(0);
+  }
+  out.write(w.buffer().data(), static_cast<std::streamsize>(w.buffer().size()));
+}
+
+}  // namespace
+
+void write_mesh(const std::string& path, const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const MeshAttributes& attr,
+                const MeshWriteOptions& options) {
+  const std::string ext = extension_of(path);
+  if (ext != ".obj" && ext != ".off" && ext != ".ply" && ext != ".stl")
+    fail(path, "unknown mesh format '" + ext + "' (expected .obj, .off, .ply or .stl)");
+  check_mesh_for_writing(path, V, F, attr);
+  write_atomically(path, [&](std::ostream& out) {
+    if (ext == ".ply") write_ply(out, V, F, attr, options.ply_encoding);
+    else if (ext == ".obj") write_obj(out, V, F, attr);
+    else if (ext == ".off") write_off(out, V, F, attr);
+    else write_stl(out, V, F);
+  });
+}
+
+void write_polylines_obj(const std::string& path, const Eigen::MatrixX3d& points,
+                         const std::vector<std::vector<int>>& polylines) {
+  for (size_t l = 0; l < polylines.size(); ++l)
+    for (int i : polylines[l])
+      if (i < 0 || i >= points.rows())
+        throw InvalidInputError(path + ": cannot write, polyline " + std::to_string(l) + " references point " +
+                                std::to_string(i) + " of " + std::to_string(points.rows()));
+  write_atomically(path, [&](std::ostream& out) {
+    out << "# written by heatcvt\n";
+    for (Eigen::Index i = 0; i < points.rows(); ++i)
+      out << "v " << format_double(points(i, 0)) << ' ' << format_double(points(i, 1)) << ' ' << format_double(points(i, 2)) << '\n';
+    for (const auto& line : polylines) {
+      if (line.size() < 2) continue;
+      out << 'l';
+      for (int i : line) out << ' ' << i + 1;
+      out << '\n';
+    }
+  });
+}
+
+void write_points_xyz(const std::string& path, const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N) {
+  if (N.rows() > 0 && N.rows() != P.rows())
+    throw InvalidInputError(path + ": cannot write, " + std::to_string(N.rows()) + " normals for " +
+                            std::to_string(P.rows()) + " points");
+  write_atomically(path, [&](std::ostream& out) {
+    for (Eigen::Index i = 0; i < P.rows(); ++i) {
+      out << format_double(P(i, 0)) << ' ' << format_double(P(i, 1)) << ' ' << format_double(P(i, 2));
+      if (N.rows() > 0) out << ' ' << format_double(N(i, 0)) << ' ' << format_double(N(i, 1)) << ' ' << format_double(N(i, 2));
+      out << '\n';
+    }
+  });
+}
+
+}  // namespace heatcvt
