@@ -1,0 +1,191 @@
+#include "heatcvt/dual_mesh.h"
+
+#include <algorithm>
+
+#include <Eigen/Geometry>
+#include <array>
+#include <cmath>
+#include <string>
+#include <unordered_set>
+
+#include "heatcvt/errors.h"
+
+namespace heatcvt {
+
+namespace {
+
+double min_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  auto angle = [](const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& r) {
+    const Eigen::Vector3d u = q - p, v = r - p;
+    const double nu = u.norm(), nv = v.norm();
+    if (!(nu > 0) || !(nv > 0)) return 0.0;
+    return std::atan2(u.cross(v).norm(), u.dot(v));
+  };
+  return std::min({angle(a, b, c), angle(b, c, a), angle(c, a, b)});
+}
+
+struct TripleHash {
+  size_t operator()(const std::array<int, 3>& t) const {
+    return (static_cast<size_t>(t[0]) * 73856093u) ^ (static_cast<size_t>(t[1]) * 19349663u) ^
+           (static_cast<size_t>(t[2]) * 83492791u);
+  }
+};
+
+}  // namespace
+
+DualMesh dual_mesh(const VoronoiDiagram& d, const Eigen::MatrixX3d& sites, const DualMeshOptions& options) {
+  const int nc = d.num_cells();
+  if (sites.rows() < nc)
+    throw InvalidInputError("dual_mesh: " + std::to_string(sites.rows()) + " site positions for " +
+                            std::to_string(nc) + " cells");
+  const int nrv = static_cast<int>(d.V.rows()), nrf = static_cast<int>(d.F.rows());
+  DualMesh out;
+  out.V = sites.topRows(nc);
+
+  // incident refined faces per refined vertex (CSR)
+  std::vector<int> off(nrv + 1, 0), inc;
+  for (int r = 0; r < nrf; ++r)
+    for (int k = 0; k < 3; ++k) ++off[d.F(r, k) + 1];
+  for (int v = 0; v < nrv; ++v) off[v + 1] += off[v];
+  inc.resize(off[nrv]);
+  {
+    std::vector<int> fill(off.begin(), off.end() - 1);
+    for (int r = 0; r < nrf; ++r)
+      for (int k = 0; k < 3; ++k) inc[fill[d.F(r, k)]++] = r;
+  }
+
+  std::vector<std::array<int, 3>> tris;
+  std::vector<int> source;
+  std::unordered_set<std::array<int, 3>, TripleHash> seen;
+  std::vector<int> ring, cyc, distinct;
+  std::vector<std::array<int, 3>> fan;  // (face, next vertex after v, previous vertex)
+  for (int v = 0; v < nrv; ++v) {
+    const int deg = off[v + 1] - off[v];
+    if (deg < 3) continue;
+    distinct.clear();
+    for (int i = off[v]; i < off[v + 1]; ++i)
+      if (d.face_cell[inc[i]] >= 0) distinct.push_back(d.face_cell[inc[i]]);
+    std::sort(distinct.begin(), distinct.end());
+    distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+    if (distinct.size() < 3) continue;
+    ++out.voronoi_vertices;
+
+    // Order the incident faces counter-clockwise: face (v, a, b) is followed by the face (v, b, c).
+    fan.clear();
+    for (int i = off[v]; i < off[v + 1]; ++i) {
+      const int r = inc[i];
+      int k = 0;
+      while (d.F(r, k) != v) ++k;
+      fan.push_back({r, d.F(r, (k + 1) % 3), d.F(r, (k + 2) % 3)});
+    }
+    // Fan start: a face whose "a" is no other face's "b" (boundary), else the first one.
+    bool manifold = true, has_boundary = false;
+    int start = 0;
+    for (size_t i = 0; i < fan.size(); ++i) {
+      int preds = 0;
+      for (size_t j = 0; j < fan.size(); ++j)
+        if (j != i && fan[j][2] == fan[i][1]) ++preds;
+      if (preds > 1) manifold = false;
+      if (preds == 0) start = static_cast<int>(i), has_boundary = true;
+    }
+    ring.clear();
+    std::vector<char> used(fan.size(), 0);
+    int cur = start;
+    while (cur >= 0 && !used[cur]) {
+      used[cur] = 1;
+      ring.push_back(fan[cur][0]);
+      int next = -1;
+      for (size_t j = 0; j < fan.size(); ++j)
+        if (!used[j] && fan[j][1] == fan[cur][2]) {
+          next = static_cast<int>(j);
+          break;
+        }
+      cur = next;
+    }
+    const bool closed_cycle = manifold && !has_boundary && ring.size() == fan.size();
+    if (!closed_cycle) ++out.open_fans;
+    if (ring.size() != fan.size()) {
+      // non-manifold spot: append the faces the walk missed so every cell is considered
+      for (size_t j = 0; j < fan.size(); ++j)
+        if (!used[j]) ring.push_back(fan[j][0]);
+    }
+    // cyclic sequence of cells, consecutive repeats collapsed, unreached faces skipped
+    cyc.clear();
+    for (int r : ring) {
+      const int c = d.face_cell[r];
+      if (c < 0) continue;
+      if (cyc.empty() || cyc.back() != c) cyc.push_back(c);
+    }
+    if (closed_cycle)
+      while (cyc.size() > 1 && cyc.front() == cyc.back()) cyc.pop_back();
+    if (cyc.size() != distinct.size()) ++out.repeated_cell_vertices;
+    if (cyc.size() < 3) continue;
+    const int k = static_cast<int>(cyc.size());
+    if (k > 3) ++out.split_vertices;
+    int apex = 0;
+    if (k > 3 && options.best_fan) {
+      double best = -1;
+      for (int a = 0; a < k; ++a) {
+        double worst = 1e300;
+        for (int i = 1; i + 1 < k; ++i) {
+          const int x = cyc[a], y = cyc[(a + i) % k], z = cyc[(a + i + 1) % k];
+          worst = std::min(worst, min_angle(out.V.row(x), out.V.row(y), out.V.row(z)));
+        }
+        if (worst > best) best = worst, apex = a;
+      }
+    }
+    // reference normal: the refined faces around v (oriented like the input)
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+    for (int r : ring) {
+      const Eigen::Vector3d p0 = d.V.row(d.F(r, 0)), p1 = d.V.row(d.F(r, 1)), p2 = d.V.row(d.F(r, 2));
+      normal += (p1 - p0).cross(p2 - p0);
+    }
+    for (int i = 1; i + 1 < k; ++i) {
+      std::array<int, 3> t = {cyc[apex], cyc[(apex + i) % k], cyc[(apex + i + 1) % k]};
+      if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+      // canonical rotation (smallest first) keeps orientation; identical triples are emitted once
+      std::array<int, 3> key = t;
+      std::rotate(key.begin(), std::min_element(key.begin(), key.end()), key.end());
+      if (!seen.insert(key).second) {
+        ++out.duplicate_triangles;
+        continue;
+      }
+      const Eigen::Vector3d a = out.V.row(t[0]), b = out.V.row(t[1]), c = out.V.row(t[2]);
+      if ((b - a).cross(c - a).dot(normal) < 0) ++out.flipped_against_input;
+      tris.push_back(t);
+      source.push_back(v);
+    }
+  }
+  out.F.resize(static_cast<Eigen::Index>(tris.size()), 3);
+  out.face_source.resize(static_cast<Eigen::Index>(tris.size()));
+  std::vector<char> used_site(nc, 0);
+  for (size_t i = 0; i < tris.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      out.F(static_cast<Eigen::Index>(i), k) = tris[i][k];
+      used_site[tris[i][k]] = 1;
+    }
+    out.face_source[static_cast<Eigen::Index>(i)] = source[i];
+  }
+  for (int s = 0; s < nc; ++s)
+    if (!used_site[s]) out.unused_sites.push_back(s);
+  return out;
+}
+
+Eigen::VectorXd smallest_angles(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F) {
+  Eigen::VectorXd a(F.rows());
+  for (Eigen::Index f = 0; f < F.rows(); ++f) a[f] = min_angle(V.row(F(f, 0)), V.row(F(f, 1)), V.row(F(f, 2)));
+  return a;
+}
+
+TriangleQuality triangle_quality(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F) {
+  TriangleQuality q;
+  q.triangles = static_cast<int>(F.rows());
+  if (F.rows() == 0) return q;
+  const Eigen::VectorXd a = smallest_angles(V, F) * (180.0 / M_PI);
+  q.min_angle_deg = a.minCoeff();
+  q.mean_min_angle_deg = a.mean();
+  q.below_30_fraction = static_cast<double>((a.array() < 30.0).count()) / static_cast<double>(a.size());
+  return q;
+}
+
+}  // namespace heatcvt

@@ -1,0 +1,350 @@
+// Surface checks of a triangle mesh. Combinatorial checks (edges, vertices, orientation, borders,
+// genus) are computed directly so that failures can name the offending elements; the polygon-mesh
+// structure, closedness, components and self-intersections are checked with CGAL
+// (Surface_mesh + Polygon_mesh_processing).
+#include "heatcvt/validate.h"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/connected_components.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/boost/graph/helpers.h>
+
+#include <algorithm>
+#include <array>
+#include <functional>
+#include <numeric>
+#include <sstream>
+#include <string>
+#include <unordered_map>
+
+#include "heatcvt/errors.h"
+
+namespace heatcvt {
+
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using CgalMesh = CGAL::Surface_mesh<Kernel::Point_3>;
+namespace PMP = CGAL::Polygon_mesh_processing;
+
+struct UnionFind {
+  std::vector<int> p;
+  explicit UnionFind(int n) : p(n) { std::iota(p.begin(), p.end(), 0); }
+  int find(int x) {
+    while (p[x] != x) x = p[x] = p[p[x]];
+    return x;
+  }
+  void unite(int a, int b) {
+    a = find(a), b = find(b);
+    if (a != b) p[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+struct Topology {
+  int vertices = 0, edges = 0, faces = 0, components = 0, boundary_loops = 0;
+  std::vector<std::vector<int>> nonmanifold_edges, border_edges, inconsistent_edges, nonmanifold_vertices,
+      unused_vertices;
+  long n_nonmanifold_edges = 0, n_border = 0, n_inconsistent = 0, n_nonmanifold_vertices = 0, n_unused = 0;
+  std::vector<int> component_of_vertex;  // −1 for unreferenced
+  std::vector<int> chi, loops;           // per component
+};
+
+Topology analyse(const Eigen::MatrixX3i& F, int nv, int max_listed) {
+  Topology t;
+  const int nf = static_cast<int>(F.rows());
+  t.faces = nf;
+  auto list = [&](std::vector<std::vector<int>>& where, long& count, std::vector<int> item) {
+    if (static_cast<int>(where.size()) < max_listed) where.push_back(std::move(item));
+    ++count;
+  };
+  std::vector<char> used(nv, 0);
+  for (int f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) used[F(f, k)] = 1;
+  for (int v = 0; v < nv; ++v) {
+    if (used[v]) ++t.vertices;
+    else list(t.unused_vertices, t.n_unused, {v});
+  }
+  // edges: (min, max, face, +1 if stored a→b with a < b)
+  std::vector<std::array<int, 4>> half;
+  half.reserve(3 * static_cast<size_t>(nf));
+  for (int f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = F(f, k), b = F(f, (k + 1) % 3);
+      half.push_back({std::min(a, b), std::max(a, b), f, a < b ? 1 : 0});
+    }
+  std::sort(half.begin(), half.end());
+  UnionFind comps(nv), border(nv);
+  std::vector<char> on_border(nv, 0);
+  for (size_t i = 0; i < half.size();) {
+    size_t j = i;
+    while (j < half.size() && half[j][0] == half[i][0] && half[j][1] == half[i][1]) ++j;
+    ++t.edges;
+    const int a = half[i][0], b = half[i][1];
+    comps.unite(a, b);
+    const size_t count = j - i;
+    if (count > 2) list(t.nonmanifold_edges, t.n_nonmanifold_edges, {a, b});
+    if (count == 1) {
+      list(t.border_edges, t.n_border, {a, b});
+      border.unite(a, b);
+      on_border[a] = on_border[b] = 1;
+    }
+    if (count == 2 && half[i][3] == half[i + 1][3]) list(t.inconsistent_edges, t.n_inconsistent, {a, b});
+    i = j;
+  }
+  // vertex links: the opposite edges of the incident faces must form one path or cycle
+  std::vector<int> off(nv + 1, 0), link;
+  for (int f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) ++off[F(f, k) + 1];
+  for (int v = 0; v < nv; ++v) off[v + 1] += off[v];
+  link.resize(2 * static_cast<size_t>(off[nv]));
+  {
+    std::vector<int> fill(off.begin(), off.end() - 1);
+    for (int f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) {
+        const int v = F(f, k), i = fill[v]++;
+        link[2 * i] = F(f, (k + 1) % 3);
+        link[2 * i + 1] = F(f, (k + 2) % 3);
+      }
+  }
+  std::unordered_map<int, int> parent;
+  std::function<int(int)> find = [&](int x) {
+    int r = x;
+    while (parent[r] != r) r = parent[r];
+    while (parent[x] != r) {
+      const int nx = parent[x];
+      parent[x] = r;
+      x = nx;
+    }
+    return r;
+  };
+  for (int v = 0; v < nv; ++v) {
+    if (off[v + 1] == off[v]) continue;
+    parent.clear();
+    for (int i = off[v]; i < off[v + 1]; ++i)
+      for (int q = 0; q < 2; ++q) parent.emplace(link[2 * i + q], link[2 * i + q]);
+    for (int i = off[v]; i < off[v + 1]; ++i) {
+      const int a = find(link[2 * i]), b = find(link[2 * i + 1]);
+      if (a != b) parent[a] = b;
+    }
+    int nroots = 0;
+    for (auto& kv : parent) nroots += kv.first == find(kv.first);
+    if (nroots > 1) list(t.nonmanifold_vertices, t.n_nonmanifold_vertices, {v});
+  }
+  // components and boundary loops
+  t.component_of_vertex.assign(nv, -1);
+  std::unordered_map<int, int> comp_id;
+  for (int v = 0; v < nv; ++v) {
+    if (!used[v]) continue;
+    const int r = comps.find(v);
+    auto it = comp_id.find(r);
+    if (it == comp_id.end()) it = comp_id.emplace(r, static_cast<int>(comp_id.size())).first;
+    t.component_of_vertex[v] = it->second;
+  }
+  t.components = static_cast<int>(comp_id.size());
+  t.chi.assign(t.components, 0);
+  t.loops.assign(t.components, 0);
+  for (int v = 0; v < nv; ++v) {
+    if (!used[v]) continue;
+    t.chi[t.component_of_vertex[v]] += 1;
+    if (on_border[v] && border.find(v) == v) {
+      t.loops[t.component_of_vertex[v]] += 1;
+      ++t.boundary_loops;
+    }
+  }
+  for (size_t i = 0; i < half.size();) {
+    size_t j = i;
+    while (j < half.size() && half[j][0] == half[i][0] && half[j][1] == half[i][1]) ++j;
+    t.chi[t.component_of_vertex[half[i][0]]] -= 1;
+    i = j;
+  }
+  for (int f = 0; f < nf; ++f) t.chi[t.component_of_vertex[F(f, 0)]] += 1;
+  return t;
+}
+
+std::string join_items(const std::vector<std::vector<int>>& where) {
+  std::ostringstream s;
+  for (size_t i = 0; i < where.size(); ++i) {
+    s << (i ? " " : "") << '(';
+    for (size_t k = 0; k < where[i].size(); ++k) s << (k ? "," : "") << where[i][k];
+    s << ')';
+  }
+  return s.str();
+}
+
+MeshCheck make_check(const std::string& name, long failures, const std::string& what,
+                     std::vector<std::vector<int>> where) {
+  MeshCheck c;
+  c.name = name;
+  c.passed = failures == 0;
+  c.detail = c.passed ? "ok" : std::to_string(failures) + " " + what + ": " + join_items(where);
+  c.where = std::move(where);
+  return c;
+}
+
+}  // namespace
+
+bool ValidationReport::ok() const {
+  for (const auto& c : checks)
+    if (!c.ran || !c.passed) return false;
+  return !checks.empty();
+}
+
+const MeshCheck* ValidationReport::find(const std::string& name) const {
+  for (const auto& c : checks)
+    if (c.name == name) return &c;
+  return nullptr;
+}
+
+std::string ValidationReport::summary() const {
+  std::ostringstream s;
+  for (const auto& c : checks) s << (c.ran ? (c.passed ? "PASS " : "FAIL ") : "SKIP ") << c.name << ": " << c.detail << '\n';
+  s << "V=" << vertices << " E=" << edges << " F=" << faces << " components=" << components
+    << " boundary_loops=" << boundary_loops << " euler=" << euler_characteristic << " genus=" << genus << '\n';
+  return s.str();
+}
+
+int mesh_genus(const Eigen::MatrixX3i& F, int num_vertices) {
+  Topology t = analyse(F, num_vertices, 0);
+  if (t.n_nonmanifold_edges || t.n_nonmanifold_vertices || t.n_inconsistent) return -1;
+  int genus = 0;
+  for (int c = 0; c < t.components; ++c) {
+    const int twice = 2 - t.chi[c] - t.loops[c];
+    if (twice < 0 || twice % 2) return -1;
+    genus += twice / 2;
+  }
+  return genus;
+}
+
+ValidationReport validate_triangle_mesh(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
+                                        const ValidationOptions& options) {
+  const int nv = static_cast<int>(V.rows());
+  if (F.rows() == 0) throw InvalidInputError("validate_triangle_mesh: the mesh has no faces");
+  if (!V.allFinite()) throw InvalidInputError("validate_triangle_mesh: non-finite vertex coordinates");
+  if (F.minCoeff() < 0 || F.maxCoeff() >= nv)
+    throw InvalidInputError("validate_triangle_mesh: face index out of range [0, " + std::to_string(nv) + ")");
+  const int listed = std::max(0, options.max_listed);
+  ValidationReport rep;
+  Topology t = analyse(F, nv, listed);
+  rep.vertices = t.vertices;
+  rep.edges = t.edges;
+  rep.faces = t.faces;
+  rep.components = t.components;
+  rep.boundary_loops = t.boundary_loops;
+  rep.euler_characteristic = t.vertices - t.edges + t.faces;
+  const bool manifold = t.n_nonmanifold_edges == 0 && t.n_nonmanifold_vertices == 0 && t.n_inconsistent == 0;
+  if (manifold) {
+    rep.genus = 0;
+    for (int c = 0; c < t.components; ++c) {
+      const int twice = 2 - t.chi[c] - t.loops[c];
+      if (twice < 0 || twice % 2) {
+        rep.genus = -1;
+        break;
+      }
+      rep.genus += twice / 2;
+    }
+  }
+  rep.checks.push_back(make_check("manifold_edges", t.n_nonmanifold_edges, "edges with more than two faces",
+                                  t.nonmanifold_edges));
+  rep.checks.push_back(make_check("manifold_vertices", t.n_nonmanifold_vertices,
+                                  "vertices whose faces do not form one fan", t.nonmanifold_vertices));
+  rep.checks.push_back(make_check("consistent_orientation", t.n_inconsistent,
+                                  "edges traversed twice in the same direction", t.inconsistent_edges));
+  if (options.require_closed) rep.checks.push_back(make_check("closed", t.n_border, "border edges", t.border_edges));
+  rep.checks.push_back(make_check("all_vertices_used", t.n_unused, "vertices in no triangle", t.unused_vertices));
+  if (options.expected_components >= 0) {
+    MeshCheck c;
+    c.name = "components";
+    c.passed = t.components == options.expected_components;
+    c.detail = std::to_string(t.components) + " components, expected " + std::to_string(options.expected_components);
+    rep.checks.push_back(c);
+  }
+  if (options.expected_genus >= 0) {
+    MeshCheck c;
+    c.name = "genus";
+    c.ran = manifold;
+    c.passed = manifold && rep.genus == options.expected_genus;
+    c.detail = manifold ? "genus " + std::to_string(rep.genus) + " (euler " + std::to_string(rep.euler_characteristic) +
+                              ", " + std::to_string(t.components) + " components, " +
+                              std::to_string(t.boundary_loops) + " boundary loops), expected " +
+                              std::to_string(options.expected_genus)
+                        : "not computed: the mesh is not an oriented 2-manifold";
+    rep.checks.push_back(c);
+  }
+
+  // CGAL: polygon-mesh structure, closedness, components, self-intersections.
+  std::vector<int> remap(nv, -1);
+  std::vector<Kernel::Point_3> points;
+  for (int f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int v = F(f, k);
+      if (remap[v] < 0) {
+        remap[v] = static_cast<int>(points.size());
+        points.emplace_back(V(v, 0), V(v, 1), V(v, 2));
+      }
+    }
+  std::vector<int> back(points.size());
+  for (int v = 0; v < nv; ++v)
+    if (remap[v] >= 0) back[remap[v]] = v;
+  std::vector<std::vector<std::size_t>> polygons(F.rows());
+  for (int f = 0; f < F.rows(); ++f)
+    polygons[f] = {static_cast<std::size_t>(remap[F(f, 0)]), static_cast<std::size_t>(remap[F(f, 1)]),
+                   static_cast<std::size_t>(remap[F(f, 2)])};
+  MeshCheck structure;
+  structure.name = "cgal_polygon_mesh";
+  structure.passed = PMP::is_polygon_soup_a_polygon_mesh(polygons);
+  structure.detail = structure.passed ? "ok"
+                                      : "CGAL rejects the triangles as a polygon mesh (non-manifold or "
+                                        "inconsistently oriented)";
+  rep.checks.push_back(structure);
+  MeshCheck si;
+  si.name = "no_self_intersections";
+  if (!structure.passed) {
+    si.ran = false;
+    si.detail = "not run: needs a valid polygon mesh";
+  } else {
+    CgalMesh mesh;
+    PMP::polygon_soup_to_polygon_mesh(points, polygons, mesh);
+    // Faces of the Surface_mesh are created in polygon order: face index i = row i of F.
+    const bool cgal_closed = CGAL::is_closed(mesh);
+    if (options.require_closed && cgal_closed != (t.n_border == 0)) {
+      MeshCheck c;
+      c.name = "cgal_closed";
+      c.passed = false;
+      c.detail = "CGAL::is_closed disagrees with the border-edge count";
+      rep.checks.push_back(c);
+    }
+    std::vector<std::size_t> comp_of_face(num_faces(mesh));
+    auto fmap = boost::make_iterator_property_map(comp_of_face.begin(), get(boost::face_index, mesh));
+    const std::size_t ncc = PMP::connected_components(mesh, fmap);
+    if (static_cast<int>(ncc) != t.components) {
+      MeshCheck c;
+      c.name = "cgal_components";
+      c.passed = false;
+      c.detail = "CGAL finds " + std::to_string(ncc) + " components, edge graph " + std::to_string(t.components);
+      rep.checks.push_back(c);
+    }
+    if (!options.check_self_intersections) {
+      si.name.clear();  // disabled by the caller: not reported
+    } else if (!PMP::does_self_intersect<CGAL::Sequential_tag>(mesh)) {
+      si.passed = true;
+      si.detail = "ok";
+      rep.self_intersecting_pairs = 0;
+    } else {
+      std::vector<std::pair<CgalMesh::Face_index, CgalMesh::Face_index>> pairs;
+      PMP::self_intersections<CGAL::Sequential_tag>(mesh, std::back_inserter(pairs));
+      rep.self_intersecting_pairs = static_cast<long>(pairs.size());
+      si.passed = false;
+      for (const auto& [a, b] : pairs) {
+        if (static_cast<int>(si.where.size()) >= listed) break;
+        si.where.push_back({static_cast<int>(a.idx()), static_cast<int>(b.idx())});
+      }
+      si.detail = std::to_string(pairs.size()) + " intersecting face pairs: " + join_items(si.where);
+    }
+  }
+  if (!si.name.empty()) rep.checks.push_back(si);
+  return rep;
+}
+
+}  // namespace heatcvt
