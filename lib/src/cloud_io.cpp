@@ -1,0 +1,394 @@
+// Point-cloud readers (PCD through PCL, PLY through the mesh PLY parser, XYZ-like text), clean-up
+// and normalisation frames.
+#include "heatcvt/cloud_io.h"
+
+#include <pcl/PCLPointCloud2.h>
+#include <pcl/io/pcd_io.h>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <numeric>
+#include <sstream>
+#include <string_view>
+#include <vector>
+
+#include "heatcvt/errors.h"
+#include "heatcvt/mesh_io.h"
+
+namespace heatcvt {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+[[noreturn]] void fail(const std::string& path, const std::string& problem) { throw IOError(path + ": " + problem); }
+
+std::string lower(std::string s) {
+  for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+void require_readable_file(const std::string& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) fail(path, "file does not exist");
+  if (fs::is_directory(path, ec)) fail(path, "is a directory, not a file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, "cannot open file for reading");
+  if (fs::file_size(path, ec) == 0) fail(path, "file is empty");
+}
+
+bool parse_double(std::string_view tok, double& out) {
+  if (!tok.empty() && tok.front() == '+') tok.remove_prefix(1);
+  if (tok.empty()) return false;
+  const auto res = std::from_chars(tok.data(), tok.data() + tok.size(), out);
+  return res.ec == std::errc() && res.ptr == tok.data() + tok.size();
+}
+
+inline bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
+
+// ------------------------------------------------------------------------------------------
+// XYZ / PWN / TXT
+
+PointCloud read_xyz(const std::string& path, CloudReadReport& rep) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string data = ss.str();
+  std::vector<double> xyz, nrm;
+  xyz.reserve(data.size() / 8);
+  bool all_have_normals = true;
+  bool first_data_line = true;
+  long line_no = 0;
+  size_t pos = 0;
+  double vals[6];
+  while (pos < data.size()) {
+    size_t end = data.find('\n', pos);
+    if (end == std::string::npos) end = data.size();
+    std::string_view line(data.data() + pos, end - pos);
+    pos = end + 1;
+    ++line_no;
+    const size_t hash = line.find('#');
+    if (hash != std::string_view::npos) line = line.substr(0, hash);
+    int cols = 0;
+    size_t i = 0;
+    while (true) {
+      while (i < line.size() && is_space(line[i])) ++i;
+      if (i >= line.size()) break;
+      size_t j = i;
+      while (j < line.size() && !is_space(line[j])) ++j;
+      const std::string_view tok = line.substr(i, j - i);
+      double v = 0;
+      if (!parse_double(tok, v))
+        fail(path, "line " + std::to_string(line_no) + ": malformed number '" + std::string(tok.substr(0, 40)) + "'");
+      if (cols < 6) vals[cols] = v;
+      ++cols;
+      i = j;
+    }
+    if (cols == 0) continue;
+    if (first_data_line && cols == 1 && vals[0] >= 0 && vals[0] == std::floor(vals[0])) {
+      first_data_line = false;  // a leading point count
+      continue;
+    }
+    first_data_line = false;
+    if (cols < 3)
+      fail(path, "line " + std::to_string(line_no) + ": expected at least 3 numbers (x y z), found " + std::to_string(cols));
+    xyz.insert(xyz.end(), vals, vals + 3);
+    if (cols >= 6) nrm.insert(nrm.end(), vals + 3, vals + 6);
+    else all_have_normals = false;
+  }
+  PointCloud cloud;
+  const Eigen::Index n = static_cast<Eigen::Index>(xyz.size() / 3);
+  cloud.P = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(xyz.data(), n, 3);
+  if (all_have_normals && n > 0)
+    cloud.N = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(nrm.data(), n, 3);
+  rep.format = "xyz";
+  rep.points_in_file = n;
+  rep.width = static_cast<int>(n);
+  rep.height = 1;
+  return cloud;
+}
+
+// ------------------------------------------------------------------------------------------
+// PCD
+
+// Checks the PCD header and the data size before handing the file to PCL, so that corrupt or
+// truncated files give a clear error rather than relying on PCL's own checks.
+void precheck_pcd(const std::string& path, std::string& data_kind, long long& header_points) {
+  std::ifstream in(path, std::ios::binary);
+  const auto file_size = static_cast<long long>(fs::file_size(path));
+  std::string line;
+  long long width = -1, height = 1, points = -1, point_step = 0;
+  std::vector<long long> sizes, counts;
+  size_t nfields = 0;
+  bool have_data = false;
+  int lines = 0;
+  while (std::getline(in, line)) {
+    if (++lines > 1000) fail(path, "not a PCD file (no DATA line in the first 1000 lines)");
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream ls(line);
+    std::string key;
+    ls >> key;
+    if (key.empty() || key[0] == '#') continue;
+    if (key == "FIELDS" || key == "COLUMNS") {
+      std::string f;
+      while (ls >> f) ++nfields;
+    } else if (key == "SIZE" || key == "COUNT") {
+      auto& dst = key == "SIZE" ? sizes : counts;
+      std::string t;
+      while (ls >> t) {
+        long long v = 0;
+        const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
+        if (r.ec != std::errc() || v <= 0 || v > 1 << 20) fail(path, "malformed PCD " + key + " entry '" + t + "'");
+        dst.push_back(v);
+      }
+    } else if (key == "WIDTH" || key == "HEIGHT" || key == "POINTS") {
+      std::string t;
+      ls >> t;
+      long long v = -1;
+      const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
+      if (r.ec != std::errc() || v < 0 || v > 2000000000LL) fail(path, "malformed PCD " + key + " '" + t + "'");
+      (key == "WIDTH" ? width : key == "HEIGHT" ? height : points) = v;
+    } else if (key == "DATA") {
+      ls >> data_kind;
+      have_data = true;
+      break;
+    } else if (key != "VERSION" && key != "TYPE" && key != "VIEWPOINT") {
+      fail(path, "not a PCD file (unexpected header line '" + line.substr(0, 40) + "')");
+    }
+  }
+  if (!have_data) fail(path, "not a PCD file or truncated header (no DATA line)");
+  if (nfields == 0 || sizes.size() != nfields) fail(path, "malformed PCD header (FIELDS and SIZE disagree)");
+  if (!counts.empty() && counts.size() != nfields) fail(path, "malformed PCD header (FIELDS and COUNT disagree)");
+  if (width < 0) fail(path, "malformed PCD header (no WIDTH)");
+  if (points < 0) points = width * height;
+  if (points != width * height)
+    fail(path, "malformed PCD header: POINTS " + std::to_string(points) + " != WIDTH*HEIGHT " + std::to_string(width * height));
+  header_points = points;
+  for (size_t k = 0; k < nfields; ++k) point_step += sizes[k] * (counts.empty() ? 1 : counts[k]);
+  const long long header_bytes = static_cast<long long>(in.tellg());
+  const long long body = in ? file_size - header_bytes : 0;
+  if (data_kind == "binary") {
+    if (points * point_step > body)
+      fail(path, "truncated: header announces " + std::to_string(points) + " points (" + std::to_string(points * point_step) +
+                     " bytes) but only " + std::to_string(body) + " bytes of data follow");
+  } else if (data_kind == "binary_compressed") {
+    uint32_t sz[2] = {0, 0};
+    if (body < 8 || !in.read(reinterpret_cast<char*>(sz), 8)) fail(path, "truncated: compressed PCD data missing");
+    if (static_cast<long long>(sz[0]) > body - 8)
+      fail(path, "truncated: compressed block of " + std::to_string(sz[0]) + " bytes but only " + std::to_string(body - 8) +
+                     " bytes follow");
+    if (static_cast<long long>(sz[1]) != points * point_step)
+      fail(path, "corrupt compressed PCD: uncompressed size " + std::to_string(sz[1]) + " != " +
+                     std::to_string(points * point_step) + " expected from the header");
+  } else if (data_kind == "ascii") {
+    if (points * 2 * static_cast<long long>(nfields) > body + 1)
+      fail(path, "truncated: header announces " + std::to_string(points) + " points but only " + std::to_string(body) +
+                     " bytes follow");
+  } else {
+    fail(path, "unknown PCD DATA type '" + data_kind + "'");
+  }
+}
+
+double load_field(const uint8_t* p, uint8_t datatype) {
+  auto get = [p](auto v) {
+    std::memcpy(&v, p, sizeof(v));
+    return static_cast<double>(v);
+  };
+  switch (datatype) {
+    case pcl::PCLPointField::INT8: return get(int8_t());
+    case pcl::PCLPointField::UINT8: return get(uint8_t());
+    case pcl::PCLPointField::INT16: return get(int16_t());
+    case pcl::PCLPointField::UINT16: return get(uint16_t());
+    case pcl::PCLPointField::INT32: return get(int32_t());
+    case pcl::PCLPointField::UINT32: return get(uint32_t());
+    case pcl::PCLPointField::FLOAT32: return get(float());
+    case pcl::PCLPointField::FLOAT64: return get(double());
+    case pcl::PCLPointField::INT64: return get(int64_t());
+    case pcl::PCLPointField::UINT64: return get(uint64_t());
+    default: return std::numeric_limits<double>::quiet_NaN();
+  }
+}
+
+size_t field_size(uint8_t datatype) {
+  switch (datatype) {
+    case pcl::PCLPointField::INT8: case pcl::PCLPointField::UINT8: return 1;
+    case pcl::PCLPointField::INT16: case pcl::PCLPointField::UINT16: return 2;
+    case pcl::PCLPointField::INT32: case pcl::PCLPointField::UINT32: case pcl::PCLPointField::FLOAT32: return 4;
+    case pcl::PCLPointField::FLOAT64: case pcl::PCLPointField::INT64: case pcl::PCLPointField::UINT64: return 8;
+    default: return 0;
+  }
+}
+
+PointCloud read_pcd(const std::string& path, CloudReadReport& rep) {
+  std::string kind;
+  long long header_points = 0;
+  precheck_pcd(path, kind, header_points);
+  pcl::PCLPointCloud2 blob;
+  int status = -1;
+  try {
+    status = pcl::io::loadPCDFile(path, blob);
+  } catch (const std::exception& e) {
+    fail(path, std::string("PCL could not read the PCD file: ") + e.what());
+  }
+  if (status < 0) fail(path, "PCL could not read the PCD file (malformed or truncated)");
+  const long long n = static_cast<long long>(blob.width) * blob.height;
+  if (n < header_points)  // PCL's ascii reader accepts short files with a warning
+    fail(path, "truncated: header announces " + std::to_string(header_points) + " points, file holds " + std::to_string(n));
+  if (static_cast<long long>(blob.data.size()) < n * static_cast<long long>(blob.point_step))
+    fail(path, "truncated: PCD data holds fewer than " + std::to_string(n) + " points");
+  const pcl::PCLPointField* f[6] = {nullptr, nullptr, nullptr, nullptr, nullptr, nullptr};
+  static const char* names[6] = {"x", "y", "z", "normal_x", "normal_y", "normal_z"};
+  for (const auto& field : blob.fields)
+    for (int k = 0; k < 6; ++k)
+      if (field.name == names[k]) f[k] = &field;
+  for (int k = 0; k < 3; ++k) {
+    if (!f[k]) fail(path, std::string("PCD file has no '") + names[k] + "' field");
+  }
+  const bool normals = f[3] && f[4] && f[5];
+  for (int k = 0; k < (normals ? 6 : 3); ++k)
+    if (field_size(f[k]->datatype) == 0 || f[k]->offset + field_size(f[k]->datatype) > blob.point_step)
+      fail(path, std::string("PCD field '") + names[k] + "' has an unsupported type or lies outside the point");
+  PointCloud cloud;
+  cloud.P.resize(n, 3);
+  if (normals) cloud.N.resize(n, 3);
+  for (long long i = 0; i < n; ++i) {
+    const uint8_t* base = blob.data.data() + i * blob.point_step;
+    for (int k = 0; k < 3; ++k) cloud.P(i, k) = load_field(base + f[k]->offset, f[k]->datatype);
+    if (normals)
+      for (int k = 0; k < 3; ++k) cloud.N(i, k) = load_field(base + f[k + 3]->offset, f[k + 3]->datatype);
+  }
+  rep.format = "pcd-" + kind;
+  rep.points_in_file = n;
+  rep.width = static_cast<int>(blob.width);
+  rep.height = static_cast<int>(blob.height);
+  return cloud;
+}
+
+// ------------------------------------------------------------------------------------------
+// PLY (vertices of the mesh PLY parser)
+
+PointCloud read_ply_cloud(const std::string& path, CloudReadReport& rep) {
+  MeshReadReport mrep;
+  PolygonSoup soup = read_polygon_soup(path, &mrep);
+  PointCloud cloud;
+  cloud.P = std::move(soup.V);
+  cloud.N = std::move(soup.N);
+  rep.format = mrep.format;
+  rep.points_in_file = cloud.P.rows();
+  rep.width = static_cast<int>(cloud.P.rows());
+  rep.height = 1;
+  return cloud;
+}
+
+}  // namespace
+
+void clean_cloud(PointCloud& cloud, CloudReadReport* report) {
+  CloudReadReport local;
+  CloudReadReport& rep = report ? *report : local;
+  const Eigen::Index n = cloud.P.rows();
+  const bool normals = cloud.N.rows() == n && n > 0;
+  if (!normals) cloud.N.resize(0, 3);
+  std::vector<Eigen::Index> order;
+  order.reserve(static_cast<size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (cloud.P.row(i).allFinite()) order.push_back(i);
+    else ++rep.non_finite_dropped;
+  }
+  // Exact duplicates: sort finite points lexicographically (index as tie-break), keep the first.
+  std::vector<Eigen::Index> sorted = order;
+  std::sort(sorted.begin(), sorted.end(), [&](Eigen::Index a, Eigen::Index b) {
+    for (int k = 0; k < 3; ++k)
+      if (cloud.P(a, k) != cloud.P(b, k)) return cloud.P(a, k) < cloud.P(b, k);
+    return a < b;
+  });
+  std::vector<char> keep(static_cast<size_t>(n), 0);
+  for (size_t s = 0; s < sorted.size(); ++s) {
+    if (s > 0 && (cloud.P.row(sorted[s]).array() == cloud.P.row(sorted[s - 1]).array()).all()) {
+      ++rep.duplicates_merged;
+      continue;
+    }
+    keep[static_cast<size_t>(sorted[s])] = 1;
+  }
+  Eigen::Index m = 0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (!keep[static_cast<size_t>(i)]) continue;
+    if (m != i) {
+      cloud.P.row(m) = cloud.P.row(i);
+      if (normals) cloud.N.row(m) = cloud.N.row(i);
+    }
+    ++m;
+  }
+  cloud.P.conservativeResize(m, 3);
+  if (normals) {
+    cloud.N.conservativeResize(m, 3);
+    bool any_nonzero = false;
+    for (Eigen::Index i = 0; i < m; ++i) {
+      if (!cloud.N.row(i).allFinite()) {
+        cloud.N.row(i).setZero();
+        ++rep.invalid_normals_zeroed;
+      }
+      if (!cloud.N.row(i).isZero(0.0)) any_nonzero = true;
+    }
+    if (!any_nonzero) {
+      cloud.N.resize(0, 3);
+      rep.normals_all_zero = true;
+    }
+  }
+  rep.has_normals = cloud.has_normals();
+}
+
+PointCloud read_cloud(const std::string& path, CloudReadReport* report) {
+  CloudReadReport local;
+  CloudReadReport& rep = report ? *report : local;
+  rep = CloudReadReport();
+  const std::string ext = lower(fs::path(path).extension().string());
+  if (ext != ".pcd" && ext != ".ply" && ext != ".xyz" && ext != ".pwn" && ext != ".txt")
+    fail(path, "unknown point-cloud format '" + ext + "' (expected .pcd, .ply, .xyz, .pwn or .txt)");
+  require_readable_file(path);
+  PointCloud cloud;
+  if (ext == ".pcd") cloud = read_pcd(path, rep);
+  else if (ext == ".ply") cloud = read_ply_cloud(path, rep);
+  else cloud = read_xyz(path, rep);
+  if (rep.points_in_file == 0) throw InvalidInputError(path + ": no points in the file");
+  clean_cloud(cloud, &rep);
+  if (cloud.P.rows() == 0)
+    throw InvalidInputError(path + ": no finite points (all " + std::to_string(rep.points_in_file) + " points are NaN/inf)");
+  return cloud;
+}
+
+CloudFrame bounding_box_frame(const Eigen::MatrixX3d& P) {
+  if (P.rows() == 0) throw InvalidInputError("bounding_box_frame: empty point set");
+  if (!P.allFinite()) throw InvalidInputError("bounding_box_frame: non-finite coordinates");
+  const Eigen::RowVector3d lo = P.colwise().minCoeff(), hi = P.colwise().maxCoeff();
+  CloudFrame frame;
+  frame.centre = (0.5 * (lo + hi)).transpose();
+  const double diag = (hi - lo).norm();
+  frame.scale = diag > 0 ? diag : 1.0;
+  return frame;
+}
+
+void apply_frame(Eigen::MatrixX3d& V, const CloudFrame& frame) {
+  V = (V.rowwise() - frame.centre.transpose()) / frame.scale;
+}
+
+void restore_frame(Eigen::MatrixX3d& V, const CloudFrame& frame) {
+  V = (V * frame.scale).rowwise() + frame.centre.transpose();
+}
+
+CloudFrame normalize_cloud(PointCloud& cloud) {
+  const CloudFrame frame = bounding_box_frame(cloud.P);
+  apply_frame(cloud.P, frame);
+  return frame;
+}
+
+void write_cloud_xyz(const std::string& path, const PointCloud& cloud) {
+  write_points_xyz(path, cloud.P, cloud.has_normals() ? cloud.N : Eigen::MatrixX3d());
+}
+
+}  // namespace heatcvt
