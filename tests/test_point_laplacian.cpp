@@ -151,17 +151,30 @@ TEST(PointLaplacian, StructuralPropertiesOnSphere) {
   }
   std::sort(keys.begin(), keys.end());
   EXPECT_TRUE(std::adjacent_find(keys.begin(), keys.end()) == keys.end());
-  std::printf("sphere 3000: %lld triangles, %d clamped edges, %d degenerate, h = %.4f, %.3f s\n",
-              static_cast<long long>(pl.triangles.rows()), pl.clamped_edges, pl.degenerate_triangles,
+  std::printf("sphere 3000: %lld triangles, %lld flips, %d clamped edges, %d degenerate, h = %.4f, %.3f s\n",
+              static_cast<long long>(pl.triangles.rows()), pl.intrinsic_flips, pl.clamped_edges, pl.degenerate_triangles,
               pl.laplacian.mean_edge_length, pl.build_seconds);
 }
 
-TEST(PointLaplacian, PlaneLinearAndQuadraticFunctions) {
+class BothModes : public ::testing::TestWithParam<bool> {
+ protected:
+  PointLaplacianOptions options() const {
+    PointLaplacianOptions o;
+    o.intrinsic_delaunay = GetParam();
+    return o;
+  }
+  const char* mode() const { return GetParam() ? "intrinsic Delaunay (tufted)" : "local 2D cotan fallback"; }
+};
+INSTANTIATE_TEST_SUITE_P(PointLaplacian, BothModes, ::testing::Values(true, false));
+
+TEST_P(BothModes, PlaneLinearAndQuadraticFunctions) {
   const int n = 5000;
   Eigen::MatrixX3d P;
   Eigen::MatrixX2d uv;
   random_plane(n, 3, P, uv);
-  const PointLaplacian pl = point_laplacian(P);
+  const PointLaplacian pl = point_laplacian(P, options());
+  std::printf("[%s] plane %d points: %lld flips, %lld unflippable, %d clamped edges\n", mode(), n,
+              pl.intrinsic_flips, pl.unflippable_edges, pl.clamped_edges);
   const Laplacian& lap = pl.laplacian;
   expect_valid_laplacian(lap, n);
   // Mass of the square [-1,1]² (area 4): boundary fans are incomplete, so a bit less.
@@ -190,8 +203,10 @@ TEST(PointLaplacian, PlaneLinearAndQuadraticFunctions) {
   }
   std::printf("plane: linear functions, per interior point |Lu|/scale: mean %.2e, max %.2e\n", mean_linear,
               worst_linear);
-  EXPECT_LT(mean_linear, 0.02);
-  EXPECT_LT(worst_linear, 0.5);
+  // Fallback: consistent fans reproduce linear functions almost exactly (measured mean 8e-5);
+  // the tufted cover's cone points at inconsistent fans do not (measured mean 3e-2).
+  EXPECT_LT(mean_linear, GetParam() ? 0.1 : 0.002);
+  EXPECT_LT(worst_linear, GetParam() ? 1.0 : 0.5);
 
   // Δ(x² + y²) = 4: L u ≈ 4 M. Aggregated over interior points (the lumped barycentric mass
   // makes individual points noisy, see the per-point figures printed below).
@@ -213,10 +228,12 @@ TEST(PointLaplacian, PlaneLinearAndQuadraticFunctions) {
   EXPECT_LT(aggregated, 0.05);
 }
 
-TEST(PointLaplacian, UnitSphereSpectrum) {
+TEST_P(BothModes, UnitSphereSpectrum) {
   const int n = 8000;
   const Eigen::MatrixX3d P = random_sphere(n, 5);
-  const PointLaplacian pl = point_laplacian(P);
+  const PointLaplacian pl = point_laplacian(P, options());
+  std::printf("[%s] sphere %d points: %lld flips, %lld unflippable, %d clamped edges, %.3f s\n", mode(), n,
+              pl.intrinsic_flips, pl.unflippable_edges, pl.clamped_edges, pl.build_seconds);
   expect_valid_laplacian(pl.laplacian, n);
   int iterations = 0;
   const Eigen::VectorXd lambda = smallest_eigenvalues(pl.laplacian, 16, 36, &iterations);
@@ -235,11 +252,11 @@ TEST(PointLaplacian, UnitSphereSpectrum) {
   std::printf("sphere spectrum: worst rel. error %.3e\n", worst);
 }
 
-TEST(PointLaplacian, DeterministicAcrossRunsAndThreads) {
+TEST_P(BothModes, DeterministicAcrossRunsAndThreads) {
   const Eigen::MatrixX3d P = random_sphere(4000, 9);
-  PointLaplacianOptions one;
+  PointLaplacianOptions one = options();
   one.threads = 1;
-  PointLaplacianOptions two;
+  PointLaplacianOptions two = options();
   two.threads = 2;
   const PointLaplacian a = point_laplacian(P, one);
   const PointLaplacian b = point_laplacian(P, two);
@@ -258,10 +275,10 @@ TEST(PointLaplacian, DeterministicAcrossRunsAndThreads) {
   }
 }
 
-TEST(PointLaplacian, HeatSolverFactorsAndDiffuses) {
+TEST_P(BothModes, HeatSolverFactorsAndDiffuses) {
   const int n = 4000;
   const Eigen::MatrixX3d P = random_sphere(n, 13);
-  const PointLaplacian pl = point_laplacian(P);
+  const PointLaplacian pl = point_laplacian(P, options());
   HeatSolver solver(pl.laplacian);  // throws SolverError if M − tL were not positive definite
   EXPECT_EQ(solver.num_vertices(), n);
   // Heat from the point nearest the north pole decreases with geodesic distance (on average)
@@ -366,23 +383,24 @@ TEST(PointLaplacian, RejectsBadInput) {
   EXPECT_THROW(estimate_normals(P, 1), InvalidInputError);
 }
 
-TEST(PointLaplacian, DuplicatePointsKeepMassPositive) {
+TEST_P(BothModes, DuplicatePointsKeepMassPositive) {
   // Exact duplicates must not break anything: M > 0 everywhere, valid Laplacian.
   Eigen::MatrixX3d P = random_sphere(2000, 31);
   Eigen::MatrixX3d D(2100, 3);
   D.topRows(2000) = P;
   D.bottomRows(100) = P.topRows(100);
-  const PointLaplacian pl = point_laplacian(D);
+  const PointLaplacian pl = point_laplacian(D, options());
   expect_valid_laplacian(pl.laplacian, 2100);
   HeatSolver solver(pl.laplacian);
   EXPECT_EQ(solver.num_vertices(), 2100);
 }
 
-TEST(PointLaplacian, Timing50kPoints) {
+TEST_P(BothModes, Timing50kPoints) {
   const Eigen::MatrixX3d P = random_sphere(50000, 41);
-  const PointLaplacian pl = point_laplacian(P);
-  std::printf("50k points, k = 30: built in %.3f s (%lld triangles)\n", pl.build_seconds,
-              static_cast<long long>(pl.triangles.rows()));
+  const PointLaplacian pl = point_laplacian(P, options());
+  std::printf("[%s] 50k points, k = 30: built in %.3f s (%lld triangles, %lld flips, %d clamped)\n", mode(),
+              pl.build_seconds, static_cast<long long>(pl.triangles.rows()), pl.intrinsic_flips,
+              pl.clamped_edges);
   expect_valid_laplacian(pl.laplacian, 50000);
   EXPECT_LT(pl.build_seconds, 60.0);  // a few seconds expected on 2 cores; generous on a shared machine
 }

@@ -1,6 +1,12 @@
 #include "heatcvt/normals.h"
 
-#include <flann/flann.hpp>
+#include <CGAL/Orthogonal_k_neighbor_search.h>
+#include <CGAL/Search_traits_3.h>
+#include <CGAL/Search_traits_adapter.h>
+#include <CGAL/Simple_cartesian.h>
+#include <CGAL/property_map.h>
+#include <boost/iterator/zip_iterator.hpp>
+#include <boost/tuple/tuple.hpp>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -34,23 +40,34 @@ void check_cloud(const Eigen::MatrixX3d& P, int k, int min_k, const char* what) 
 Eigen::MatrixXi k_nearest_neighbors(const Eigen::MatrixX3d& P, int k, int threads) {
   check_cloud(P, k, 1, "k_nearest_neighbors");
   const int n = static_cast<int>(P.rows());
-  // FLANN wants row-major contiguous storage.
-  std::vector<double> data(static_cast<size_t>(n) * 3);
-  for (int i = 0; i < n; ++i)
-    for (int c = 0; c < 3; ++c) data[3 * static_cast<size_t>(i) + c] = P(i, c);
-  flann::Matrix<double> points(data.data(), n, 3);
-  // Single kd-tree: exact search, deterministic construction (no randomisation).
-  flann::Index<flann::L2<double>> index(points, flann::KDTreeSingleIndexParams(10));
-  index.buildIndex();
+  // Exact kd-tree search (CGAL spatial searching, double precision). FLANN is not used here:
+  // instantiating its index classes pulls in LZ4 symbols that libheatcvt does not link.
+  using Kernel = CGAL::Simple_cartesian<double>;
+  using Point = Kernel::Point_3;
+  using PointAndIndex = boost::tuple<Point, int>;
+  using Traits = CGAL::Search_traits_adapter<PointAndIndex, CGAL::Nth_of_tuple_property_map<0, PointAndIndex>,
+                                             CGAL::Search_traits_3<Kernel>>;
+  using Search = CGAL::Orthogonal_k_neighbor_search<Traits>;
+  std::vector<Point> pts;
+  std::vector<int> ids(n);
+  pts.reserve(n);
+  for (int i = 0; i < n; ++i) {
+    pts.emplace_back(P(i, 0), P(i, 1), P(i, 2));
+    ids[i] = i;
+  }
+  Search::Tree tree(boost::make_zip_iterator(boost::make_tuple(pts.begin(), ids.begin())),
+                    boost::make_zip_iterator(boost::make_tuple(pts.end(), ids.end())));
+  tree.build();  // build before the concurrent (const) queries
 
   const int kq = k + 1;  // the point itself is (normally) its own nearest neighbour
-  std::vector<int> idx(static_cast<size_t>(n) * kq);
-  std::vector<double> dist(static_cast<size_t>(n) * kq);
-  flann::Matrix<int> indices(idx.data(), n, kq);
-  flann::Matrix<double> dists(dist.data(), n, kq);
-  flann::SearchParams params(flann::FLANN_CHECKS_UNLIMITED, 0.0f, true);
-  params.cores = resolve_threads(threads);
-  index.knnSearch(points, indices, dists, kq, params);
+  std::vector<int> idx(static_cast<size_t>(n) * kq, -1);
+#pragma omp parallel for num_threads(resolve_threads(threads)) schedule(dynamic, 256)
+  for (int i = 0; i < n; ++i) {
+    Search search(tree, pts[i], static_cast<unsigned int>(kq), 0.0, true, Search::Distance(), true);
+    int q = 0;
+    for (auto it = search.begin(); it != search.end() && q < kq; ++it, ++q)
+      idx[static_cast<size_t>(i) * kq + q] = boost::get<1>(it->first);
+  }
 
   Eigen::MatrixXi out(n, k);
   for (int i = 0; i < n; ++i) {
@@ -63,7 +80,7 @@ Eigen::MatrixXi k_nearest_neighbors(const Eigen::MatrixX3d& P, int k, int thread
         continue;
       }
       if (row[q] < 0 || row[q] >= n)
-        throw Error("k_nearest_neighbors: FLANN returned an invalid index for point " + std::to_string(i));
+        throw Error("k_nearest_neighbors: the kd-tree returned too few neighbours for point " + std::to_string(i));
       out(i, c++) = row[q];
     }
   }

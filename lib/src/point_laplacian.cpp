@@ -40,6 +40,168 @@ struct LocalFan {
   int degenerate = 0;
 };
 
+
+/// Heron's formula, stable form; 0 if the lengths violate the triangle inequality.
+double triangle_area(double a, double b, double c) {
+  double s[3] = {a, b, c};
+  std::sort(s, s + 3, std::greater<double>());
+  const double x = s[0], y = s[1], z = s[2];
+  const double q = (x + (y + z)) * (z - (x - y)) * (z + (x - y)) * (x + (y - z));
+  return q > 0 ? 0.25 * std::sqrt(q) : 0.0;
+}
+
+/// Cotangent of the angle opposite the side of length a in the triangle (a, b, c).
+double cot_opposite(double a, double b, double c, double area, double clamp) {
+  if (!(area > 0)) return 0.0;
+  return std::clamp((b * b + c * c - a * a) / (4.0 * area), -clamp, clamp);
+}
+
+/// Intrinsic Delaunay cotan Laplacian of the tufted cover of a triangle soup (Sharp & Crane
+/// 2020, §4–5): every soup face gets a front and a back sheet; around an edge with m soup faces
+/// the sheets are glued in the (deterministic) soup order, the up-going half-edge of face i to
+/// the down-going one of face i+1 (mod m), which yields a closed oriented manifold. Edge lengths
+/// are the 3D lengths, mollified by δ so every corner has slack ≥ ε·h̄; then Lawson flips until
+/// every edge satisfies cot α + cot β ≥ 0. Contributions (scaled by `scale` and by ½ for the two
+/// sheets) are appended to `edge_weights` (key = min·n + max) and `M`. Returns the flip count.
+struct TuftedResult {
+  int64_t flips = 0;
+  int64_t skipped = 0;  // non-Delaunay edges that could not be flipped (combinatorial guards)
+};
+
+TuftedResult tufted_intrinsic_delaunay(const std::vector<std::array<int, 3>>& soup, const Eigen::MatrixX3d& P,
+                                       double mollify_factor, double cot_clamp, double scale,
+                                       std::vector<std::pair<int64_t, double>>& edge_weights, Eigen::VectorXd& M) {
+  const int64_t n = P.rows();
+  const int64_t nf = static_cast<int64_t>(soup.size());
+  const int64_t nh = 6 * nf;  // half-edge 3·s + c of sheet s ∈ {2f (front), 2f+1 (back)}
+  std::vector<int> tail(nh);
+  std::vector<int64_t> next(nh), twin(nh, -1);
+  std::vector<double> len(nh);
+  for (int64_t f = 0; f < nf; ++f) {
+    const std::array<int, 3>& t = soup[f];
+    const int front[3] = {t[0], t[1], t[2]}, back[3] = {t[0], t[2], t[1]};
+    for (int c = 0; c < 3; ++c) {
+      tail[6 * f + c] = front[c];
+      tail[6 * f + 3 + c] = back[c];
+      next[6 * f + c] = 6 * f + (c + 1) % 3;
+      next[6 * f + 3 + c] = 6 * f + 3 + (c + 1) % 3;
+    }
+  }
+  // Gluing: per undirected edge, the faces in soup order; up (min→max) of face i ↔ down of i+1.
+  struct Side {
+    int64_t key, face, up, down;
+    bool operator<(const Side& o) const { return key != o.key ? key < o.key : face < o.face; }
+  };
+  std::vector<Side> sides;
+  sides.reserve(3 * nf);
+  for (int64_t f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c) {
+      const int64_t hf = 6 * f + c;  // front half-edge tail → head
+      const int a = tail[hf], b = tail[next[hf]];
+      // Back half-edge of the same edge goes b → a.
+      int64_t hb = -1;
+      for (int d = 0; d < 3; ++d) {
+        const int64_t g = 6 * f + 3 + d;
+        if (tail[g] == b && tail[next[g]] == a) hb = g;
+      }
+      const int64_t key = std::min<int64_t>(a, b) * n + std::max<int64_t>(a, b);
+      sides.push_back(a < b ? Side{key, f, hf, hb} : Side{key, f, hb, hf});
+    }
+  std::sort(sides.begin(), sides.end());
+  for (size_t r = 0; r < sides.size();) {
+    size_t e = r;
+    while (e < sides.size() && sides[e].key == sides[r].key) ++e;
+    const size_t m = e - r;
+    for (size_t i = 0; i < m; ++i) {
+      const int64_t up = sides[r + i].up, down = sides[r + (i + 1) % m].down;
+      twin[up] = down;
+      twin[down] = up;
+    }
+    r = e;
+  }
+  // Lengths with mollification (Sharp & Crane §4.5).
+  double mean_len = 0;
+  for (int64_t h = 0; h < nh; ++h) {
+    len[h] = (P.row(tail[h]) - P.row(tail[next[h]])).norm();
+    mean_len += len[h];
+  }
+  mean_len /= static_cast<double>(nh);
+  const double eps = mollify_factor * mean_len;
+  double delta = 0;
+  for (int64_t h = 0; h < nh; ++h) {
+    const double a = len[h], b = len[next[h]], c = len[next[next[h]]];
+    delta = std::max(delta, eps - (b + c - a));
+  }
+  if (delta > 0)
+    for (double& l : len) l += delta;
+
+  auto halfedge_cot = [&](int64_t h) {  // cot of the angle opposite h in its face
+    const double a = len[h], b = len[next[h]], c = len[next[next[h]]];
+    return cot_opposite(a, b, c, triangle_area(a, b, c), cot_clamp);
+  };
+  TuftedResult result;
+  std::vector<int64_t> stack;
+  std::vector<char> queued(nh, 0);
+  for (int64_t h = nh - 1; h >= 0; --h)
+    if (h < twin[h]) {
+      stack.push_back(h);
+      queued[h] = 1;
+    }
+  const int64_t max_flips = 50 * nh + 1000;  // Lawson terminates; the cap only guards rounding loops
+  while (!stack.empty()) {
+    int64_t h = stack.back();
+    stack.pop_back();
+    queued[h] = 0;
+    const int64_t t = twin[h];
+    if (halfedge_cot(h) + halfedge_cot(t) >= -1e-10) continue;
+    const int64_t h1 = next[h], h2 = next[h1], t1 = next[t], t2 = next[t1];
+    // Guards: distinct faces, no endpoint of degree 2 (the flip would leave a degree-1 vertex).
+    if (t == h1 || t == h2 || twin[h1] == t2 || twin[h2] == t1 || result.flips >= max_flips) {
+      ++result.skipped;
+      continue;
+    }
+    // Lay out i = (0,0), j = (L,0), k above, l below; the new diagonal is |k − l|.
+    const double L = len[h];
+    const double ik = len[h2], jk = len[h1], il = len[t1], jl = len[t2];
+    const double kx = (L * L + ik * ik - jk * jk) / (2 * L);
+    const double ky = std::sqrt(std::max(0.0, ik * ik - kx * kx));
+    const double lx = (L * L + il * il - jl * jl) / (2 * L);
+    const double ly = -std::sqrt(std::max(0.0, il * il - lx * lx));
+    const double kl = std::hypot(kx - lx, ky - ly);
+    if (!(kl > 0) || !(triangle_area(kl, ik, il) > 0) || !(triangle_area(kl, jk, jl) > 0)) {
+      ++result.skipped;
+      continue;
+    }
+    const int k = tail[h2], l = tail[t2];
+    // Face A' = (h: l→k, h2: k→i, t1: i→l), face B' = (t: k→l, t2: l→j, h1: j→k).
+    tail[h] = l;
+    tail[t] = k;
+    len[h] = len[t] = kl;
+    next[h] = h2, next[h2] = t1, next[t1] = h;
+    next[t] = t2, next[t2] = h1, next[h1] = t;
+    ++result.flips;
+    for (int64_t g : {h1, h2, t1, t2}) {
+      const int64_t rep = std::min(g, twin[g]);
+      if (!queued[rep]) {
+        queued[rep] = 1;
+        stack.push_back(rep);
+      }
+    }
+  }
+  // Cotan weights and masses of the final triangulation: every half-edge lies in one face.
+  const double w_scale = 0.5 * scale;  // ½ for the two sheets
+  for (int64_t h = 0; h < nh; ++h) {
+    const int a = tail[h], b = tail[next[h]];
+    const double la = len[h], lb = len[next[h]], lc = len[next[next[h]]];
+    const double area = triangle_area(la, lb, lc);
+    M[a] += w_scale * area / 3.0;
+    if (a == b) continue;  // an intrinsic loop adds nothing to L u
+    const int64_t key = std::min<int64_t>(a, b) * n + std::max<int64_t>(a, b);
+    edge_weights.emplace_back(key, w_scale * 0.5 * cot_opposite(la, lb, lc, area, cot_clamp));
+  }
+  return result;
+}
+
 }  // namespace
 
 PointLaplacian point_laplacian(const Eigen::MatrixX3d& P, const PointLaplacianOptions& options) {
@@ -51,9 +213,10 @@ PointLaplacian point_laplacian(const Eigen::MatrixX3d& P, const PointLaplacianOp
   if (P.rows() < static_cast<Eigen::Index>(k) + 1)
     throw InvalidInputError("point_laplacian: the cloud has " + std::to_string(P.rows()) +
                             " points, need at least k + 1 = " + std::to_string(k + 1));
-  if (!(options.cot_clamp > 0) || !(options.degenerate_area_epsilon >= 0) || !(options.min_mass_fraction > 0))
+  if (!(options.cot_clamp > 0) || !(options.degenerate_area_epsilon >= 0) || !(options.min_mass_fraction > 0) ||
+      !(options.mollify_factor >= 0))
     throw InvalidInputError("point_laplacian: cot_clamp and min_mass_fraction must be > 0, "
-                            "degenerate_area_epsilon >= 0");
+                            "degenerate_area_epsilon and mollify_factor >= 0");
   const int n = static_cast<int>(P.rows());
   const int threads = resolve_threads(options.threads);
   // Validates finiteness too (throws InvalidInputError naming the point).
@@ -144,31 +307,35 @@ PointLaplacian point_laplacian(const Eigen::MatrixX3d& P, const PointLaplacianOp
   // Sequential, ordered merge: results do not depend on the thread count.
   std::vector<std::pair<int64_t, double>> edge_weights;
   std::vector<std::pair<std::array<int, 3>, int64_t>> keyed;  // (sorted corners, occurrence)
+  std::vector<std::array<int, 3>> all_tris;  // the soup, with repetitions, in point order
   Eigen::VectorXd M = Eigen::VectorXd::Zero(n);
-  int64_t occurrence = 0;
   for (int i = 0; i < n; ++i) {
     out.degenerate_triangles += fans[i].degenerate;
     for (const LocalTriangle& t : fans[i].triangles) {
-      for (int c = 0; c < 3; ++c) {
-        M[t.v[c]] += t.area / 9.0;  // (1/3 weight) · (area / 3 per corner), eq. 6
-        const int a = t.v[(c + 1) % 3], b = t.v[(c + 2) % 3];
-        const int64_t key = static_cast<int64_t>(std::min(a, b)) * n + std::max(a, b);
-        edge_weights.emplace_back(key, t.cot[c] / 6.0);  // (1/3 weight) · ½ cot, eq. 5
-      }
+      if (!options.intrinsic_delaunay)
+        for (int c = 0; c < 3; ++c) {
+          M[t.v[c]] += t.area / 9.0;  // (1/3 weight) · (area / 3 per corner), eq. 6
+          const int a = t.v[(c + 1) % 3], b = t.v[(c + 2) % 3];
+          const int64_t key = static_cast<int64_t>(std::min(a, b)) * n + std::max(a, b);
+          edge_weights.emplace_back(key, t.cot[c] / 6.0);  // (1/3 weight) · ½ cot, eq. 5
+        }
       std::array<int, 3> s = t.v;
       std::sort(s.begin(), s.end());
-      keyed.emplace_back(s, occurrence++);
+      keyed.emplace_back(s, static_cast<int64_t>(all_tris.size()));
+      all_tris.push_back(t.v);
     }
   }
   if (keyed.empty())
     throw InvalidInputError("point_laplacian: no local triangle could be built (the " + std::to_string(n) +
                             " points are collinear or coincident)");
+  if (options.intrinsic_delaunay) {
+    const TuftedResult r = tufted_intrinsic_delaunay(all_tris, P, options.mollify_factor, options.cot_clamp,
+                                                     1.0 / 3.0, edge_weights, M);
+    out.intrinsic_flips = r.flips;
+    out.unflippable_edges = r.skipped;
+  }
 
   // Distinct triangles, first occurrence kept, in order of occurrence.
-  std::vector<std::array<int, 3>> all_tris;
-  all_tris.reserve(keyed.size());
-  for (const LocalFan& f : fans)
-    for (const LocalTriangle& t : f.triangles) all_tris.push_back(t.v);
   std::sort(keyed.begin(), keyed.end());
   std::vector<int64_t> firsts;
   for (size_t r = 0; r < keyed.size(); ++r)
@@ -190,8 +357,6 @@ PointLaplacian point_laplacian(const Eigen::MatrixX3d& P, const PointLaplacianOp
     double w = 0;
     for (; r < edge_weights.size() && edge_weights[r].first == key; ++r) w += edge_weights[r].second;
     const int a = static_cast<int>(key / n), b = static_cast<int>(key % n);
-    length_sum += (P.row(a) - P.row(b)).norm();
-    ++edge_count;
     if (w < 0) {
       ++out.clamped_edges;
       continue;
@@ -203,6 +368,19 @@ PointLaplacian point_laplacian(const Eigen::MatrixX3d& P, const PointLaplacianOp
     diag[b] -= w;
   }
   for (int i = 0; i < n; ++i) triplets.emplace_back(i, i, diag[i]);
+  {  // h̄: mean 3D length of the distinct edges of the local triangles
+    std::vector<int64_t> keys;
+    keys.reserve(3 * static_cast<size_t>(out.triangles.rows()));
+    for (Eigen::Index t = 0; t < out.triangles.rows(); ++t)
+      for (int c = 0; c < 3; ++c) {
+        const int a = out.triangles(t, c), b = out.triangles(t, (c + 1) % 3);
+        keys.push_back(static_cast<int64_t>(std::min(a, b)) * n + std::max(a, b));
+      }
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    for (int64_t key : keys) length_sum += (P.row(static_cast<int>(key / n)) - P.row(static_cast<int>(key % n))).norm();
+    edge_count = static_cast<int64_t>(keys.size());
+  }
 
   Laplacian& lap = out.laplacian;
   lap.L.resize(n, n);

@@ -7,7 +7,7 @@
 
 namespace heatcvt {
 
-/// Exact k nearest neighbours of every point (FLANN single kd-tree, exact search).
+/// Exact k nearest neighbours of every point (kd-tree, exact search in double precision).
 ///   P  #P by 3 positions. Returns #P by k indices, row i sorted by increasing distance to
 ///   P.row(i), the point itself EXCLUDED (a duplicate of P.row(i) at distance 0 may appear).
 ///   Deterministic: the same input gives the same output for any `threads`.
