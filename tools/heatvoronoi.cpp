@@ -99,6 +99,10 @@ int main(int argc, char** argv) {
     if (!(t_coef > 0) || !std::isfinite(t_coef)) throw InvalidInputError("--t-coef must be a positive number");
     if (threads < 0) throw InvalidInputError("--threads must be >= 0");
     if (centroid_steps < 1) throw InvalidInputError("--centroid-steps must be >= 1");
+    cli::check_output_path(cells_path, {".ply", ".obj", ".off", ".stl"});
+    cli::check_output_path(edges_path, {".obj"});
+    cli::check_output_path(centroids_path, {".xyz", ".txt"});
+    cli::check_output_path(report_path, {".json"});
     auto log = [&](const std::string& s) {
       if (!quiet) std::cerr << s << std::endl;
     };

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <map>
 #include <stdexcept>
+#include <sys/wait.h>
 
 #include "heatcvt/mesh.h"
 
@@ -105,6 +106,66 @@ TriangleMesh torus(int n, int m, double R, double r) {
 
 void scale_to_area(TriangleMesh& mesh, double area) {
   mesh.V *= std::sqrt(area / surface_area(mesh.V, mesh.F));
+}
+
+}  // namespace heatcvt::test
+
+#include <fstream>
+#include <sstream>
+#include <unistd.h>
+
+namespace heatcvt::test {
+
+ScratchDir::ScratchDir(const std::string& tag) {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::string name = "heatcvt_" + tag + "_" + (info ? std::string(info->name()) : "x") + "_" + std::to_string(::getpid());
+  dir_ = (std::filesystem::temp_directory_path() / name).string();
+  std::filesystem::remove_all(dir_);
+  std::filesystem::create_directories(dir_);
+}
+
+ScratchDir::~ScratchDir() {
+  std::error_code ec;
+  std::filesystem::remove_all(dir_, ec);
+}
+
+std::string ScratchDir::path(const std::string& name) const { return dir_ + "/" + name; }
+
+int ScratchDir::entries() const {
+  int n = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir_)) ++n;
+  return n;
+}
+
+static std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+CommandResult run_tool(const std::string& tool, const std::string& args) {
+  const std::string exe = std::string(HEATCVT_BIN_DIR) + "/" + tool;
+  if (!std::filesystem::exists(exe)) {
+    ADD_FAILURE() << "tool not built: " << exe;
+    return {};
+  }
+  const auto base = std::filesystem::temp_directory_path() /
+                    ("heatcvt_cmd_" + std::to_string(::getpid()) + "_" + std::to_string(std::rand()));
+  const std::string out = base.string() + ".out", err = base.string() + ".err";
+  const std::string cmd = exe + " " + args + " > " + out + " 2> " + err;
+  const int status = std::system(cmd.c_str());
+  CommandResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  std::filesystem::remove(out);
+  std::filesystem::remove(err);
+  return r;
+}
+
+void write_text_file(const std::string& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
 }
 
 }  // namespace heatcvt::test

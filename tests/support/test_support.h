@@ -25,3 +25,35 @@ TriangleMesh torus(int n, int m, double R = 1.0, double r = 0.4);
 void scale_to_area(TriangleMesh& mesh, double area);
 
 }  // namespace heatcvt::test
+
+namespace heatcvt::test {
+
+/// A fresh temporary directory, removed with its content when the object dies.
+class ScratchDir {
+ public:
+  explicit ScratchDir(const std::string& tag);
+  ~ScratchDir();
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+  std::string path(const std::string& name) const;
+  /// Number of entries (files, including hidden temporaries) in the directory.
+  int entries() const;
+
+ private:
+  std::string dir_;
+};
+
+/// Result of running a command through the shell.
+struct CommandResult {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+/// Runs `bin/<tool> <args>` from the build tree (args are passed to the shell as written),
+/// capturing stdout and stderr.
+CommandResult run_tool(const std::string& tool, const std::string& args);
+
+/// Writes a text file.
+void write_text_file(const std::string& path, const std::string& text);
+
+}  // namespace heatcvt::test

@@ -2,7 +2,12 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cstdio>
+#include <filesystem>
+
+#include "heatcvt/errors.h"
 #include <exception>
 #include <iostream>
 
@@ -50,6 +55,26 @@ int run_tool(const std::string& tool, const std::function<int()>& body) {
     std::cerr << tool << ": error: unknown failure" << std::endl;
     return 1;
   }
+}
+
+void check_output_path(const std::string& path, const std::vector<std::string>& extensions) {
+  if (path.empty()) return;
+  namespace fs = std::filesystem;
+  const fs::path p(path);
+  if (!extensions.empty()) {
+    std::string ext = p.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (std::find(extensions.begin(), extensions.end(), ext) == extensions.end()) {
+      std::string list;
+      for (const auto& e : extensions) list += (list.empty() ? "" : " ") + e;
+      throw InvalidInputError(path + ": unsupported output extension (use one of: " + list + ")");
+    }
+  }
+  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
+  if (!fs::is_directory(dir)) throw InvalidInputError(path + ": output directory '" + dir.string() + "' does not exist");
+  if (::access(dir.c_str(), W_OK) != 0)
+    throw InvalidInputError(path + ": output directory '" + dir.string() + "' is not writable");
+  if (fs::is_directory(p)) throw InvalidInputError(path + ": is a directory, not an output file");
 }
 
 double seconds_since(std::chrono::steady_clock::time_point start) {

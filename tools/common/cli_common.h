@@ -4,6 +4,7 @@
 #include <chrono>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace heatcvt::cli {
 
@@ -25,6 +26,11 @@ class Progress {
 /// Runs the body of a tool: catches every exception, prints "<tool>: error: <message>" as one
 /// line on stderr and returns 1 (2 for command-line errors from CLI11).
 int run_tool(const std::string& tool, const std::function<int()>& body);
+
+/// Fails fast, before any work, when an output could not be written: its directory is missing
+/// or not writable, or (when `extensions` is non-empty, e.g. {".ply", ".obj"}) its extension is
+/// not one of them. Throws heatcvt::InvalidInputError "<path>: <problem>". Empty paths pass.
+void check_output_path(const std::string& path, const std::vector<std::string>& extensions = {});
 
 /// Seconds elapsed since `start`.
 double seconds_since(std::chrono::steady_clock::time_point start);

@@ -1,0 +1,134 @@
+// The heatvoronoi tool end to end: a real run, and every class of bad input gives one clear
+// error line naming the file, a non-zero exit and no output file.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "heatcvt/mesh_io.h"
+#include "test_support.h"
+
+using namespace heatcvt;
+
+namespace {
+
+// Asserts: exit code non-zero, exactly one "heatvoronoi: error:" line on stderr mentioning
+// every needle, no output file and no temporary left behind.
+void expect_clean_failure(const test::CommandResult& r, const std::vector<std::string>& needles,
+                          const test::ScratchDir& dir, int expected_entries) {
+  EXPECT_NE(r.exit_code, 0);
+  ASSERT_FALSE(r.err.empty());
+  std::vector<std::string> error_lines;
+  std::istringstream lines(r.err);
+  for (std::string line; std::getline(lines, line);)
+    if (line.find("error") != std::string::npos) error_lines.push_back(line);
+  ASSERT_EQ(error_lines.size(), 1u) << r.err;
+  EXPECT_EQ(error_lines[0].rfind("heatvoronoi: error: ", 0), 0u) << error_lines[0];
+  for (const auto& n : needles)
+    EXPECT_NE(error_lines[0].find(n), std::string::npos) << "'" << n << "' not in: " << error_lines[0];
+  EXPECT_EQ(dir.entries(), expected_entries) << "an output or temporary file was left behind";
+}
+
+const char* kTetra =
+    "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
+
+}  // namespace
+
+TEST(HeatVoronoiTool, RealMeshProducesCellsEdgesCentroidsAndReport) {
+  test::ScratchDir dir("hv");
+  const std::string mesh = test::data_path("meshes/spot.obj");
+  auto r = test::run_tool("heatvoronoi", mesh + " -o " + dir.path("cells.ply") + " --sites 30 --edges " +
+                                             dir.path("edges.obj") + " --centroids " + dir.path("c.xyz") + " --report " +
+                                             dir.path("r.json") + " --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(r.err.empty()) << "--quiet must silence stderr: " << r.err;
+  TriangleMesh cells = read_mesh(dir.path("cells.ply"));
+  TriangleMesh input = read_mesh(mesh);
+  EXPECT_GE(cells.F.rows(), input.F.rows());
+  EXPECT_NEAR(surface_area(cells.V, cells.F), surface_area(input.V, input.F), 1e-9 * surface_area(input.V, input.F));
+  std::ifstream c(dir.path("c.xyz"));
+  int lines = 0;
+  for (std::string line; std::getline(c, line);) ++lines;
+  EXPECT_EQ(lines, 30);
+  EXPECT_TRUE(std::filesystem::exists(dir.path("edges.obj")));
+  EXPECT_TRUE(std::filesystem::exists(dir.path("r.json")));
+  // same seed, same output
+  auto r2 = test::run_tool("heatvoronoi", mesh + " -o " + dir.path("cells2.ply") + " --sites 30 -q");
+  ASSERT_EQ(r2.exit_code, 0);
+  std::ifstream a(dir.path("cells.ply"), std::ios::binary), b(dir.path("cells2.ply"), std::ios::binary);
+  std::string sa((std::istreambuf_iterator<char>(a)), {}), sb((std::istreambuf_iterator<char>(b)), {});
+  EXPECT_EQ(sa, sb);
+}
+
+TEST(HeatVoronoiTool, MissingFile) {
+  test::ScratchDir dir("hv");
+  const std::string missing = dir.path("nope.obj");
+  expect_clean_failure(test::run_tool("heatvoronoi", missing + " -o " + dir.path("o.ply")), {missing}, dir, 0);
+}
+
+TEST(HeatVoronoiTool, UnknownFormat) {
+  test::ScratchDir dir("hv");
+  test::write_text_file(dir.path("mesh.xyzw"), kTetra);
+  expect_clean_failure(test::run_tool("heatvoronoi", dir.path("mesh.xyzw") + " -o " + dir.path("o.ply")),
+                       {dir.path("mesh.xyzw")}, dir, 1);
+}
+
+TEST(HeatVoronoiTool, TruncatedFile) {
+  test::ScratchDir dir("hv");
+  std::ifstream in(test::data_path("meshes/knot_open3d.ply"), std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  test::write_text_file(dir.path("cut.ply"), bytes.substr(0, bytes.size() / 2));
+  expect_clean_failure(test::run_tool("heatvoronoi", dir.path("cut.ply") + " -o " + dir.path("o.ply")),
+                       {dir.path("cut.ply"), "truncated"}, dir, 1);
+}
+
+TEST(HeatVoronoiTool, FaceIndexOutOfRange) {
+  test::ScratchDir dir("hv");
+  test::write_text_file(dir.path("bad.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
+  expect_clean_failure(test::run_tool("heatvoronoi", dir.path("bad.obj") + " -o " + dir.path("o.ply")),
+                       {dir.path("bad.obj"), "range"}, dir, 1);
+}
+
+TEST(HeatVoronoiTool, NaNCoordinates) {
+  test::ScratchDir dir("hv");
+  test::write_text_file(dir.path("nan.off"), "OFF\n4 4 0\n0 0 0\n1 0 0\nnan 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n");
+  expect_clean_failure(test::run_tool("heatvoronoi", dir.path("nan.off") + " -o " + dir.path("o.ply")),
+                       {dir.path("nan.off"), "NaN"}, dir, 1);
+}
+
+TEST(HeatVoronoiTool, NoFaces) {
+  test::ScratchDir dir("hv");
+  test::write_text_file(dir.path("pts.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+  expect_clean_failure(test::run_tool("heatvoronoi", dir.path("pts.obj") + " -o " + dir.path("o.ply")),
+                       {dir.path("pts.obj"), "no faces"}, dir, 1);
+}
+
+TEST(HeatVoronoiTool, ImpossibleOptions) {
+  test::ScratchDir dir("hv");
+  test::write_text_file(dir.path("t.obj"), kTetra);
+  const std::string base = dir.path("t.obj") + " -o " + dir.path("o.ply");
+  expect_clean_failure(test::run_tool("heatvoronoi", base + " --sites 5"), {"--sites", "exceeds"}, dir, 1);
+  expect_clean_failure(test::run_tool("heatvoronoi", base + " --sites 0"), {"--sites"}, dir, 1);
+  expect_clean_failure(test::run_tool("heatvoronoi", base + " --t-coef -2"), {"--t-coef"}, dir, 1);
+  test::write_text_file(dir.path("s.txt"), "0 0 0\n1 2\n");
+  expect_clean_failure(test::run_tool("heatvoronoi", base + " --sites-file " + dir.path("s.txt")),
+                       {dir.path("s.txt"), "line 2"}, dir, 2);
+}
+
+TEST(HeatVoronoiTool, UnwritableOutputLeavesNothing) {
+  test::ScratchDir dir("hv");
+  test::write_text_file(dir.path("t.obj"), kTetra);
+  const std::string out = dir.path("missing_dir/o.ply");
+  expect_clean_failure(test::run_tool("heatvoronoi", dir.path("t.obj") + " -o " + out + " --sites 2"), {out}, dir, 1);
+}
+
+TEST(HeatVoronoiTool, DegenerateAndNonManifoldMeshesAreHandled) {
+  test::ScratchDir dir("hv");
+  // tetrahedron + a zero-area face + a fin sharing edge (1,2): non-manifold edge
+  test::write_text_file(dir.path("nm.obj"), std::string(kTetra) + "v 0.5 0 0\nv 1 1 -1\nf 1 2 5\nf 1 2 6\n");
+  auto r = test::run_tool("heatvoronoi", dir.path("nm.obj") + " -o " + dir.path("o.ply") + " --sites 3");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("degenerate"), std::string::npos) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir.path("o.ply")));
+}
