@@ -396,6 +396,25 @@ TEST(MeshIO, ObjIndexFormsNegativeIndicesAndConcavePolygons) {
   }
 }
 
+TEST(MeshIO, HugePolygonIsTriangulatedQuickly) {
+  TempDir tmp;
+  // A regular 5000-gon (planar, convex): n-2 triangles covering exactly its area.
+  const int n = 5000;
+  std::ostringstream off;
+  off << "OFF\n" << n << " 1 0\n";
+  for (int i = 0; i < n; ++i)
+    off << format_double(std::cos(2 * M_PI * i / n)) << ' ' << format_double(std::sin(2 * M_PI * i / n)) << " 0\n";
+  off << n;
+  for (int i = 0; i < n; ++i) off << ' ' << i;
+  off << '\n';
+  write_text(tmp.path("ngon.off"), off.str());
+  MeshReadReport rep;
+  const TriangleMesh m = read_mesh(tmp.path("ngon.off"), &rep);
+  EXPECT_EQ(m.F.rows(), n - 2);
+  EXPECT_EQ(rep.triangles_from_polygons, n - 2);
+  EXPECT_NEAR(surface_area(m.V, m.F), 0.5 * n * std::sin(2 * M_PI / n), 1e-9);
+}
+
 TEST(MeshIO, OffVariantsWithCommentsColoursAndInlineCounts) {
   TempDir tmp;
   const std::string p = tmp.path("c.off");

@@ -3,6 +3,7 @@
 #include "heatcvt/cloud_io.h"
 
 #include <pcl/PCLPointCloud2.h>
+#include <pcl/console/print.h>
 #include <pcl/io/pcd_io.h>
 
 #include <algorithm>
@@ -231,11 +232,16 @@ PointCloud read_pcd(const std::string& path, CloudReadReport& rep) {
   precheck_pcd(path, kind, header_points);
   pcl::PCLPointCloud2 blob;
   int status = -1;
+  // PCL prints its own diagnostics; we report one line ourselves, so silence it while loading.
+  const pcl::console::VERBOSITY_LEVEL verbosity = pcl::console::getVerbosityLevel();
+  pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
   try {
     status = pcl::io::loadPCDFile(path, blob);
   } catch (const std::exception& e) {
+    pcl::console::setVerbosityLevel(verbosity);
     fail(path, std::string("PCL could not read the PCD file: ") + e.what());
   }
+  pcl::console::setVerbosityLevel(verbosity);
   if (status < 0) fail(path, "PCL could not read the PCD file (malformed or truncated)");
   const long long n = static_cast<long long>(blob.width) * blob.height;
   if (n < header_points)  // PCL's ascii reader accepts short files with a warning

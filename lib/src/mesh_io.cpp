@@ -612,7 +612,10 @@ void triangulate_polygon(const Eigen::MatrixX3d& V, const std::vector<int>& poly
   auto fan = [&](const std::vector<int>& p) {
     for (size_t i = 1; i + 1 < p.size(); ++i) out.emplace_back(p[0], p[i], p[i + 1]);
   };
-  if (!(normal.norm() > 0) || !std::isfinite(normal.norm())) {
+  // Ear clipping costs O(n^3) in the worst case: very large polygons (never seen in real meshes,
+  // easily produced by corrupt files) are fanned so that no input can make the reader hang.
+  constexpr size_t kMaxEarClippingCorners = 256;
+  if (n > kMaxEarClippingCorners || !(normal.norm() > 0) || !std::isfinite(normal.norm())) {
     fan(poly);
     return;
   }

@@ -4,7 +4,8 @@
 /// STL (ascii / binary), chosen by the file extension (case-insensitive).
 ///
 /// Readers return a clean triangle mesh: polygons are triangulated (ear clipping in the
-/// polygon's best-fit plane, fan as fallback), faces with a repeated vertex index are dropped,
+/// polygon's best-fit (Newell) plane; a fan for polygons of more than 256 corners or when clipping
+/// fails), faces with a repeated vertex index are dropped,
 /// unreferenced vertices are removed (indices are renumbered preserving vertex order), STL
 /// vertices are welded by exact position. What was changed is counted in MeshReadReport.
 ///
