@@ -482,6 +482,7 @@ PolygonSoup read_ply(const std::string& path, const std::string& data, MeshReadR
         }
         const double cnt = body.read(p.count_type, context);
         if (cnt < 0) fail(path, "negative list length in " + context());
+        if (cnt > static_cast<double>(body.remaining())) fail(path, "truncated: list longer than the remaining data in " + context());
         const size_t n = static_cast<size_t>(cnt);
         if (!ascii && n * ply_size(p.type) > body.remaining())
           fail(path, "truncated: binary data ends in " + context());
@@ -489,7 +490,7 @@ PolygonSoup read_ply(const std::string& path, const std::string& data, MeshReadR
           poly.clear();
           for (size_t k = 0; k < n; ++k) {
             const double idx = body.read(p.type, context);
-            if (idx < 0 || (num_vertices >= 0 && idx >= static_cast<double>(num_vertices)))
+            if (idx < 0 || idx >= static_cast<double>(std::max<long long>(num_vertices, 0)))
               fail(path, "face " + std::to_string(i) + ": vertex index " + format_double(idx) + " out of range (" +
                              std::to_string(std::max<long long>(num_vertices, 0)) + " vertices)");
             poly.push_back(static_cast<int>(idx));
