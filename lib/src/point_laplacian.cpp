@@ -87,17 +87,23 @@ TuftedResult tufted_intrinsic_delaunay(const std::vector<std::array<int, 3>>& so
       next[6 * f + 3 + c] = 6 * f + 3 + (c + 1) % 3;
     }
   }
-  // Gluing: per undirected edge, the faces in soup order; up (min→max) of face i ↔ down of i+1.
+  // Gluing: per undirected edge (a < b), the faces sorted by the angle of their third vertex
+  // around the axis a→b (ties: soup order), then interleaved s0, s_h, s1, s_h+1, … (h = ⌈m/2⌉)
+  // so that the faces on opposite sides of the edge alternate; consecutive faces are glued, the
+  // up-going (a→b) half-edge of one to the down-going one of the next (cyclically). For the
+  // repeated copies of two consistent neighbours T, T' this pairs every copy of T with a copy of
+  // T' (a flat quad) instead of folding T onto its own copy.
   struct Side {
     int64_t key, face, up, down;
-    bool operator<(const Side& o) const { return key != o.key ? key < o.key : face < o.face; }
+    int third;
+    double angle;
   };
   std::vector<Side> sides;
   sides.reserve(3 * nf);
   for (int64_t f = 0; f < nf; ++f)
     for (int c = 0; c < 3; ++c) {
       const int64_t hf = 6 * f + c;  // front half-edge tail → head
-      const int a = tail[hf], b = tail[next[hf]];
+      const int a = tail[hf], b = tail[next[hf]], third = tail[next[next[hf]]];
       // Back half-edge of the same edge goes b → a.
       int64_t hb = -1;
       for (int d = 0; d < 3; ++d) {
@@ -105,15 +111,37 @@ TuftedResult tufted_intrinsic_delaunay(const std::vector<std::array<int, 3>>& so
         if (tail[g] == b && tail[next[g]] == a) hb = g;
       }
       const int64_t key = std::min<int64_t>(a, b) * n + std::max<int64_t>(a, b);
-      sides.push_back(a < b ? Side{key, f, hf, hb} : Side{key, f, hb, hf});
+      sides.push_back(a < b ? Side{key, f, hf, hb, third, 0.0} : Side{key, f, hb, hf, third, 0.0});
     }
-  std::sort(sides.begin(), sides.end());
+  std::sort(sides.begin(), sides.end(),
+            [](const Side& x, const Side& y) { return x.key != y.key ? x.key < y.key : x.face < y.face; });
+  std::vector<Side> order;
   for (size_t r = 0; r < sides.size();) {
     size_t e = r;
     while (e < sides.size() && sides[e].key == sides[r].key) ++e;
     const size_t m = e - r;
+    const int a = static_cast<int>(sides[r].key / n), b = static_cast<int>(sides[r].key % n);
+    const Eigen::Vector3d pa = P.row(a).transpose();
+    const Eigen::Vector3d axis = (P.row(b).transpose() - pa).normalized();
+    Eigen::Vector3d ref = P.row(sides[r].third).transpose() - pa;
+    ref = (ref - ref.dot(axis) * axis).normalized();
+    const Eigen::Vector3d ortho = axis.cross(ref);
+    for (size_t i = r; i < e; ++i) {
+      const Eigen::Vector3d d = P.row(sides[i].third).transpose() - pa;
+      double ang = std::atan2(d.dot(ortho), d.dot(ref));
+      if (!std::isfinite(ang)) ang = 0;
+      sides[i].angle = ang < 0 ? ang + 2 * M_PI : ang;
+    }
+    std::stable_sort(sides.begin() + r, sides.begin() + e,
+                     [](const Side& x, const Side& y) { return x.angle < y.angle; });
+    order.clear();
+    const size_t h = (m + 1) / 2;
+    for (size_t i = 0; i < h; ++i) {
+      order.push_back(sides[r + i]);
+      if (h + i < m) order.push_back(sides[r + h + i]);
+    }
     for (size_t i = 0; i < m; ++i) {
-      const int64_t up = sides[r + i].up, down = sides[r + (i + 1) % m].down;
+      const int64_t up = order[i].up, down = order[(i + 1) % m].down;
       twin[up] = down;
       twin[down] = up;
     }
@@ -156,7 +184,7 @@ TuftedResult tufted_intrinsic_delaunay(const std::vector<std::array<int, 3>>& so
     if (halfedge_cot(h) + halfedge_cot(t) >= -1e-10) continue;
     const int64_t h1 = next[h], h2 = next[h1], t1 = next[t], t2 = next[t1];
     // Guards: distinct faces, no endpoint of degree 2 (the flip would leave a degree-1 vertex).
-    if (t == h1 || t == h2 || twin[h1] == t2 || twin[h2] == t1 || result.flips >= max_flips) {
+    if (t == h1 || t == h2 || result.flips >= max_flips) {
       ++result.skipped;
       continue;
     }
@@ -359,6 +387,7 @@ PointLaplacian point_laplacian(const Eigen::MatrixX3d& P, const PointLaplacianOp
     const int a = static_cast<int>(key / n), b = static_cast<int>(key % n);
     if (w < 0) {
       ++out.clamped_edges;
+      out.most_negative_weight = std::min(out.most_negative_weight, w);
       continue;
     }
     if (w == 0) continue;
