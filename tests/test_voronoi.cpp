@@ -124,7 +124,8 @@ void check_diagram(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const V
   for (int r = 0; r < nrf; ++r)
     for (int k = 0; k < 3; ++k) {
       int a = d.F(r, k), b = d.F(r, (k + 1) % 3);
-      edge_cells[{std::min(a, b), std::max(a, b)}].insert(d.face_cell[r]);
+      auto& cs = edge_cells[{std::min(a, b), std::max(a, b)}];
+      if (d.face_cell[r] >= 0) cs.insert(d.face_cell[r]);
     }
   for (int c = 0; c < d.num_cells(); ++c)
     for (int n : d.cell_adjacency[c]) {
@@ -436,5 +437,74 @@ TEST(HeatVoronoi, SphereBisectorConvergesQuadratically) {
       std::printf("sphere %s t=%g slope %.2f\n", biased ? "biased" : "uniform", t, slope);
       EXPECT_GE(slope, biased ? 1.6 : 1.8) << (biased ? "biased" : "uniform") << " t=" << t;
     }
+  }
+}
+
+// Degenerate inputs: sites on the 12 icosahedron vertices of a subdivided icosahedron (exact
+// ties on bisectors through vertices and along edges), many sites per face, and a localized
+// field in which some vertices know no site at all.
+TEST(HeatVoronoi, StressTiesManySitesAndLocalizedField) {
+  auto m = test::icosphere(3);
+  HeatSolver solver(cotan_laplacian(m.V, m.F));
+  const double area = surface_area(m.V, m.F);
+  {
+    std::vector<SurfacePoint> sites;
+    for (int v = 0; v < 12; ++v)
+      for (int f = 0; f < m.F.rows() && static_cast<int>(sites.size()) <= v; ++f)
+        for (int k = 0; k < 3; ++k)
+          if (m.F(f, k) == v) {
+            sites.push_back(SurfacePoint{f, Eigen::Vector3d::Unit(k)});
+            break;
+          }
+    ASSERT_EQ(sites.size(), 12u);
+    VoronoiDiagram d = heat_voronoi(m.V, m.F, solver, sites);
+    SCOPED_TRACE("icosahedron sites");
+    check_diagram(m.V, m.F, d, true);
+    // icosahedral symmetry: all cells have the same area, 5 neighbours, 20 Voronoi vertices
+    for (int c = 0; c < 12; ++c) {
+      EXPECT_NEAR(d.cell_area[c], area / 12, 1e-3 * area / 12);
+      EXPECT_EQ(d.cell_adjacency[c].size(), 5u);
+    }
+    EXPECT_EQ(d.voronoi_vertices.size(), 20u);
+  }
+  {
+    const auto sites = random_sites(m.F, 300, 21);  // about 2 vertices per site
+    VoronoiDiagram d = heat_voronoi(m.V, m.F, solver, sites);
+    SCOPED_TRACE("300 sites");
+    check_diagram(m.V, m.F, d, true);
+    // the blocked solve + top-k merge of heat_voronoi equals the field of the full dense matrix
+    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(m.V.rows(), 300);
+    for (int s = 0; s < 300; ++s)
+      for (int k = 0; k < 3; ++k) rhs(m.F(sites[s].face, k), s) += sites[s].bary[k];
+    const HeatField full = heat_field_from_dense(solver.solve(rhs), 8);
+    VoronoiDiagram e = tessellate(m.V, m.F, full);
+    EXPECT_EQ(e.F, d.F);
+    EXPECT_EQ(e.face_cell, d.face_cell);
+    EXPECT_EQ(e.V, d.V);
+  }
+  {
+    // localized: each site knows its heat only within a geodesic-ish ball (Euclidean 0.5)
+    const auto sites = random_sites(m.F, 30, 8);
+    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(m.V.rows(), 30);
+    for (int s = 0; s < 30; ++s)
+      for (int k = 0; k < 3; ++k) rhs(m.F(sites[s].face, k), s) += sites[s].bary[k];
+    const Eigen::MatrixXd U = solver.solve(rhs);
+    std::vector<std::vector<int>> idx(30);
+    std::vector<std::vector<double>> val(30);
+    for (int s = 0; s < 30; ++s) {
+      const Eigen::Vector3d p = position(m.V, m.F, sites[s]);
+      for (int v = 0; v < m.V.rows(); ++v)
+        if ((m.V.row(v).transpose() - p).norm() < 0.5) {
+          idx[s].push_back(v);
+          val[s].push_back(U(v, s));
+        }
+    }
+    VoronoiDiagram d = tessellate(m.V, m.F, heat_field_from_sparse(static_cast<int>(m.V.rows()), idx, val, 4));
+    SCOPED_TRACE("localized");
+    int unknown = 0;
+    for (int r = 0; r < d.F.rows(); ++r) unknown += d.face_cell[r] < 0;
+    std::printf("localized field: %d refined faces without a site\n", unknown);
+    check_diagram(m.V, m.F, d, true, unknown == 0);
+    EXPECT_TRUE(d.unreached_components.empty());
   }
 }

@@ -44,27 +44,68 @@ void keep_hottest(std::vector<SiteHeat>& row, int keep) {
   if (static_cast<int>(row.size()) > keep) row.resize(keep);
 }
 
+// The `keep` hottest sites per vertex, merged column block by column block (columns must be
+// added in increasing site order, so ties keep the smaller site first: the order of
+// keep_hottest). Column-major friendly: each thread owns a range of vertices.
+class TopKField {
+ public:
+  TopKField(int num_vertices, int keep)
+      : nv_(num_vertices), keep_(keep), site_(static_cast<size_t>(num_vertices) * keep, -1),
+        heat_(static_cast<size_t>(num_vertices) * keep, 0.0), count_(num_vertices, 0) {}
+
+  void add_columns(const Eigen::MatrixXd& U, int first_site, int threads) {
+    const int nb = static_cast<int>(U.cols());
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int v = 0; v < nv_; ++v) {
+      int* ts = &site_[static_cast<size_t>(v) * keep_];
+      double* th = &heat_[static_cast<size_t>(v) * keep_];
+      int& c = count_[v];
+      for (int j = 0; j < nb; ++j) {
+        const double h = U(v, j);
+        if (c == keep_ && !(h > th[keep_ - 1])) continue;
+        int pos = c < keep_ ? c : keep_ - 1;
+        while (pos > 0 && h > th[pos - 1]) {
+          ts[pos] = ts[pos - 1];
+          th[pos] = th[pos - 1];
+          --pos;
+        }
+        ts[pos] = first_site + j;
+        th[pos] = h;
+        if (c < keep_) ++c;
+      }
+    }
+  }
+
+  HeatField finish(int num_sites) const {
+    HeatField field;
+    field.num_sites = num_sites;
+    field.offsets.assign(nv_ + 1, 0);
+    for (int v = 0; v < nv_; ++v) field.offsets[v + 1] = field.offsets[v] + count_[v];
+    field.site.resize(field.offsets[nv_]);
+    field.heat.resize(field.offsets[nv_]);
+    for (int v = 0; v < nv_; ++v)
+      for (int i = 0; i < count_[v]; ++i) {
+        field.site[field.offsets[v] + i] = site_[static_cast<size_t>(v) * keep_ + i];
+        field.heat[field.offsets[v] + i] = heat_[static_cast<size_t>(v) * keep_ + i];
+      }
+    return field;
+  }
+
+ private:
+  int nv_, keep_;
+  std::vector<int> site_;
+  std::vector<double> heat_;
+  std::vector<int> count_;
+};
+
 }  // namespace
 
 HeatField heat_field_from_dense(const Eigen::MatrixXd& U, int keep) {
   if (keep < 1) throw InvalidInputError("heat_field_from_dense: keep must be >= 1, got " + std::to_string(keep));
   if (!U.allFinite()) throw InvalidInputError("heat_field_from_dense: the heat matrix has NaN or infinite entries");
-  HeatField field;
-  field.num_sites = static_cast<int>(U.cols());
-  const int n = static_cast<int>(U.rows());
-  field.offsets.assign(n + 1, 0);
-  std::vector<SiteHeat> row;
-  for (int v = 0; v < n; ++v) {
-    row.clear();
-    for (int s = 0; s < U.cols(); ++s) row.push_back({s, U(v, s)});
-    keep_hottest(row, keep);
-    for (const SiteHeat& e : row) {
-      field.site.push_back(e.site);
-      field.heat.push_back(e.heat);
-    }
-    field.offsets[v + 1] = static_cast<int>(field.site.size());
-  }
-  return field;
+  TopKField top(static_cast<int>(U.rows()), keep);
+  top.add_columns(U, 0, resolve_threads(0));
+  return top.finish(static_cast<int>(U.cols()));
 }
 
 HeatField heat_field_from_sparse(int num_vertices, const std::vector<std::vector<int>>& indices,
@@ -635,7 +676,6 @@ VoronoiDiagram heat_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F
                             " vertices but the mesh has " + std::to_string(V.rows()));
   if (options.keep_sites_per_vertex < 1)
     throw InvalidInputError("heat_voronoi: keep_sites_per_vertex must be >= 1");
-  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(V.rows(), static_cast<Eigen::Index>(sites.size()));
   for (size_t s = 0; s < sites.size(); ++s) {
     const SurfacePoint& p = sites[s];
     if (p.face < 0 || p.face >= F.rows())
@@ -643,10 +683,25 @@ VoronoiDiagram heat_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F
                               " out of range [0, " + std::to_string(F.rows()) + ")");
     if (!p.bary.allFinite())
       throw InvalidInputError("heat_voronoi: site " + std::to_string(s) + " has non-finite barycentric coordinates");
-    for (int k = 0; k < 3; ++k) rhs(F(p.face, k), static_cast<Eigen::Index>(s)) += p.bary[k];  // eq. 8
   }
-  const Eigen::MatrixXd U = solver.solve(rhs);
-  return tessellate(V, F, heat_field_from_dense(U, options.keep_sites_per_vertex), options);
+  // Batched solves in blocks of columns; the `keep` hottest sites per vertex are merged block by
+  // block, so memory is #V·(keep + block) instead of #V·#sites. Same result as
+  // heat_field_from_dense on the full matrix (order: heat descending, then site ascending).
+  const int nv = static_cast<int>(V.rows()), ns = static_cast<int>(sites.size());
+  const int block = 64;
+  const int threads = resolve_threads(options.threads);
+  TopKField top(nv, options.keep_sites_per_vertex);
+  for (int s0 = 0; s0 < ns; s0 += block) {
+    const int nb = std::min(block, ns - s0);
+    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(V.rows(), nb);
+    for (int j = 0; j < nb; ++j)
+      for (int k = 0; k < 3; ++k) rhs(F(sites[s0 + j].face, k), j) += sites[s0 + j].bary[k];  // eq. 8
+    const Eigen::MatrixXd U = solver.solve(rhs);
+    if (!U.allFinite()) throw SolverError("heat_voronoi: the heat solve produced non-finite values");
+    top.add_columns(U, s0, threads);
+  }
+  const HeatField field = top.finish(ns);
+  return tessellate(V, F, field, options);
 }
 
 std::vector<std::vector<std::pair<int, double>>> cell_load_vectors(const VoronoiDiagram& diagram,

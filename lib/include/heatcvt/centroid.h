@@ -33,13 +33,20 @@ SurfacePoint refine_hottest_vertex(const Eigen::MatrixX3d& V, const Eigen::Matri
                                    int hottest_vertex);
 
 /// Heat centroid of every cell of the diagram with full solves: one area-source diffusion per
-/// cell (batched), hottest vertex among the vertices of the cell's faces, optional refinement.
+/// cell (load vector of its refined pieces, cell_load_vectors(); solved in blocks of 64 columns
+/// with solver.solve(MatrixXd); `steps` > 1 repeats h ← u, i.e. rhs = M u), hottest vertex among
+/// the vertices of the cell's parent faces, optional refinement (refine_hottest_vertex).
+///   F is the original mesh of the diagram (diagram.face_parent indexes it).
+///   returns #cells points; a cell without refined faces (empty) gets face = −1.
+/// \throw InvalidInputError if the solver or the diagram do not match the mesh, steps < 1.
 std::vector<SurfacePoint> heat_centroids(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
                                          const HeatSolver& solver, const VoronoiDiagram& diagram,
                                          const CentroidOptions& options = {});
 
 /// Heat centroid of an arbitrary set of whole faces (area source on them), e.g. the polygons of
 /// the Fig. 4 experiment. The hottest vertex is searched over all vertices.
+/// \throw InvalidInputError if `faces` is empty or has an index out of range, steps < 1, or the
+/// solver does not match the mesh.
 SurfacePoint heat_centroid_of_faces(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const HeatSolver& solver,
                                     const std::vector<int>& faces, const CentroidOptions& options = {});
 

@@ -80,11 +80,24 @@ struct VoronoiDiagram {
 
 /// Tessellates the mesh (V, F) given the heat field of the sites.
 ///   V #V by 3, F #F by 3, field.num_vertices() == #V.
+/// Corner labels: largest heat, ties by eq. 19 (heat at the face's other two corners, then the
+/// smaller site). Faces whose corners agree keep one cell; the others are cut exactly along the
+/// bisectors (eq. 20). Points on original edges depend only on the edge (canonical orientation,
+/// 1D upper envelope of the sites known at its ends) and are shared by both faces, so the
+/// refined mesh is conforming (same Euler characteristic and boundary as the input).
+/// A site absent from a vertex's row counts as heat 0 there; faces whose corners know no site
+/// get cell −1, and components without any known heat are listed in unreached_components.
+/// Parallel over faces; the output does not depend on the thread count.
+/// \throw InvalidInputError if the mesh is invalid or the field does not match it.
 VoronoiDiagram tessellate(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const HeatField& field,
                           const VoronoiOptions& options = {});
 
-/// One diffusion per site with the solver (point sources, eq. 8), then tessellate().
-/// \throw InvalidInputError if a site's face index is out of range or there are no sites.
+/// One diffusion per site with the solver (point sources, eq. 8: rhs = barycentric vector),
+/// batched in blocks of 64 columns whose `keep_sites_per_vertex` hottest sites per vertex are
+/// merged (memory #V·(keep + 64), result identical to heat_field_from_dense of the full
+/// matrix), then tessellate().
+/// \throw InvalidInputError if a site's face index is out of range, its barycentric
+/// coordinates are not finite, there are no sites, or the solver does not match the mesh.
 VoronoiDiagram heat_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const HeatSolver& solver,
                             const std::vector<SurfacePoint>& sites, const VoronoiOptions& options = {});
 
