@@ -62,6 +62,7 @@ class TopKField {
       int& c = count_[v];
       for (int j = 0; j < nb; ++j) {
         const double h = U(v, j);
+        if (h == 0.0) continue;  // absent means 0: an exact zero carries no information
         if (c == keep_ && !(h > th[keep_ - 1])) continue;
         int pos = c < keep_ ? c : keep_ - 1;
         while (pos > 0 && h > th[pos - 1]) {
@@ -125,7 +126,7 @@ HeatField heat_field_from_sparse(int num_vertices, const std::vector<std::vector
                                 std::to_string(v) + " out of range [0, " + std::to_string(num_vertices) + ")");
       if (!std::isfinite(values[s][k]))
         throw InvalidInputError("heat_field_from_sparse: site " + std::to_string(s) + " has a non-finite value");
-      rows[v].push_back({static_cast<int>(s), values[s][k]});
+      if (values[s][k] != 0.0) rows[v].push_back({static_cast<int>(s), values[s][k]});  // absent means 0
     }
   }
   HeatField field;

@@ -13,7 +13,9 @@ namespace heatcvt {
 
 /// Heat of the sites at the vertices where it is known, in compressed rows: the pairs of
 /// vertex v are `site[offsets[v] .. offsets[v+1])` / `heat[...]`, sorted by decreasing heat.
-/// A site absent from a vertex's row has heat 0 there (far away, or outside a localized set).
+/// A site absent from a vertex's row has heat 0 there (far away, or outside a localized set);
+/// the builders below therefore store no exact zeros (e.g. the heat of a site on another
+/// connected component), so a vertex with an empty row is one no site reached.
 struct HeatField {
   int num_sites = 0;
   std::vector<int> offsets;  ///< #V + 1
