@@ -182,3 +182,43 @@ TEST(HeatCentroid, CellsOnIcosphereNearAreaCentroid) {
   }
   std::printf("icosphere cells: worst |heat centroid - normalised area centroid| = %.3f h\n", worst / h);
 }
+
+// The exact cell load vectors integrate linear functions exactly (∫_cell f = Σ_v w_v f(v) for
+// linear f), and heat_centroids follows the documented pipeline: load vector → `steps` implicit
+// steps (diffuse_steps) → hottest vertex of the cell's parent faces → refinement.
+TEST(HeatCentroid, LoadVectorsAndPipelineConsistent) {
+  auto m = test::icosphere(3);
+  HeatSolver solver(cotan_laplacian(m.V, m.F));
+  std::mt19937 rng(9);
+  std::uniform_int_distribution<int> face(0, static_cast<int>(m.F.rows()) - 1);
+  std::vector<SurfacePoint> sites(12);
+  for (auto& s : sites) s.face = face(rng);
+  VoronoiDiagram d = heat_voronoi(m.V, m.F, solver, sites);
+  const auto faces = cell_faces(d);
+  for (int c = 0; c < d.num_cells(); ++c) {
+    Eigen::Vector3d exact = Eigen::Vector3d::Zero();  // ∫_cell (x, y, z) over the refined pieces
+    for (int r : faces[c])
+      exact += d.face_area[r] * (d.V.row(d.F(r, 0)) + d.V.row(d.F(r, 1)) + d.V.row(d.F(r, 2))).transpose() / 3.0;
+    Eigen::Vector3d via_load = Eigen::Vector3d::Zero();
+    for (auto& [v, w] : cell_load_vector(d, m.F, c)) via_load += w * m.V.row(v).transpose();
+    EXPECT_LT((exact - via_load).norm(), 1e-12);
+  }
+  CentroidOptions opt;
+  opt.steps = 3;
+  const auto cents = heat_centroids(m.V, m.F, solver, d, opt);
+  const auto vf = vertex_faces(static_cast<int>(m.V.rows()), m.F);
+  const Eigen::MatrixX3d N = vertex_normals(m.V, m.F);
+  for (int c = 0; c < d.num_cells(); ++c) {
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m.V.rows());
+    for (auto& [v, w] : cell_load_vector(d, m.F, c)) rhs[v] += w;
+    const Eigen::VectorXd u = solver.diffuse_steps(rhs, 3);
+    int hot = -1;
+    for (int r : faces[c])
+      for (int k = 0; k < 3; ++k) {
+        const int v = m.F(d.face_parent[r], k);
+        if (hot < 0 || u[v] > u[hot] || (u[v] == u[hot] && v < hot)) hot = v;
+      }
+    const SurfacePoint p = refine_hottest_vertex(m.V, m.F, vf, N, u, hot);
+    EXPECT_LT((position(m.V, m.F, p) - position(m.V, m.F, cents[c])).norm(), 1e-9) << "cell " << c;
+  }
+}
