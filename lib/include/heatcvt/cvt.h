@@ -1,0 +1,136 @@
+#pragma once
+/// \file cvt.h
+/// Centroidal Voronoi tessellations by Lloyd iteration with heat Voronoi cells and heat
+/// centroids (paper §7.1), with localized solves (paper §6) so that each iteration costs
+/// about (number of sites) × (size of a few cells), not (number of sites) × #V.
+///
+/// One engine, two Laplacian builders: centroidal_voronoi() only needs (V, F) for geometry
+/// (positions, the tessellation's triangles) and a Laplacian. Triangle meshes use
+/// cotan_laplacian() (or anisotropic_laplacian() below); point clouds pass their point Laplacian
+/// and its triangle set F (point_laplacian.h).
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "heatcvt/dual_mesh.h"
+#include "heatcvt/laplacian.h"
+#include "heatcvt/mesh.h"
+#include "heatcvt/voronoi.h"
+
+namespace heatcvt {
+
+/// How the initial sites are chosen when none are given.
+enum class CvtInitialization {
+  random,          ///< area-uniform random points (std::mt19937 seeded with `seed`)
+  farthest_point,  ///< random first vertex, then repeatedly the vertex farthest (graph geodesic) from all sites
+};
+
+/// Options of centroidal_voronoi(). Defaults follow the paper (100 iterations, t = h̄²).
+struct CvtOptions {
+  /// Number of sites (generators). Default 1000.
+  int sites = 1000;
+  /// Maximum number of Lloyd iterations. Default 100.
+  int iterations = 100;
+  /// Stop early when no site moved more than `tolerance · spacing`, spacing = sqrt(area / sites).
+  /// 0 = always run all iterations. Default 0.
+  double tolerance = 0.0;
+  /// Seed of the random initialisation. Default 1.
+  std::uint32_t seed = 1;
+  /// Initial sampling when no initial sites are given. Default random (as in the paper).
+  CvtInitialization initialization = CvtInitialization::random;
+  /// Threads (OpenMP, parallel over sites); 0 = all hardware threads. Results do not depend on it.
+  int threads = 0;
+  /// t = time_coefficient · h̄² of the Laplacian's mean edge length. Default 1 (paper).
+  double time_coefficient = 1.0;
+  /// Index set of a site's Voronoi diffusion: its cell plus this many rings of neighbouring cells
+  /// (previous iteration's adjacency). Default 2 (paper: cell, neighbours, their neighbours).
+  int voronoi_rings = 2;
+  /// Index set of a cell's centroid diffusion: the cell plus this many rings of cells. Default 1.
+  int centroid_rings = 1;
+  /// Index set of the Voronoi diffusions once the sites have settled (max move below a quarter of
+  /// the spacing): the cell plus this many rings. Default 1 (measured: same cells as 2 rings,
+  /// about half the cost). Set it to voronoi_rings to keep the paper's 2 rings throughout.
+  int voronoi_rings_settled = 1;
+  /// Quadratic sub-vertex refinement of the centroid (§7.1 "Centroids on faces"). Default true.
+  bool quadratic_refinement = true;
+  /// Forward-solve pruning of the localized solves (localized_solve.h). The heat only feeds
+  /// comparisons (labels, hottest vertex), so relative errors of 1e-9 are immaterial. Default 1e-9.
+  double drop_tolerance = 1e-9;
+  /// Sites kept per vertex in the heat field. Default 8.
+  int keep_sites_per_vertex = 8;
+  /// Build the dual triangulation of the final diagram. Default true.
+  bool build_dual = true;
+};
+
+/// Statistics of one Lloyd iteration.
+struct CvtIterationStats {
+  int iteration = 0;           ///< 1-based
+  double seconds = 0;          ///< wall time of the iteration
+  double voronoi_seconds = 0;  ///< of which localized Voronoi solves + tessellation
+  double centroid_seconds = 0; ///< of which centroid solves + refinement
+  double voronoi_solve_seconds = 0;  ///< localized point-source solves (part of voronoi_seconds)
+  double tessellate_seconds = 0;     ///< heat field + tessellation (part of voronoi_seconds)
+  double max_move = 0;         ///< largest site displacement (Euclidean, input units)
+  double mean_move = 0;
+  double area_variance = 0;    ///< variance of the cell areas of the diagram this iteration started from
+  double mean_index_set = 0;   ///< mean |I| of the Voronoi solves
+  int revived_sites = 0;       ///< sites whose cell was empty, moved into the largest cell this iteration
+};
+
+/// Result of centroidal_voronoi().
+struct CvtResult {
+  std::vector<SurfacePoint> sites;   ///< final sites
+  Eigen::MatrixX3d positions;        ///< #sites by 3 positions of the final sites
+  VoronoiDiagram diagram;            ///< exact heat Voronoi diagram of the final sites
+  DualMesh dual;                     ///< its dual triangulation (if options.build_dual)
+  std::vector<CvtIterationStats> iterations;
+  bool converged = false;            ///< stopped by the tolerance
+  double factor_seconds = 0;         ///< Cholesky factorisation of M − tL
+  std::size_t factor_bytes = 0;      ///< memory of the factor
+  double setup_seconds = 0;          ///< factorisation + adjacency + initial sites
+  double total_seconds = 0;
+  double final_area_variance = 0;    ///< variance of the final cell areas
+};
+
+/// Progress callback: called after every iteration with its statistics; return false to stop.
+using CvtCallback = std::function<bool(const CvtIterationStats&)>;
+
+/// Lloyd iteration for a CVT of the surface (V, F) with the given Laplacian (paper §7.1).
+///   V #V by 3, F #F by 3; laplacian.num_vertices() == #V (cotan or point Laplacian).
+///   initial_sites: optional starting sites (empty = options.initialization with options.seed);
+///   then options.sites is ignored.
+///   face_metric_area: optional #F areas in the Laplacian's metric (anisotropic lift); the area
+///   sources of the centroids use them. Empty = the Euclidean areas of (V, F).
+/// Each iteration: per site a localized point-source diffusion over its cell and
+/// `voronoi_rings` rings of neighbouring cells → heat field → (exact) tessellation → per cell an
+/// area-source diffusion (eq. 10–11) localized to the cell and `centroid_rings` rings → hottest
+/// vertex → quadratic refinement → move. Deterministic: same inputs and seed give bit-identical
+/// results for any thread count.
+/// \throw InvalidInputError on bad sizes/options (sites < 1 or > #V, iterations < 0, ...);
+///        SolverError if the heat matrix cannot be factored.
+CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const Laplacian& laplacian,
+                             const CvtOptions& options = {}, const std::vector<SurfacePoint>& initial_sites = {},
+                             const CvtCallback& callback = {},
+                             const Eigen::VectorXd& face_metric_area = Eigen::VectorXd());
+
+/// Laplacian of the anisotropic CVT (paper §7.1, Fig. 9): scales the mesh into the unit
+/// bounding box (largest side 1), lifts each vertex to (p, λ n) ∈ R⁶ (n = area-weighted unit
+/// vertex normal; paper λ = 0.05) and builds the cotan Laplacian from the lifted edge lengths
+/// (face_edge_lengths + cotan_laplacian_from_lengths); h̄ (hence t) is the lifted mean edge
+/// length. `face_metric_area`, if given, receives the lifted face areas (#F, same scaled units),
+/// to be passed to centroidal_voronoi() so the centroids' area sources use the lifted metric.
+/// \throw InvalidInputError on an invalid mesh or λ < 0 / non-finite.
+Laplacian anisotropic_laplacian(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, double lambda,
+                                Eigen::VectorXd* face_metric_area = nullptr);
+
+/// Initial sites: area-uniform random points (seeded) or farthest-point sampling (graph geodesics).
+/// \throw InvalidInputError if count < 1.
+std::vector<SurfacePoint> initial_sites(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, int count,
+                                        CvtInitialization method, std::uint32_t seed);
+
+/// Variance of the cell areas (population variance over the cells).
+double cell_area_variance(const VoronoiDiagram& diagram);
+
+}  // namespace heatcvt

@@ -1,0 +1,706 @@
+// Lloyd iteration with heat Voronoi cells and heat centroids (paper §7.1), localized solves
+// (paper §6). See cvt.h.
+#include "heatcvt/cvt.h"
+
+#include <omp.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <queue>
+#include <random>
+#include <string>
+
+#include "heatcvt/centroid.h"
+#include "heatcvt/errors.h"
+#include "heatcvt/heat_solver.h"
+#include "heatcvt/localized_solve.h"
+#include "heatcvt/parallel.h"
+
+namespace heatcvt {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// Vertex adjacency with edge lengths, CSR.
+struct Graph {
+  std::vector<int> off, nbr;
+  std::vector<double> len;
+};
+
+Graph edge_graph(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F) {
+  const int n = static_cast<int>(V.rows());
+  std::vector<std::vector<int>> adj = vertex_neighbors(n, F);
+  Graph g;
+  g.off.assign(n + 1, 0);
+  for (int v = 0; v < n; ++v) g.off[v + 1] = g.off[v] + static_cast<int>(adj[v].size());
+  g.nbr.resize(g.off[n]);
+  g.len.resize(g.off[n]);
+  for (int v = 0; v < n; ++v)
+    for (size_t k = 0; k < adj[v].size(); ++k) {
+      g.nbr[g.off[v] + k] = adj[v][k];
+      g.len[g.off[v] + k] = (V.row(v) - V.row(adj[v][k])).norm();
+    }
+  return g;
+}
+
+int nearest_corner(const Eigen::MatrixX3i& F, const SurfacePoint& p) {
+  int k = 0;
+  p.bary.maxCoeff(&k);
+  return F(p.face, k);
+}
+
+// Multi-source Dijkstra: label of the nearest source (ties: smaller source index first popped).
+std::vector<int> graph_voronoi(const Graph& g, const std::vector<int>& sources) {
+  const int n = static_cast<int>(g.off.size()) - 1;
+  std::vector<int> label(n, -1);
+  std::vector<double> dist(n, std::numeric_limits<double>::infinity());
+  using Item = std::pair<double, std::pair<int, int>>;  // (distance, (source, vertex)): deterministic order
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> q;
+  for (size_t s = 0; s < sources.size(); ++s) q.push({0.0, {static_cast<int>(s), sources[s]}});
+  while (!q.empty()) {
+    const auto [d, sv] = q.top();
+    q.pop();
+    const int s = sv.first, v = sv.second;
+    if (label[v] >= 0) continue;
+    label[v] = s;
+    dist[v] = d;
+    for (int k = g.off[v]; k < g.off[v + 1]; ++k) {
+      const int w = g.nbr[k];
+      const double nd = d + g.len[k];
+      if (label[w] < 0 && nd < dist[w]) {
+        dist[w] = nd;
+        q.push({nd, {s, w}});
+      }
+    }
+  }
+  return label;
+}
+
+// Per-thread scratch.
+struct ThreadScratch {
+  LocalizedWorkspace ws;
+  std::vector<unsigned char> mark;   // vertex marks (zero between uses)
+  std::vector<unsigned char> cmark;  // cell marks
+  std::vector<int> cells, frontier, next;
+  Eigen::VectorXd heat;              // dense heat, zero between uses
+  std::vector<double> dist;          // Dijkstra, +inf between uses
+  std::vector<int> touched;
+  std::vector<std::pair<int, double>> rhs;
+  std::vector<double> values;
+};
+
+// Neighbourhood data of the current diagram: per cell its vertices and neighbouring cells.
+struct CellData {
+  std::vector<std::vector<int>> vertices;
+  std::vector<std::vector<int>> adjacency;
+};
+
+CellData cells_from_labels(const Graph& g, const std::vector<int>& label, int num_cells) {
+  const int n = static_cast<int>(label.size());
+  CellData c;
+  c.vertices.resize(num_cells);
+  c.adjacency.resize(num_cells);
+  for (int v = 0; v < n; ++v) {
+    if (label[v] < 0) continue;
+    c.vertices[label[v]].push_back(v);
+    for (int k = g.off[v]; k < g.off[v + 1]; ++k) {
+      const int w = g.nbr[k];
+      if (label[w] >= 0 && label[w] != label[v]) c.adjacency[label[v]].push_back(label[w]);
+    }
+  }
+  for (auto& a : c.adjacency) {
+    std::sort(a.begin(), a.end());
+    a.erase(std::unique(a.begin(), a.end()), a.end());
+  }
+  return c;
+}
+
+// Cells within `rings` steps of `cell` in the adjacency graph (cell included), sorted.
+void ring_cells(const CellData& cd, int cell, int rings, ThreadScratch& t) {
+  t.cells.clear();
+  t.frontier.assign(1, cell);
+  t.cmark[cell] = 1;
+  t.cells.push_back(cell);
+  for (int r = 0; r < rings; ++r) {
+    t.next.clear();
+    for (int c : t.frontier)
+      for (int a : cd.adjacency[c])
+        if (!t.cmark[a]) {
+          t.cmark[a] = 1;
+          t.cells.push_back(a);
+          t.next.push_back(a);
+        }
+    t.frontier.swap(t.next);
+  }
+  for (int c : t.cells) t.cmark[c] = 0;
+  std::sort(t.cells.begin(), t.cells.end());
+}
+
+// Union of the vertices of t.cells, in a deterministic order (cells sorted, vertices sorted per cell).
+void union_vertices(const CellData& cd, ThreadScratch& t, std::vector<int>& out) {
+  out.clear();
+  for (int c : t.cells)
+    for (int v : cd.vertices[c])
+      if (!t.mark[v]) {
+        t.mark[v] = 1;
+        out.push_back(v);
+      }
+  for (int v : out) t.mark[v] = 0;
+}
+
+// Dijkstra ball of the given radius around the vertices of a face (fallback for empty cells).
+void dijkstra_ball(const Graph& g, const Eigen::MatrixX3i& F, int face, double radius, ThreadScratch& t,
+                   std::vector<int>& out) {
+  out.clear();
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> q;
+  for (int k = 0; k < 3; ++k) {
+    const int v = F(face, k);
+    if (t.dist[v] > 0) {
+      if (std::isinf(t.dist[v])) t.touched.push_back(v);
+      t.dist[v] = 0;
+      q.push({0.0, v});
+    }
+  }
+  while (!q.empty()) {
+    const auto [d, v] = q.top();
+    q.pop();
+    if (d > t.dist[v]) continue;
+    out.push_back(v);
+    for (int k = g.off[v]; k < g.off[v + 1]; ++k) {
+      const int w = g.nbr[k];
+      const double nd = d + g.len[k];
+      if (nd <= radius && nd < t.dist[w]) {
+        if (std::isinf(t.dist[w])) t.touched.push_back(w);
+        t.dist[w] = nd;
+        q.push({nd, w});
+      }
+    }
+  }
+  for (int v : t.touched) t.dist[v] = std::numeric_limits<double>::infinity();
+  t.touched.clear();
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+}
+
+// Per-vertex hottest sites from the per-site localized solves (CSR, sorted by decreasing heat,
+// ties by increasing site): the same content as heat_field_from_sparse(), without per-vertex
+// allocations.
+HeatField build_field(int n, const std::vector<std::vector<int>>& indices, const std::vector<std::vector<double>>& values,
+                      int keep, int threads) {
+  const int ns = static_cast<int>(indices.size());
+  std::vector<int> count(n + 1, 0);
+  for (int s = 0; s < ns; ++s)
+    for (int v : indices[s]) ++count[v + 1];
+  for (int v = 0; v < n; ++v) count[v + 1] += count[v];
+  std::vector<int> site(count[n]);
+  std::vector<double> heat(count[n]);
+  {
+    std::vector<int> fill(count.begin(), count.end() - 1);
+    for (int s = 0; s < ns; ++s)
+      for (size_t i = 0; i < indices[s].size(); ++i) {
+        const int v = indices[s][i], k = fill[v]++;
+        site[k] = s;
+        heat[k] = values[s][i];
+      }
+  }
+  HeatField field;
+  field.num_sites = ns;
+  field.offsets.assign(n + 1, 0);
+  std::vector<int> kept(n);
+#pragma omp parallel num_threads(threads)
+  {
+    std::vector<std::pair<double, int>> row;
+#pragma omp for schedule(static)
+    for (int v = 0; v < n; ++v) {
+      row.clear();
+      for (int k = count[v]; k < count[v + 1]; ++k) row.push_back({heat[k], site[k]});
+      auto better = [](const std::pair<double, int>& a, const std::pair<double, int>& b) {
+        return a.first != b.first ? a.first > b.first : a.second < b.second;
+      };
+      const int m = std::min<int>(keep, static_cast<int>(row.size()));
+      std::partial_sort(row.begin(), row.begin() + m, row.end(), better);
+      for (int k = 0; k < m; ++k) {
+        site[count[v] + k] = row[k].second;
+        heat[count[v] + k] = row[k].first;
+      }
+      kept[v] = m;
+    }
+  }
+  for (int v = 0; v < n; ++v) field.offsets[v + 1] = field.offsets[v] + kept[v];
+  field.site.resize(field.offsets[n]);
+  field.heat.resize(field.offsets[n]);
+  for (int v = 0; v < n; ++v)
+    for (int k = 0; k < kept[v]; ++k) {
+      field.site[field.offsets[v] + k] = site[count[v] + k];
+      field.heat[field.offsets[v] + k] = heat[count[v] + k];
+    }
+  return field;
+}
+
+// The part of a cell inside one face: area fraction and ∫ φ_k / area(face) for its corners.
+struct Piece {
+  int face, cell;
+  double fraction;
+  double w[3];
+};
+
+double field_heat(const HeatField& f, int v, int s) {
+  for (int k = f.offsets[v]; k < f.offsets[v + 1]; ++k)
+    if (f.site[k] == s) return f.heat[k];
+  return 0.0;
+}
+
+// Exact cells of one face (paper eq. 20): inside a face every u_s is linear, so the part of the face
+// where s is hottest is the triangle clipped by the half-planes u_s − u_r ≥ 0 (convex). Faces whose
+// three corners share the hottest site belong to it entirely (u_r − u_s ≤ 0 at the corners implies
+// it everywhere), which is the common case; only faces on cell boundaries are clipped.
+void face_pieces(const HeatField& field, const Eigen::MatrixX3i& F, int f, std::vector<Piece>& out,
+                 std::vector<int>& cand, std::vector<std::array<double, 3>>& uvals) {
+  const int c[3] = {F(f, 0), F(f, 1), F(f, 2)};
+  int top[3];
+  for (int k = 0; k < 3; ++k) top[k] = field.offsets[c[k] + 1] > field.offsets[c[k]] ? field.site[field.offsets[c[k]]] : -1;
+  if (top[0] == top[1] && top[1] == top[2]) {
+    if (top[0] >= 0) out.push_back({f, top[0], 1.0, {1.0 / 3, 1.0 / 3, 1.0 / 3}});
+    return;
+  }
+  cand.clear();
+  for (int k = 0; k < 3; ++k)
+    for (int e = field.offsets[c[k]]; e < field.offsets[c[k] + 1]; ++e) cand.push_back(field.site[e]);
+  std::sort(cand.begin(), cand.end());
+  cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+  uvals.resize(cand.size());
+  for (size_t i = 0; i < cand.size(); ++i)
+    for (int k = 0; k < 3; ++k) uvals[i][k] = field_heat(field, c[k], cand[i]);
+  // drop candidates dominated at all three corners by one of the corner tops
+  std::vector<int> keep_idx;
+  keep_idx.reserve(cand.size());
+  for (size_t i = 0; i < cand.size(); ++i) {
+    bool dominated = false;
+    for (int t = 0; t < 3 && !dominated; ++t) {
+      if (top[t] < 0 || top[t] == cand[i]) continue;
+      const size_t j = std::lower_bound(cand.begin(), cand.end(), top[t]) - cand.begin();
+      dominated = uvals[i][0] < uvals[j][0] && uvals[i][1] < uvals[j][1] && uvals[i][2] < uvals[j][2];
+    }
+    if (!dominated) keep_idx.push_back(static_cast<int>(i));
+  }
+  std::vector<Eigen::Vector3d> poly, next;
+  std::vector<double> g;
+  for (int i : keep_idx) {
+    poly = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()};
+    for (int j : keep_idx) {
+      if (j == i || poly.empty()) continue;
+      const double gi[3] = {uvals[i][0] - uvals[j][0], uvals[i][1] - uvals[j][1], uvals[i][2] - uvals[j][2]};
+      if (gi[0] == 0 && gi[1] == 0 && gi[2] == 0) {  // identical heat: the smaller site index wins
+        if (cand[i] > cand[j]) poly.clear();
+        continue;
+      }
+      g.resize(poly.size());
+      bool all_in = true;
+      for (size_t p = 0; p < poly.size(); ++p) {
+        g[p] = poly[p][0] * gi[0] + poly[p][1] * gi[1] + poly[p][2] * gi[2];
+        all_in &= g[p] >= 0;
+      }
+      if (all_in) continue;
+      next.clear();
+      for (size_t p = 0; p < poly.size(); ++p) {
+        const size_t q = (p + 1) % poly.size();
+        if (g[p] >= 0) next.push_back(poly[p]);
+        if ((g[p] >= 0) != (g[q] >= 0)) {
+          const double t = g[p] / (g[p] - g[q]);
+          next.push_back(poly[p] + t * (poly[q] - poly[p]));
+        }
+      }
+      poly.swap(next);
+      if (poly.size() < 3) poly.clear();
+    }
+    if (poly.size() < 3) continue;
+    Piece piece{f, cand[i], 0.0, {0, 0, 0}};
+    for (size_t p = 1; p + 1 < poly.size(); ++p) {
+      const Eigen::Vector3d &a = poly[0], &b = poly[p], &d = poly[p + 1];
+      // area fraction of triangle (a, b, d) of the face, in barycentric coordinates (λ1, λ2)
+      const double frac = std::abs((b[1] - a[1]) * (d[2] - a[2]) - (b[2] - a[2]) * (d[1] - a[1]));
+      piece.fraction += frac;
+      for (int k = 0; k < 3; ++k) piece.w[k] += frac * (a[k] + b[k] + d[k]) / 3.0;
+    }
+    if (piece.fraction > 0) out.push_back(piece);
+  }
+}
+
+// Everything an iteration needs from the diagram: per cell its vertices, neighbours, area and
+// load vector (eq. 10–11, exact on the clipped pieces, in the metric given by face_scale).
+struct IterationCells {
+  CellData cells;
+  std::vector<std::vector<std::pair<int, double>>> loads;
+  Eigen::VectorXd area;
+};
+
+IterationCells iteration_cells(const HeatField& field, const Eigen::MatrixX3i& F, const Eigen::VectorXd& face_area,
+                               const Eigen::VectorXd& face_scale, int ns, int threads) {
+  const int nf = static_cast<int>(F.rows());
+  const int blocks = std::max(1, std::min(nf, 64 * threads));
+  std::vector<std::vector<Piece>> pieces(blocks);
+#pragma omp parallel num_threads(threads)
+  {
+    std::vector<int> cand;
+    std::vector<std::array<double, 3>> uvals;
+#pragma omp for schedule(dynamic, 1)
+    for (int b = 0; b < blocks; ++b) {
+      const int f0 = static_cast<int>(static_cast<long>(nf) * b / blocks);
+      const int f1 = static_cast<int>(static_cast<long>(nf) * (b + 1) / blocks);
+      for (int f = f0; f < f1; ++f) face_pieces(field, F, f, pieces[b], cand, uvals);
+    }
+  }
+  IterationCells r;
+  r.cells.vertices.assign(ns, {});
+  r.cells.adjacency.assign(ns, {});
+  r.loads.assign(ns, {});
+  r.area = Eigen::VectorXd::Zero(ns);
+  for (const auto& block : pieces)
+    for (size_t i = 0; i < block.size(); ++i) {
+      const Piece& p = block[i];
+      const double A = face_area[p.face];
+      const double scale = face_scale.size() ? face_scale[p.face] : 1.0;
+      r.area[p.cell] += A * p.fraction;
+      for (int k = 0; k < 3; ++k) {
+        r.cells.vertices[p.cell].push_back(F(p.face, k));
+        r.loads[p.cell].push_back({F(p.face, k), A * scale * p.w[k]});
+      }
+      // cells sharing a face are neighbours
+      for (size_t j = i + 1; j < block.size() && block[j].face == p.face; ++j) {
+        r.cells.adjacency[p.cell].push_back(block[j].cell);
+        r.cells.adjacency[block[j].cell].push_back(p.cell);
+      }
+    }
+#pragma omp parallel for schedule(dynamic, 16) num_threads(threads)
+  for (int c = 0; c < ns; ++c) {
+    auto& v = r.cells.vertices[c];
+    std::sort(v.begin(), v.end());
+    v.erase(std::unique(v.begin(), v.end()), v.end());
+    auto& a = r.cells.adjacency[c];
+    std::sort(a.begin(), a.end());
+    a.erase(std::unique(a.begin(), a.end()), a.end());
+    auto& l = r.loads[c];
+    std::sort(l.begin(), l.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+    size_t w = 0;
+    for (size_t i = 0; i < l.size(); ++i) {
+      if (w > 0 && l[w - 1].first == l[i].first) l[w - 1].second += l[i].second;
+      else l[w++] = l[i];
+    }
+    l.resize(w);
+  }
+  return r;
+}
+
+double variance(const Eigen::VectorXd& x) {
+  if (x.size() == 0) return 0.0;
+  const double mean = x.mean();
+  return (x.array() - mean).square().sum() / static_cast<double>(x.size());
+}
+
+}  // namespace
+
+double cell_area_variance(const VoronoiDiagram& diagram) { return variance(diagram.cell_area); }
+
+std::vector<SurfacePoint> initial_sites(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, int count,
+                                        CvtInitialization method, std::uint32_t seed) {
+  if (count < 1) throw InvalidInputError("initial_sites: the number of sites must be >= 1, got " + std::to_string(count));
+  validate_mesh(V, F, "initial_sites: mesh");
+  std::mt19937 rng(seed);
+  std::vector<SurfacePoint> sites;
+  if (method == CvtInitialization::random) {
+    const Eigen::VectorXd area = face_areas(V, F);
+    std::vector<double> cdf(area.size());
+    double acc = 0;
+    for (Eigen::Index f = 0; f < area.size(); ++f) cdf[f] = (acc += area[f]);
+    if (!(acc > 0)) throw InvalidInputError("initial_sites: the mesh has zero area");
+    std::uniform_real_distribution<double> uni(0.0, 1.0);
+    for (int s = 0; s < count; ++s) {
+      const double x = uni(rng) * acc;
+      int f = static_cast<int>(std::upper_bound(cdf.begin(), cdf.end(), x) - cdf.begin());
+      f = std::min<int>(f, static_cast<int>(F.rows()) - 1);
+      const double r1 = std::sqrt(uni(rng)), r2 = uni(rng);
+      SurfacePoint p;
+      p.face = f;
+      p.bary = Eigen::Vector3d(1 - r1, r1 * (1 - r2), r1 * r2);
+      sites.push_back(p);
+    }
+    return sites;
+  }
+  // farthest-point sampling on the edge graph
+  const Graph g = edge_graph(V, F);
+  const int n = static_cast<int>(V.rows());
+  std::vector<std::vector<int>> vf = vertex_faces(n, F);
+  if (count > n) throw InvalidInputError("initial_sites: more sites than vertices");
+  std::vector<double> dist(n, std::numeric_limits<double>::infinity());
+  std::vector<int> referenced;
+  for (int v = 0; v < n; ++v)
+    if (!vf[v].empty()) referenced.push_back(v);
+  int next = referenced[std::uniform_int_distribution<size_t>(0, referenced.size() - 1)(rng)];
+  using Item = std::pair<double, int>;
+  for (int s = 0; s < count; ++s) {
+    SurfacePoint p;
+    p.face = vf[next].front();
+    int k = 0;
+    while (F(p.face, k) != next) ++k;
+    p.bary = Eigen::Vector3d::Unit(k);
+    sites.push_back(p);
+    std::priority_queue<Item, std::vector<Item>, std::greater<Item>> q;
+    dist[next] = 0;
+    q.push({0.0, next});
+    while (!q.empty()) {
+      const auto [d, v] = q.top();
+      q.pop();
+      if (d > dist[v]) continue;
+      for (int e = g.off[v]; e < g.off[v + 1]; ++e) {
+        const double nd = d + g.len[e];
+        if (nd < dist[g.nbr[e]]) {
+          dist[g.nbr[e]] = nd;
+          q.push({nd, g.nbr[e]});
+        }
+      }
+    }
+    double best = -1;
+    for (int v : referenced)
+      if (dist[v] > best) best = dist[v], next = v;  // unreached components have +inf: sampled first
+  }
+  return sites;
+}
+
+Laplacian anisotropic_laplacian(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, double lambda,
+                                Eigen::VectorXd* face_metric_area) {
+  validate_mesh(V, F, "anisotropic_laplacian: mesh");
+  if (!(lambda >= 0) || !std::isfinite(lambda))
+    throw InvalidInputError("anisotropic_laplacian: lambda must be finite and >= 0, got " + std::to_string(lambda));
+  const Eigen::RowVector3d lo = V.colwise().minCoeff(), hi = V.colwise().maxCoeff();
+  const double extent = (hi - lo).maxCoeff();
+  if (!(extent > 0)) throw InvalidInputError("anisotropic_laplacian: the mesh has an empty bounding box");
+  Eigen::MatrixXd X(V.rows(), 6);
+  X.leftCols(3) = (V.rowwise() - lo) / extent;  // unit bounding box (largest side 1)
+  X.rightCols(3) = lambda * vertex_normals(V, F);
+  const Eigen::MatrixX3d lengths = face_edge_lengths(X, F);
+  Laplacian lap = cotan_laplacian_from_lengths(lengths, F, static_cast<int>(V.rows()));
+  if (face_metric_area) {
+    face_metric_area->resize(F.rows());
+    for (Eigen::Index f = 0; f < F.rows(); ++f) {  // Heron, stable form
+      double a = lengths(f, 0), b = lengths(f, 1), c = lengths(f, 2);
+      if (a < b) std::swap(a, b);
+      if (a < c) std::swap(a, c);
+      if (b < c) std::swap(b, c);
+      const double s = (a + (b + c)) * (c - (a - b)) * (c + (a - b)) * (a + (b - c));
+      (*face_metric_area)[f] = s > 0 ? 0.25 * std::sqrt(s) : 0.0;
+    }
+  }
+  return lap;
+}
+
+CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const Laplacian& laplacian,
+                             const CvtOptions& options, const std::vector<SurfacePoint>& given_sites,
+                             const CvtCallback& callback, const Eigen::VectorXd& face_metric_area) {
+  const auto start = Clock::now();
+  validate_mesh(V, F, "centroidal_voronoi: mesh");
+  const int n = static_cast<int>(V.rows());
+  if (laplacian.num_vertices() != n)
+    throw InvalidInputError("centroidal_voronoi: the Laplacian has " + std::to_string(laplacian.num_vertices()) +
+                            " vertices but the mesh has " + std::to_string(n));
+  if (options.iterations < 0) throw InvalidInputError("centroidal_voronoi: iterations must be >= 0");
+  if (!(options.tolerance >= 0)) throw InvalidInputError("centroidal_voronoi: tolerance must be >= 0");
+  if (options.voronoi_rings < 0 || options.centroid_rings < 0 || options.voronoi_rings_settled < 0)
+    throw InvalidInputError("centroidal_voronoi: ring counts must be >= 0");
+  if (options.keep_sites_per_vertex < 1) throw InvalidInputError("centroidal_voronoi: keep_sites_per_vertex must be >= 1");
+  if (face_metric_area.size() != 0 && face_metric_area.size() != F.rows())
+    throw InvalidInputError("centroidal_voronoi: face_metric_area has " + std::to_string(face_metric_area.size()) +
+                            " entries but the mesh has " + std::to_string(F.rows()) + " faces");
+  std::vector<SurfacePoint> sites = given_sites;
+  if (sites.empty()) {
+    if (options.sites < 1 || options.sites > n)
+      throw InvalidInputError("centroidal_voronoi: the number of sites must be in [1, #V = " + std::to_string(n) +
+                              "], got " + std::to_string(options.sites));
+    sites = initial_sites(V, F, options.sites, options.initialization, options.seed);
+  }
+  for (size_t s = 0; s < sites.size(); ++s)
+    if (sites[s].face < 0 || sites[s].face >= F.rows() || !sites[s].bary.allFinite())
+      throw InvalidInputError("centroidal_voronoi: initial site " + std::to_string(s) + " is not on a face of the mesh");
+  const int ns = static_cast<int>(sites.size());
+  const int threads = resolve_threads(options.threads);
+
+  HeatSolverOptions so;
+  so.time_coefficient = options.time_coefficient;
+  so.threads = threads;
+  HeatSolver solver(laplacian, so);
+  LocalizedSolveOptions lo;
+  lo.drop_tolerance = options.drop_tolerance;
+  LocalizedSolver local(solver, lo);
+
+  CvtResult result;
+  result.factor_seconds = solver.factor_seconds();
+  result.factor_bytes = solver.factor().memory_bytes();
+
+  const Graph graph = edge_graph(V, F);
+  const std::vector<std::vector<int>> vfaces = vertex_faces(n, F);
+  const Eigen::MatrixX3d normals = vertex_normals(V, F);
+  Eigen::VectorXd face_scale;  // metric area / Euclidean area per face
+  if (face_metric_area.size()) {
+    const Eigen::VectorXd A = face_areas(V, F);
+    face_scale.resize(F.rows());
+    for (Eigen::Index f = 0; f < F.rows(); ++f) face_scale[f] = A[f] > 0 ? face_metric_area[f] / A[f] : 0.0;
+  }
+  const double spacing = std::sqrt(surface_area(V, F) / ns);
+
+  std::vector<ThreadScratch> scratch(threads);
+  for (auto& t : scratch) {
+    t.ws.resize(n);
+    t.mark.assign(n, 0);
+    t.cmark.assign(ns, 0);
+    t.heat = Eigen::VectorXd::Zero(n);
+    t.dist.assign(n, std::numeric_limits<double>::infinity());
+  }
+
+  // Initial neighbourhoods: graph Voronoi cells of the sites (multi-source Dijkstra).
+  CellData cells;
+  {
+    std::vector<int> sources(ns);
+    for (int s = 0; s < ns; ++s) sources[s] = nearest_corner(F, sites[s]);
+    cells = cells_from_labels(graph, graph_voronoi(graph, sources), ns);
+  }
+  result.setup_seconds = since(start);
+
+  std::vector<std::vector<int>> indices(ns);
+  std::vector<std::vector<double>> values(ns);
+  const Eigen::VectorXd face_area = face_areas(V, F);
+  double index_total = 0;
+  int rings = options.voronoi_rings;
+  // Localized point-source diffusion per site over its cell and `rings` rings of cells (eq. 8),
+  // then the per-vertex hottest sites.
+  auto heat_field = [&]() {
+#pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
+    for (int s = 0; s < ns; ++s) {
+      ThreadScratch& t = scratch[omp_get_thread_num()];
+      ring_cells(cells, s, rings, t);
+      union_vertices(cells, t, indices[s]);
+      if (cells.vertices[s].empty()) dijkstra_ball(graph, F, sites[s].face, 3.0 * spacing, t, indices[s]);
+      t.rhs.clear();
+      for (int k = 0; k < 3; ++k)
+        if (sites[s].bary[k] != 0.0) t.rhs.push_back({F(sites[s].face, k), sites[s].bary[k]});
+      local.solve(t.rhs, indices[s], values[s], t.ws);
+    }
+    index_total = 0;
+    for (int s = 0; s < ns; ++s) index_total += static_cast<double>(indices[s].size());
+    return build_field(n, indices, values, options.keep_sites_per_vertex, threads);
+  };
+
+  for (int it = 1; it <= options.iterations; ++it) {
+    const auto t0 = Clock::now();
+    CvtIterationStats st;
+    st.iteration = it;
+    const HeatField field = heat_field();
+    st.voronoi_solve_seconds = since(t0);
+    st.mean_index_set = index_total / ns;
+    const auto tt = Clock::now();
+    IterationCells ic = iteration_cells(field, F, face_area, face_scale, ns, threads);
+    st.tessellate_seconds = since(tt);
+    st.area_variance = variance(ic.area);
+    cells = std::move(ic.cells);
+    st.voronoi_seconds = since(t0);
+
+    // Heat centroids: area source of each cell, localized to the cell and `centroid_rings` rings.
+    const auto t1 = Clock::now();
+    const auto& loads = ic.loads;
+    std::vector<SurfacePoint> moved = sites;
+#pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
+    for (int c = 0; c < ns; ++c) {
+      if (loads[c].empty()) continue;  // the cell vanished: the site stays
+      ThreadScratch& t = scratch[omp_get_thread_num()];
+      ring_cells(cells, c, options.centroid_rings, t);
+      std::vector<int> I;
+      union_vertices(cells, t, I);
+      local.solve(loads[c], I, t.values, t.ws);
+      for (size_t i = 0; i < I.size(); ++i) t.heat[I[i]] = t.values[i];
+      int hottest = -1;
+      double best = -std::numeric_limits<double>::infinity();
+      for (int v : cells.vertices[c])  // sorted: ties go to the smallest index
+        if (t.heat[v] > best) best = t.heat[v], hottest = v;
+      if (hottest >= 0) {
+        if (options.quadratic_refinement) {
+          moved[c] = refine_hottest_vertex(V, F, vfaces, normals, t.heat, hottest);
+        } else {
+          SurfacePoint p;
+          p.face = vfaces[hottest].front();
+          int k = 0;
+          while (F(p.face, k) != hottest) ++k;
+          p.bary = Eigen::Vector3d::Unit(k);
+          moved[c] = p;
+        }
+      }
+      for (int v : I) t.heat[v] = 0.0;
+    }
+    // Sites whose cell vanished (e.g. two sites that reached the same hottest vertex) are moved
+    // into the largest cell, to its vertex farthest from that cell's site; counted in the stats.
+    for (int c = 0; c < ns; ++c) {
+      if (!loads[c].empty()) continue;
+      int big = 0;
+      ic.area.maxCoeff(&big);
+      const Eigen::Vector3d centre = position(V, F, moved[big]);
+      int far = -1;
+      double best = -1;
+      for (int v : cells.vertices[big]) {
+        const double dist = (V.row(v).transpose() - centre).norm();
+        if (dist > best) best = dist, far = v;
+      }
+      if (far < 0) continue;
+      SurfacePoint p;
+      p.face = vfaces[far].front();
+      int k = 0;
+      while (F(p.face, k) != far) ++k;
+      p.bary = Eigen::Vector3d::Unit(k);
+      moved[c] = p;
+      ic.area[big] = 0;  // do not put two revived sites into the same cell
+      ++st.revived_sites;
+    }
+    double max_move = 0, sum_move = 0;
+    for (int s = 0; s < ns; ++s) {
+      const double d = (position(V, F, moved[s]) - position(V, F, sites[s])).norm();
+      max_move = std::max(max_move, d);
+      sum_move += d;
+    }
+    sites.swap(moved);
+    st.centroid_seconds = since(t1);
+    st.max_move = max_move;
+    st.mean_move = sum_move / ns;
+    st.seconds = since(t0);
+    result.iterations.push_back(st);
+    if (max_move < 0.25 * spacing) rings = std::min(rings, options.voronoi_rings_settled);
+    bool go_on = true;
+    if (callback) go_on = callback(st);
+    if (options.tolerance > 0 && max_move < options.tolerance * spacing) {
+      result.converged = true;
+      break;
+    }
+    if (!go_on) break;
+  }
+
+  // Final exact diagram of the final sites (voronoi.h's conforming tessellation) and its dual.
+  rings = options.voronoi_rings;
+  {
+    VoronoiOptions vo;
+    vo.exact = true;
+    vo.keep_sites_per_vertex = options.keep_sites_per_vertex;
+    vo.threads = threads;
+    result.diagram = tessellate(V, F, heat_field(), vo);
+  }
+  result.final_area_variance = variance(result.diagram.cell_area);
+  result.sites = sites;
+  result.positions.resize(ns, 3);
+  for (int s = 0; s < ns; ++s) result.positions.row(s) = position(V, F, sites[s]).transpose();
+  if (options.build_dual) result.dual = dual_mesh(result.diagram, result.positions);
+  result.total_seconds = since(start);
+  return result;
+}
+
+}  // namespace heatcvt

@@ -1,0 +1,182 @@
+// Centroidal Voronoi tessellations by Lloyd iteration (paper §7.1): equal cell areas on the unit-area
+// sphere and torus, closed duals of the input's genus, determinism, anisotropy, bad input.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+
+#include "heatcvt/cvt.h"
+#include "heatcvt/errors.h"
+#include "heatcvt/laplacian.h"
+#include "heatcvt/mesh_io.h"
+#include "heatcvt/subdivision.h"
+#include "heatcvt/validate.h"
+#include "test_support.h"
+
+using namespace heatcvt;
+
+namespace {
+
+CvtResult run(const TriangleMesh& m, int sites, int iterations, int threads = 0, std::uint32_t seed = 1) {
+  CvtOptions o;
+  o.sites = sites;
+  o.iterations = iterations;
+  o.threads = threads;
+  o.seed = seed;
+  return centroidal_voronoi(m.V, m.F, cotan_laplacian(m.V, m.F), o);
+}
+
+void expect_equal_areas(const TriangleMesh& m, int sites, double max_variance, const char* name) {
+  CvtResult r = run(m, sites, 100);
+  const double var = r.final_area_variance;
+  std::printf("[ info ] %s, %d sites, 100 iterations: cell-area variance %.3g (initial %.3g), %.3f s/iteration\n",
+              name, sites, var, r.iterations.front().area_variance,
+              (r.total_seconds - r.setup_seconds) / r.iterations.size());
+  EXPECT_LE(var, max_variance) << name;
+  EXPECT_LT(var, 0.05 * r.iterations.front().area_variance) << name << ": Lloyd did not equalise";
+  EXPECT_NEAR(r.diagram.cell_area.sum(), 1.0, 1e-9);
+  // Lloyd settles: the last moves are much smaller than the first
+  EXPECT_LT(r.iterations.back().max_move, 0.2 * r.iterations.front().max_move) << name;
+}
+
+}  // namespace
+
+TEST(Cvt, SphereUnitAreaEqualCellAreas) {
+  auto sphere = test::icosphere(5);  // 10k vertices
+  test::scale_to_area(sphere, 1.0);
+  expect_equal_areas(sphere, 20, 1e-5, "sphere");
+  expect_equal_areas(sphere, 500, 1e-7, "sphere");
+}
+
+TEST(Cvt, TorusUnitAreaEqualCellAreas) {
+  auto torus = test::torus(160, 64);  // 10k vertices
+  test::scale_to_area(torus, 1.0);
+  expect_equal_areas(torus, 20, 1e-5, "torus");
+  expect_equal_areas(torus, 500, 1e-7, "torus");
+}
+
+TEST(Cvt, SameSeedSameOutputForAnyThreadCount) {
+  auto sphere = test::icosphere(4);
+  CvtResult a = run(sphere, 60, 8, 1, 7);
+  CvtResult b = run(sphere, 60, 8, 2, 7);
+  CvtResult c = run(sphere, 60, 8, 2, 8);
+  ASSERT_EQ(a.sites.size(), b.sites.size());
+  for (size_t s = 0; s < a.sites.size(); ++s) {
+    EXPECT_EQ(a.sites[s].face, b.sites[s].face);
+    EXPECT_EQ(a.sites[s].bary, b.sites[s].bary);  // bit-identical
+  }
+  EXPECT_EQ(a.positions, b.positions);
+  EXPECT_EQ(a.dual.F, b.dual.F);
+  EXPECT_EQ(a.diagram.cell_area, b.diagram.cell_area);
+  EXPECT_NE(a.positions, c.positions);  // the seed matters
+}
+
+TEST(Cvt, DualsOfRealMeshesAreClosedManifoldsOfTheInputGenus) {
+  // Site counts: the cells must be smaller than the thinnest parts of the shape (otherwise two
+  // cells meet on both sides of a thin wall and the dual has an edge with four triangles, which
+  // the validation reports), and cover enough mesh vertices to be resolved by the heat.
+  // Fertility (4.5k vertices) and casting (5k, thin walls) are Loop-subdivided once (18k, 20k).
+  struct Case {
+    const char* file;
+    int genus;
+    int sites;
+    int subdivisions;
+  };
+  for (const Case& k : {Case{"meshes/sphere_ico642.obj", 0, 100, 0}, Case{"meshes/torus.obj", 1, 200, 0},
+                        Case{"meshes/fertility.off", 4, 1000, 1}, Case{"meshes/casting.obj", 9, 2000, 1}}) {
+    SCOPED_TRACE(k.file);
+    TriangleMesh m = read_mesh(test::data_path(k.file));
+    for (int i = 0; i < k.subdivisions; ++i) m = loop_subdivide(m);
+    ASSERT_EQ(mesh_genus(m.F, static_cast<int>(m.V.rows())), k.genus);
+    CvtOptions o;
+    o.sites = k.sites;
+    o.iterations = 30;
+    CvtResult r = centroidal_voronoi(m.V, m.F, cotan_laplacian(m.V, m.F), o);
+    ValidationOptions vo;
+    vo.expected_genus = k.genus;
+    vo.expected_components = 1;
+    ValidationReport rep = validate_triangle_mesh(r.dual.V, r.dual.F, vo);
+    EXPECT_TRUE(rep.ok()) << rep.summary();
+    EXPECT_TRUE(r.dual.unused_sites.empty());
+    EXPECT_EQ(r.dual.flipped_against_input, 0);
+    // Euler: F = 2V − 2χ for a closed triangulation
+    EXPECT_EQ(r.dual.F.rows(), 2 * r.dual.V.rows() - 2 * (2 - 2 * k.genus));
+    TriangleQuality q = triangle_quality(r.dual.V, r.dual.F);
+    std::printf("[ info ] %s: %d sites, 30 iterations: phi_min %.1f, phi_m %.2f, %.3f s/iteration\n", k.file, k.sites,
+                q.min_angle_deg, q.mean_min_angle_deg, (r.total_seconds - r.setup_seconds) / 30);
+    EXPECT_GT(q.mean_min_angle_deg, 45.0);
+  }
+}
+
+TEST(Cvt, AnisotropicCellsFollowCurvature) {
+  // An elongated ellipsoid: with the R⁶ lift (paper λ = 0.05... here larger for a coarse mesh),
+  // cells crowd where the normal turns fast (the tips), compared to the isotropic CVT.
+  auto m = test::icosphere(5);
+  m.V.col(0) *= 3.0;
+  CvtOptions o;
+  o.sites = 150;
+  o.iterations = 30;
+  CvtResult iso = centroidal_voronoi(m.V, m.F, cotan_laplacian(m.V, m.F), o);
+  Eigen::VectorXd metric;
+  Laplacian lap = anisotropic_laplacian(m.V, m.F, 0.3, &metric);
+  ASSERT_EQ(metric.size(), m.F.rows());
+  CvtResult ani = centroidal_voronoi(m.V, m.F, lap, o, {}, {}, metric);
+  auto tip_sites = [](const CvtResult& r) {
+    int count = 0;
+    for (int s = 0; s < r.positions.rows(); ++s) count += std::abs(r.positions(s, 0)) > 2.4;
+    return count;
+  };
+  std::printf("[ info ] sites near the tips: isotropic %d, anisotropic %d\n", tip_sites(iso), tip_sites(ani));
+  EXPECT_GT(tip_sites(ani), tip_sites(iso) + 5);
+  ValidationOptions vo;
+  vo.expected_genus = 0;
+  EXPECT_TRUE(validate_triangle_mesh(ani.dual.V, ani.dual.F, vo).ok());
+}
+
+TEST(Cvt, ConvergenceToleranceStopsEarlyAndCallbackCanStop) {
+  auto sphere = test::icosphere(4);
+  CvtOptions o;
+  o.sites = 40;
+  o.iterations = 200;
+  o.tolerance = 0.02;
+  CvtResult r = centroidal_voronoi(sphere.V, sphere.F, cotan_laplacian(sphere.V, sphere.F), o);
+  EXPECT_TRUE(r.converged);
+  EXPECT_LT(r.iterations.size(), 200u);
+  EXPECT_LT(r.iterations.back().max_move, 0.02 * std::sqrt(surface_area(sphere.V, sphere.F) / 40));
+  int calls = 0;
+  o.tolerance = 0;
+  r = centroidal_voronoi(sphere.V, sphere.F, cotan_laplacian(sphere.V, sphere.F), o, {},
+                         [&](const CvtIterationStats& s) {
+                           ++calls;
+                           EXPECT_EQ(s.iteration, calls);
+                           return calls < 5;
+                         });
+  EXPECT_EQ(calls, 5);
+  EXPECT_EQ(r.iterations.size(), 5u);
+  EXPECT_FALSE(r.converged);
+}
+
+TEST(Cvt, GivenInitialSitesAreUsedAndBadInputThrows) {
+  auto sphere = test::icosphere(3);
+  Laplacian lap = cotan_laplacian(sphere.V, sphere.F);
+  CvtOptions o;
+  o.iterations = 0;
+  std::vector<SurfacePoint> start = initial_sites(sphere.V, sphere.F, 30, CvtInitialization::farthest_point, 3);
+  CvtResult r = centroidal_voronoi(sphere.V, sphere.F, lap, o, start);
+  ASSERT_EQ(r.sites.size(), 30u);
+  for (size_t s = 0; s < 30; ++s) EXPECT_EQ(r.sites[s].face, start[s].face);
+  EXPECT_NEAR(r.diagram.cell_area.sum(), surface_area(sphere.V, sphere.F), 1e-9);
+  o.sites = 0;
+  EXPECT_THROW(centroidal_voronoi(sphere.V, sphere.F, lap, o), InvalidInputError);
+  o.sites = static_cast<int>(sphere.V.rows()) + 1;
+  EXPECT_THROW(centroidal_voronoi(sphere.V, sphere.F, lap, o), InvalidInputError);
+  o.sites = 10;
+  o.iterations = -1;
+  EXPECT_THROW(centroidal_voronoi(sphere.V, sphere.F, lap, o), InvalidInputError);
+  o.iterations = 1;
+  auto small = test::icosphere(2);
+  EXPECT_THROW(centroidal_voronoi(small.V, small.F, lap, o), InvalidInputError);  // Laplacian size mismatch
+  std::vector<SurfacePoint> bad = {SurfacePoint{static_cast<int>(sphere.F.rows()), Eigen::Vector3d(1, 0, 0)}};
+  EXPECT_THROW(centroidal_voronoi(sphere.V, sphere.F, lap, o, bad), InvalidInputError);
+  EXPECT_THROW(anisotropic_laplacian(sphere.V, sphere.F, -1.0), InvalidInputError);
+}
