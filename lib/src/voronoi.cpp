@@ -223,6 +223,8 @@ struct LocalPoint {
 };
 
 struct FaceResult {
+  bool whole = false;  // the face is one refined face of `cell` (no allocation)
+  int cell = -1;
   std::vector<LocalPoint> points;
   std::vector<std::array<int, 3>> tris;
   std::vector<int> cells;
@@ -253,17 +255,18 @@ double bary_det(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1, const Eige
   return (x1[1] - x0[1]) * (x2[2] - x0[2]) - (x2[1] - x0[1]) * (x1[2] - x0[2]);
 }
 
-FaceResult tessellate_face(const Eigen::MatrixX3i& F, const HeatField& field, int f,
-                           const std::vector<std::vector<EdgePoint>>* edge_points_of_face, const VoronoiOptions& opt) {
+FaceResult tessellate_face(const Eigen::MatrixX3i& F, const HeatField& field, int f, const VoronoiOptions& opt) {
   FaceResult res;
   const int vtx[3] = {F(f, 0), F(f, 1), F(f, 2)};
-  // candidate sites: union of the three rows
-  std::vector<int> sites;
+  // candidate sites: union of the three rows (scratch buffers reused per thread)
+  thread_local std::vector<int> sites;
+  thread_local std::vector<std::array<double, 3>> U;
+  sites.clear();
   for (int c = 0; c < 3; ++c)
     for (int k = field.offsets[vtx[c]]; k < field.offsets[vtx[c] + 1]; ++k) sites.push_back(field.site[k]);
   std::sort(sites.begin(), sites.end());
   sites.erase(std::unique(sites.begin(), sites.end()), sites.end());
-  std::vector<std::array<double, 3>> U(sites.size());
+  U.resize(sites.size());
   for (size_t i = 0; i < sites.size(); ++i)
     for (int c = 0; c < 3; ++c) U[i][c] = field_value(field, vtx[c], sites[i]);
 
@@ -278,9 +281,8 @@ FaceResult tessellate_face(const Eigen::MatrixX3i& F, const HeatField& field, in
   };
 
   if (sites.empty()) {
-    add_corners();
-    res.tris.push_back({0, 1, 2});
-    res.cells.push_back(-1);
+    res.whole = true;
+    res.cell = -1;
     return res;
   }
 
@@ -289,18 +291,16 @@ FaceResult tessellate_face(const Eigen::MatrixX3i& F, const HeatField& field, in
     int best = 0;
     for (size_t i = 1; i < sites.size(); ++i)
       if (U[i][0] + U[i][1] + U[i][2] > U[best][0] + U[best][1] + U[best][2]) best = static_cast<int>(i);
-    add_corners();
-    res.tris.push_back({0, 1, 2});
-    res.cells.push_back(sites[best]);
+    res.whole = true;
+    res.cell = sites[best];
     return res;
   }
 
   const int l0 = corner_label(sites, U, 0), l1 = corner_label(sites, U, 1), l2 = corner_label(sites, U, 2);
   if (l0 == l1 && l1 == l2) {
     // u_l is the largest at all three corners, hence (linear functions) on the whole face
-    add_corners();
-    res.tris.push_back({0, 1, 2});
-    res.cells.push_back(sites[l0]);
+    res.whole = true;
+    res.cell = sites[l0];
     return res;
   }
 
@@ -316,13 +316,18 @@ FaceResult tessellate_face(const Eigen::MatrixX3i& F, const HeatField& field, in
   }
 
   // Canonical points: corners, then the switch points of each edge (edge k = corners k, k+1).
+  std::array<std::vector<EdgePoint>, 3> edge_points;
+  for (int k = 0; k < 3; ++k) {
+    const int a = vtx[k], b = vtx[(k + 1) % 3];
+    edge_points[k] = edge_switch_points(field, std::min(a, b), std::max(a, b));
+  }
   add_corners();
   std::array<std::vector<int>, 3> edge_point_ids;  // ordered from the canonical a to b
   for (int k = 0; k < 3; ++k) {
     const int ca = k, cb = (k + 1) % 3;
     const int a = std::min(vtx[ca], vtx[cb]), b = std::max(vtx[ca], vtx[cb]);
     const int corner_a = vtx[ca] == a ? ca : cb, corner_b = corner_a == ca ? cb : ca;
-    for (const EdgePoint& e : (*edge_points_of_face)[k]) {
+    for (const EdgePoint& e : edge_points[k]) {
       LocalPoint p;
       p.kind = LocalPoint::OnEdge;
       p.key = {a, b, e.p, e.q};
@@ -588,21 +593,13 @@ VoronoiDiagram tessellate(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, 
 
   std::vector<FaceResult> results(nf);
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 256)
-  for (int f = 0; f < nf; ++f) {
-    std::vector<std::vector<EdgePoint>> edge_points(3);
-    if (options.exact)
-      for (int k = 0; k < 3; ++k) {
-        const int a = F(f, k), b = F(f, (k + 1) % 3);
-        edge_points[k] = edge_switch_points(field, std::min(a, b), std::max(a, b));
-      }
-    results[f] = tessellate_face(F, field, f, &edge_points, options);
-  }
+  for (int f = 0; f < nf; ++f) results[f] = tessellate_face(F, field, f, options);
 
   // assemble in face order (deterministic)
   VoronoiDiagram d;
   size_t num_tris = 0, num_new = 0;
   for (const FaceResult& r : results) {
-    num_tris += r.tris.size();
+    num_tris += r.whole ? 1 : r.tris.size();
     for (const LocalPoint& p : r.points) num_new += p.kind != LocalPoint::Corner;
   }
   std::vector<Eigen::Vector3d> new_points;
@@ -618,6 +615,15 @@ VoronoiDiagram tessellate(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, 
   std::vector<int> gid;
   for (int f = 0; f < nf; ++f) {
     const FaceResult& r = results[f];
+    if (r.whole) {
+      d.F.row(row) = F.row(f);
+      d.face_bary.middleRows<3>(3 * row).setIdentity();
+      d.face_cell[row] = r.cell;
+      d.face_parent[row] = f;
+      d.face_area[row] = parent_area[f];
+      ++row;
+      continue;
+    }
     gid.resize(r.points.size());
     for (size_t i = 0; i < r.points.size(); ++i) {
       const LocalPoint& p = r.points[i];
