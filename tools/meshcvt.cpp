@@ -1,0 +1,193 @@
+// meshcvt: intrinsic (optionally anisotropic) CVT remeshing of a triangle mesh by Lloyd iteration
+// with heat Voronoi cells and heat centroids (Herholz et al. 2017, §6–7.1). Writes the dual
+// triangulation of the final CVT and reports its quality and the CGAL surface checks.
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <map>
+#include <string>
+
+#include "cell_colors.h"
+#include "cli_common.h"
+#include "heatcvt/cvt.h"
+#include "heatcvt/dual_mesh.h"
+#include "heatcvt/errors.h"
+#include "heatcvt/laplacian.h"
+#include "heatcvt/mesh_io.h"
+#include "heatcvt/validate.h"
+#include "report_json.h"
+
+using namespace heatcvt;
+using Clock = std::chrono::steady_clock;
+
+int main(int argc, char** argv) {
+  CLI::App app{"meshcvt: remesh a triangle mesh by an intrinsic centroidal Voronoi tessellation with heat "
+               "diffusion (Herholz, Haase, Alexa 2017, §7.1); writes the dual triangulation"};
+  CvtOptions cvt;  // defaults shown by --help come from here
+  std::string mesh_path, out_path, cells_path, report_path, init = "random";
+  int sites = cvt.sites, iterations = cvt.iterations, threads = cvt.threads;
+  unsigned seed = cvt.seed;
+  double anisotropy = 0.0, tolerance = cvt.tolerance, t_coef = cvt.time_coefficient;
+  bool quiet = false;
+  app.add_option("MESH", mesh_path, "input triangle mesh (.obj .off .ply .stl)")->required();
+  app.add_option("-n,--sites", sites, "number of sites = vertices of the output")->capture_default_str();
+  app.add_option("-o,--output", out_path, "output dual triangulation (.obj .ply .off)")->required();
+  app.add_option("-i,--iterations", iterations, "maximum number of Lloyd iterations")->capture_default_str();
+  app.add_option("--tolerance", tolerance,
+                 "stop when no site moves more than TOL * sqrt(area / sites) (0 = run all iterations)")
+      ->capture_default_str();
+  app.add_option("--anisotropy", anisotropy,
+                 "lambda of the anisotropic CVT: lift to (p, lambda n) in R^6 after scaling to the unit bounding "
+                 "box (paper: 0.05; 0 = isotropic)")
+      ->capture_default_str();
+  app.add_option("--init", init, "initial sites: random (area-uniform) or farthest (farthest-point sampling)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"random", "farthest"}));
+  app.add_option("--seed", seed, "random seed of the initial sites")->capture_default_str();
+  app.add_option("--t-coef", t_coef, "time step t = C * (mean edge length)^2")->capture_default_str();
+  app.add_option("--threads", threads, "worker threads (0 = all cores); results do not depend on it")
+      ->capture_default_str();
+  app.add_option("--cells", cells_path, "also write the tessellated input with a cell id per face (.ply)");
+  app.add_option("--report", report_path, "also write the final report as JSON");
+  app.add_flag("-q,--quiet", quiet, "no progress and no report on the terminal");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::string what = e.what();
+    for (char& c : what)
+      if (c == '\n') c = ' ';
+    std::cerr << "meshcvt: error: " << what << " (see --help)" << std::endl;
+    return 1;
+  }
+
+  const int rc = cli::run_tool("meshcvt", [&]() -> int {
+    if (sites < 1) throw InvalidInputError("--sites must be at least 1, got " + std::to_string(sites));
+    if (iterations < 0) throw InvalidInputError("--iterations must be >= 0, got " + std::to_string(iterations));
+    if (!(tolerance >= 0) || !std::isfinite(tolerance)) throw InvalidInputError("--tolerance must be >= 0");
+    if (!(anisotropy >= 0) || !std::isfinite(anisotropy)) throw InvalidInputError("--anisotropy must be >= 0");
+    if (!(t_coef > 0) || !std::isfinite(t_coef)) throw InvalidInputError("--t-coef must be a positive number");
+    if (threads < 0) throw InvalidInputError("--threads must be >= 0");
+    cli::check_output_path(out_path, {".obj", ".ply", ".off"});
+    cli::check_output_path(cells_path, {".ply"});
+    cli::check_output_path(report_path, {".json"});
+    auto log = [&](const std::string& s) {
+      if (!quiet) std::cerr << s << std::endl;
+    };
+    const auto t_start = Clock::now();
+    TriangleMesh mesh = read_mesh(mesh_path);
+    validate_mesh(mesh.V, mesh.F, mesh_path);
+    const int nv = static_cast<int>(mesh.V.rows());
+    if (sites > nv)
+      throw InvalidInputError("--sites " + std::to_string(sites) + " exceeds the " + std::to_string(nv) +
+                              " vertices of " + mesh_path);
+    const MeshTopology topo = mesh_topology(mesh.F, nv);
+    const int input_genus = mesh_genus(mesh.F, nv);
+    log("read " + mesh_path + ": " + std::to_string(nv) + " vertices, " + std::to_string(mesh.F.rows()) +
+        " faces, genus " + (input_genus >= 0 ? std::to_string(input_genus) : std::string("undefined (not a manifold)")) +
+        (topo.boundary_edges ? ", open" : ", closed"));
+
+    auto t0 = Clock::now();
+    Eigen::VectorXd metric;
+    Laplacian lap = anisotropy > 0 ? anisotropic_laplacian(mesh.V, mesh.F, anisotropy, &metric)
+                                   : cotan_laplacian(mesh.V, mesh.F);
+    const double laplacian_s = cli::seconds_since(t0);
+    if (!lap.degenerate_faces.empty())
+      log("warning: " + std::to_string(lap.degenerate_faces.size()) + " degenerate faces in " + mesh_path +
+          " carry no heat conduction");
+
+    cvt.sites = sites;
+    cvt.iterations = iterations;
+    cvt.tolerance = tolerance;
+    cvt.seed = seed;
+    cvt.threads = threads;
+    cvt.time_coefficient = t_coef;
+    cvt.initialization = init == "farthest" ? CvtInitialization::farthest_point : CvtInitialization::random;
+    cli::Progress progress("lloyd", iterations, quiet);
+    CvtResult r = centroidal_voronoi(mesh.V, mesh.F, lap, cvt, {},
+                                     [&](const CvtIterationStats& s) {
+                                       progress.update(s.iteration);
+                                       return true;
+                                     },
+                                     metric);
+    progress.finish();
+    for (int comp : r.diagram.unreached_components)
+      log("warning: connected component " + std::to_string(comp) + " of " + mesh_path +
+          " has no site and gets no cell");
+
+    // Checks of the dual (nothing is repaired).
+    ValidationOptions vopt;
+    vopt.require_closed = topo.boundary_edges == 0;
+    vopt.expected_genus = input_genus;
+    const ValidationReport checks = validate_triangle_mesh(r.dual.V, r.dual.F, vopt);
+    const TriangleQuality q = triangle_quality(r.dual.V, r.dual.F);
+
+    write_mesh(out_path, r.dual.V, r.dual.F);
+    if (!cells_path.empty()) {
+      MeshAttributes attr;
+      attr.face_int = r.diagram.face_cell;
+      attr.face_color = cli::cell_colors(r.diagram.face_cell);
+      write_mesh(cells_path, r.diagram.V, r.diagram.F, attr);
+    }
+
+    const int done = static_cast<int>(r.iterations.size());
+    double iter_s = 0;
+    for (const auto& s : r.iterations) iter_s += s.seconds;
+    const double per_iter = done ? iter_s / done : 0.0;
+    const double total_s = cli::seconds_since(t_start);
+    int revived = 0;
+    for (const auto& s : r.iterations) revived += s.revived_sites;
+    if (!report_path.empty()) {
+      cli::JsonObject rep;
+      rep.add("input", mesh_path).add("vertices", nv).add("faces", static_cast<long>(mesh.F.rows()))
+          .add("input_genus", input_genus).add("sites", static_cast<int>(r.sites.size()))
+          .add("anisotropy", anisotropy).add("seed", static_cast<long>(seed)).add("iterations", done)
+          .add("converged", r.converged).add("laplacian_s", laplacian_s).add("factor_s", r.factor_seconds)
+          .add("factor_memory_bytes", static_cast<long>(r.factor_bytes)).add("time_per_iteration_s", per_iter)
+          .add("total_s", total_s).add("cell_area_variance", r.final_area_variance)
+          .add("revived_sites", revived).add("triangles", q.triangles).add("phi_min_deg", q.min_angle_deg)
+          .add("phi_mean_deg", q.mean_min_angle_deg).add("share_below_30", q.below_30_fraction)
+          .add("split_voronoi_vertices", r.dual.split_vertices)
+          .add("duplicate_triangles", r.dual.duplicate_triangles)
+          .add("flipped_triangles", r.dual.flipped_against_input)
+          .add("unused_sites", static_cast<long>(r.dual.unused_sites.size()));
+      std::vector<double> moves, times;
+      for (const auto& s : r.iterations) moves.push_back(s.max_move), times.push_back(s.seconds);
+      rep.add("max_move_per_iteration", moves).add("seconds_per_iteration", times);
+      std::vector<cli::JsonObject> items;
+      for (const auto& c : checks.checks) {
+        cli::JsonObject o;
+        o.add("name", c.name).add("passed", c.passed).add("ran", c.ran).add("detail", c.detail);
+        items.push_back(o);
+      }
+      cli::JsonObject topo_json;
+      topo_json.add("vertices", checks.vertices).add("edges", checks.edges).add("faces", checks.faces)
+          .add("components", checks.components).add("boundary_loops", checks.boundary_loops)
+          .add("euler_characteristic", checks.euler_characteristic).add("genus", checks.genus);
+      rep.add_array("checks", items).add_object("dual_topology", topo_json).add("all_checks_passed", checks.ok());
+      cli::write_json(report_path, rep);
+    }
+    if (!quiet) {
+      std::printf("meshcvt: %s (%d vertices) -> %s (%d vertices, %d triangles)\n", mesh_path.c_str(), nv,
+                  out_path.c_str(), static_cast<int>(r.dual.V.rows()), q.triangles);
+      std::printf("  factor: %.3f s, %.1f MB; %d iterations%s, %.4f s per iteration; total %.2f s\n", r.factor_seconds,
+                  r.factor_bytes / 1e6, done, r.converged ? " (converged)" : "", per_iter, total_s);
+      std::printf("  quality: phi_min %.2f deg, phi_m %.2f deg, %.2f%% of triangles below 30 deg\n", q.min_angle_deg,
+                  q.mean_min_angle_deg, 100.0 * q.below_30_fraction);
+      std::printf("  cell-area variance %.4g%s\n", r.final_area_variance,
+                  revived ? (", " + std::to_string(revived) + " vanished cells re-seeded").c_str() : "");
+      std::printf("  checks (CGAL):\n");
+      for (const auto& c : checks.checks)
+        std::printf("    %s %-24s %s\n", c.ran ? (c.passed ? "PASS" : "FAIL") : "SKIP", c.name.c_str(), c.detail.c_str());
+    }
+    if (!checks.ok()) log("warning: the dual triangulation failed some checks (see above); try more sites or iterations");
+    return 0;
+  });
+  return rc == 0 ? 0 : 1;
+}
