@@ -507,3 +507,20 @@ TEST(HeatVoronoi, StressTiesManySitesAndLocalizedField) {
     EXPECT_TRUE(d.unreached_components.empty());
   }
 }
+
+// Coincident and nearly coincident sites: identical heat everywhere (the smaller index takes the
+// whole region, the duplicate cell is empty) and near-ties in one face; still a valid diagram.
+TEST(HeatVoronoi, CoincidentAndNearlyCoincidentSites) {
+  auto m = test::icosphere(3);
+  HeatSolver solver(cotan_laplacian(m.V, m.F));
+  std::vector<SurfacePoint> sites = random_sites(m.F, 6, 4);
+  sites.push_back(sites[2]);  // exact duplicate of site 2
+  SurfacePoint near = sites[4];
+  near.bary += Eigen::Vector3d(1e-9, -1e-9, 0);  // 1e-9 away from site 4
+  sites.push_back(near);
+  VoronoiDiagram d = heat_voronoi(m.V, m.F, solver, sites);
+  check_diagram(m.V, m.F, d, true);
+  EXPECT_EQ(d.cell_area[6], 0.0) << "the duplicate of site 2 has an empty cell";
+  EXPECT_GT(d.cell_area[2], 0.0);
+  EXPECT_GT(d.cell_area[4] + d.cell_area[7], 0.0);
+}

@@ -11,6 +11,7 @@
 // conforming and the cell boundaries form polylines.
 #include "heatcvt/voronoi.h"
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -314,6 +315,17 @@ FaceResult tessellate_face(const Eigen::MatrixX3i& F, const HeatField& field, in
     cand.resize(limit);
     std::sort(cand.begin(), cand.end());
   }
+  // A site whose heat equals a smaller site's at all three corners can win nowhere in this face
+  // (ties go to the smaller site) and its bisectors coincide with the smaller site's: drop it.
+  {
+    std::vector<int> distinct;
+    for (int r : cand) {
+      bool dup = false;
+      for (int q : distinct) dup = dup || (U[q][0] == U[r][0] && U[q][1] == U[r][1] && U[q][2] == U[r][2]);
+      if (!dup) distinct.push_back(r);
+    }
+    cand.swap(distinct);
+  }
 
   // Canonical points: corners, then the switch points of each edge (edge k = corners k, k+1).
   std::array<std::vector<EdgePoint>, 3> edge_points;
@@ -339,67 +351,129 @@ FaceResult tessellate_face(const Eigen::MatrixX3i& F, const HeatField& field, in
       res.points.push_back(p);
     }
   }
-  const int num_canonical = static_cast<int>(res.points.size());
 
-  // Maps a clipped polygon vertex to a local point index (snap / weld).
+  // Clipping with combinatorial bookkeeping. Every polygon edge knows its supporting line
+  // (face edge k = corners k, k+1, encoded −1−k; or the bisector with local site r, encoded r),
+  // every vertex is the intersection of two lines and gets a canonical key: a corner, a point on
+  // face edge k of the pair {s, r}, or the triple point {s, r, q} where three heat functions
+  // agree. The position of a key is computed once from the key alone, so all polygons of the
+  // face share bit-identical vertices even where near-parallel bisectors make the clipped
+  // positions ill-conditioned (nearly coincident sites).
+  struct PolyVertex {
+    Eigen::Vector3d x;  // position used by the clipping
+    int line_a, line_b; // the two lines through it (for the key)
+    int line_out;       // support of the edge to the next vertex
+  };
+  std::map<std::array<int, 4>, int> key_ids;
+  auto common_corner = [](int k1, int k2) {
+    for (int c : {k1, (k1 + 1) % 3})
+      if (c == k2 || c == (k2 + 1) % 3) return c;
+    return k1;
+  };
+  // nearest canonical point (corner or walk point) of face edge k at parameter t from its
+  // smaller to its larger vertex
+  auto snap_to_edge = [&](int k, double t) -> int {
+    const int ca = k, cb = (k + 1) % 3;
+    const int a = std::min(vtx[ca], vtx[cb]);
+    const int corner_a = vtx[ca] == a ? ca : cb, corner_b = corner_a == ca ? cb : ca;
+    int best = corner_a;
+    double best_d = std::abs(t);
+    if (std::abs(1.0 - t) < best_d) {
+      best = corner_b;
+      best_d = std::abs(1.0 - t);
+    }
+    for (int id : edge_point_ids[k]) {
+      const double dd = std::abs(res.points[id].t - t);
+      if (dd < best_d) {
+        best = id;
+        best_d = dd;
+      }
+    }
+    return best;
+  };
+  auto point_on_edge = [&](int k, int p, int q) -> int {
+    // the walk of edge k is the canonical truth; look the pair up, else snap to the nearest point
+    const int ca = k, cb = (k + 1) % 3;
+    const int a = std::min(vtx[ca], vtx[cb]), b = std::max(vtx[ca], vtx[cb]);
+    const int gp = sites[std::min(p, q)], gq = sites[std::max(p, q)];
+    for (int id : edge_point_ids[k]) {
+      const LocalPoint& lp = res.points[id];
+      if (lp.key[2] == gp && lp.key[3] == gq) return id;
+    }
+    const double da = field_value(field, a, gp) - field_value(field, a, gq);
+    const double db = field_value(field, b, gp) - field_value(field, b, gq);
+    double t = da / (da - db);
+    if (!std::isfinite(t)) t = 0.5;
+    return snap_to_edge(k, t);
+  };
   const double weld_tol = 1e-10;
-  auto point_id = [&](const Eigen::Vector3d& x) -> int {
-    int zeros = 0, zero_c = -1;
-    for (int c = 0; c < 3; ++c)
-      if (x[c] == 0.0) {
-        ++zeros;
-        zero_c = c;
-      }
-    if (zeros >= 2) {
-      int c = 0;
-      x.maxCoeff(&c);
-      return c;
+  auto vertex_id = [&](int s, int l1, int l2) -> int {
+    if (l1 < 0 && l2 < 0) return common_corner(-1 - l1, -1 - l2);
+    if (l1 < 0 || l2 < 0) {
+      const int k = l1 < 0 ? -1 - l1 : -1 - l2, r = l1 < 0 ? l2 : l1;
+      return point_on_edge(k, s, r);
     }
-    if (zeros == 1) {
-      // on the edge opposite corner zero_c, i.e. edge k = (zero_c + 1) % 3
-      const int k = (zero_c + 1) % 3;
-      const int ca = k, cb = (k + 1) % 3;
-      const int a = std::min(vtx[ca], vtx[cb]);
-      const int corner_a = vtx[ca] == a ? ca : cb, corner_b = corner_a == ca ? cb : ca;
-      const double t = x[corner_b] / (x[corner_a] + x[corner_b]);
-      int best = corner_a;
-      double best_d = t;
-      if (1.0 - t < best_d) {
-        best = corner_b;
-        best_d = 1.0 - t;
-      }
-      for (int id : edge_point_ids[k]) {
-        const double d = std::abs(res.points[id].t - t);
-        if (d < best_d) {
-          best = id;
-          best_d = d;
-        }
-      }
-      return best;
+    std::array<int, 3> tri = {s, l1, l2};
+    std::sort(tri.begin(), tri.end());
+    const std::array<int, 4> key = {tri[0], tri[1], tri[2], 0};
+    auto it = key_ids.find(key);
+    if (it != key_ids.end()) return it->second;
+    // u_a = u_b = u_c, Σβ = 1
+    Eigen::Matrix3d A;
+    for (int c = 0; c < 3; ++c) {
+      A(0, c) = U[tri[0]][c] - U[tri[1]][c];
+      A(1, c) = U[tri[0]][c] - U[tri[2]][c];
+      A(2, c) = 1.0;
     }
-    for (int i = 0; i < static_cast<int>(res.points.size()); ++i)
-      if ((res.points[i].bary - x).cwiseAbs().maxCoeff() < weld_tol) return i;
+    Eigen::Vector3d x = A.fullPivLu().solve(Eigen::Vector3d(0, 0, 1));
+    if (!x.allFinite()) x = Eigen::Vector3d::Constant(1.0 / 3);
+    x = x.cwiseMax(0.0);
+    x /= x.sum();
+    int id = -1;
+    int cmin = 0;
+    if (x.minCoeff(&cmin) <= weld_tol) {
+      // a triple point on the face boundary is the edge's switch point (or a corner)
+      const int k = (cmin + 1) % 3, ca = k, cb = (k + 1) % 3;
+      const int corner_a = vtx[ca] < vtx[cb] ? ca : cb, corner_b = corner_a == ca ? cb : ca;
+      id = snap_to_edge(k, x[corner_b] / (x[corner_a] + x[corner_b]));
+    } else {
+      // several triples at one point (≥ 4 cells meeting): weld
+      for (int i = 0; i < static_cast<int>(res.points.size()) && id < 0; ++i)
+        if ((res.points[i].bary - x).cwiseAbs().maxCoeff() < weld_tol) id = i;
+    }
+    if (id >= 0) {
+      key_ids.emplace(key, id);
+      return id;
+    }
     LocalPoint p;
     p.kind = LocalPoint::Interior;
     p.bary = x;
     res.points.push_back(p);
+    key_ids.emplace(key, static_cast<int>(res.points.size()) - 1);
     return static_cast<int>(res.points.size()) - 1;
   };
-  (void)num_canonical;
 
-  std::vector<Eigen::Vector3d> poly, next;
+  std::vector<PolyVertex> poly, next;
   std::vector<double> g;
   for (int s : cand) {
-    poly = {Eigen::Vector3d::Unit(0), Eigen::Vector3d::Unit(1), Eigen::Vector3d::Unit(2)};
+    // triangle: vertex c lies on edges c−1 and c; the edge from vertex c to c+1 is edge c
+    poly.clear();
+    for (int c = 0; c < 3; ++c) poly.push_back({Eigen::Vector3d::Unit(c), -1 - (c + 2) % 3, -1 - c, -1 - c});
     for (int r : cand) {
       if (r == s) continue;
       const Eigen::Vector3d d(U[s][0] - U[r][0], U[s][1] - U[r][1], U[s][2] - U[r][2]);
+      // inside: u_s > u_r, or an exact tie and s is the smaller site (identical heat functions,
+      // e.g. coincident sites, must not both claim the region)
+      const bool ties_in = s < r;
+      auto inside = [&](double gi) { return gi > 0 || (gi == 0 && ties_in); };
       g.resize(poly.size());
       bool all_in = true, all_out = true;
       for (size_t i = 0; i < poly.size(); ++i) {
-        g[i] = d.dot(poly[i]);
-        if (g[i] < 0) all_in = false;
-        if (g[i] >= 0) all_out = false;
+        g[i] = d.dot(poly[i].x);
+        if (inside(g[i]))
+          all_out = false;
+        else
+          all_in = false;
       }
       if (all_in) continue;
       if (all_out) {
@@ -409,15 +483,14 @@ FaceResult tessellate_face(const Eigen::MatrixX3i& F, const HeatField& field, in
       next.clear();
       for (size_t i = 0; i < poly.size(); ++i) {
         const size_t j = (i + 1) % poly.size();
-        const bool in_i = g[i] >= 0, in_j = g[j] >= 0;
+        const bool in_i = inside(g[i]), in_j = inside(g[j]);
+        const int L = poly[i].line_out;
         if (in_i) next.push_back(poly[i]);
         if (in_i != in_j) {
           const double lambda = g[i] / (g[i] - g[j]);
-          Eigen::Vector3d x = poly[i] + lambda * (poly[j] - poly[i]);
-          // exact zeros stay zero on edges of the face
-          for (int c = 0; c < 3; ++c)
-            if (poly[i][c] == 0.0 && poly[j][c] == 0.0) x[c] = 0.0;
-          next.push_back(x);
+          const Eigen::Vector3d x = poly[i].x + lambda * (poly[j].x - poly[i].x);
+          // leaving: the new edge runs along the bisector; entering: along L again
+          next.push_back({x, L, r, in_i ? r : L});
         }
       }
       poly.swap(next);
@@ -428,8 +501,8 @@ FaceResult tessellate_face(const Eigen::MatrixX3i& F, const HeatField& field, in
     }
     if (poly.size() < 3) continue;
     std::vector<int> ids;
-    for (const Eigen::Vector3d& x : poly) {
-      const int id = point_id(x);
+    for (const PolyVertex& pv : poly) {
+      const int id = vertex_id(s, pv.line_a, pv.line_b);
       if (ids.empty() || ids.back() != id) ids.push_back(id);
     }
     while (ids.size() > 1 && ids.back() == ids.front()) ids.pop_back();
