@@ -26,6 +26,18 @@ struct ReconstructionOptions {
   double time_coefficient = 1.0;  ///< t = C·h̄². Default 1.
   std::uint32_t seed = 1;         ///< seed of the initial sites. Default 1.
   int threads = 0;                ///< 0 = all cores. Default 0.
+  // --- additive fields (not in the first pinned version) ---
+  /// Boundary loops of the extracted mesh with at most this many edges are treated as holes of
+  /// the extraction (not scan boundaries) and filled. Default 8.
+  int max_hole_edges = 8;
+  /// Statistical outlier removal: neighbours and standard-deviation multiplier (PCL
+  /// StatisticalOutlierRemoval). Defaults 20 and 2.0. Only used with `denoise`.
+  /// Final polish: iterations of tangential relaxation (each vertex towards the area-weighted
+  /// centroid of its one-ring, re-projected to the fitted surface) alternating with max-min-angle
+  /// edge flips. 0 = the plain dual of the heat CVT (edge flips only). Default 10.
+  int relaxation_iterations = 10;
+  int denoise_neighbors = 20;
+  double denoise_stddev = 2.0;
 };
 
 /// Progress of a reconstruction: a stage name and a fraction in [0, 1].
@@ -40,11 +52,60 @@ struct ReconstructionResult {
   int iterations = 0;              ///< Lloyd iterations run
   double min_angle_deg = 0;        ///< φmin: smallest interior angle over all triangles
   double mean_min_angle_deg = 0;   ///< φm: mean over triangles of their smallest angle
+  // --- additive fields (not in the first pinned version) ---
+  int points_input = 0;            ///< rows of P
+  int points_merged = 0;           ///< exact duplicates merged
+  int points_denoised = 0;         ///< removed by the outlier filter
+  int points_voxel_removed = 0;    ///< removed by voxel-grid downsampling (input − output count)
+  std::vector<double> iteration_seconds;  ///< wall time of each Lloyd iteration
+  int candidate_triangles = 0;     ///< distinct dual triangles witnessed by the point triangles
+  int rejected_triangles = 0;      ///< candidates not kept (non-manifold or orientation conflict)
+  int removed_triangles = 0;       ///< kept, then removed to make vertices manifold / drop tiny pieces
+  int holes_filled = 0;            ///< boundary loops with ≤ max_hole_edges edges that were filled
+  int flipped_edges = 0;           ///< max-min-angle edge flips on the extracted mesh
+  int unused_sites = 0;            ///< sites that ended in no triangle (dropped from the mesh)
 };
 
 /// Reconstructs a surface from the points P (#P by 3; NaN-free, duplicates allowed).
+///
+/// Pipeline (all in the cloud's bounding_box_frame, restored at the end):
+///  1. exact duplicates merged; optional statistical outlier removal and voxel grid (PCL);
+///  2. point_laplacian() with k = `neighbors` (tufted intrinsic Delaunay, kNN via FLANN), PCA
+///     normals oriented by orient_normals_mst(); with anisotropy λ > 0 the Laplacian is rebuilt
+///     from the edge lengths of the local triangles lifted to (p, λ n) ∈ R⁶ (paper §7.1);
+///  3. centroidal_voronoi() on (points, local triangles, Laplacian): `sites` sites, `iterations`
+///     Lloyd steps, seeded random start;
+///  4. dual triangles: every local triangle whose three corner points lie in three different cells
+///     witnesses the triangle of those three sites; candidates ordered by witness count, then
+///     by smallest angle, and accepted greedily when every edge stays shared by ≤ 2 triangles
+///     traversed in opposite directions (orientation from the MST-oriented normals);
+///  5. site positions projected to a weighted least-squares quadratic height field fitted to the
+///     k nearest points (PCA frame);
+///  6. non-manifold vertices resolved (largest fan kept), components of < 4 triangles dropped,
+///     boundary loops of ≤ max_hole_edges edges filled (max-min-angle triangulation), unused
+///     sites removed;
+///  7. validate_triangle_mesh() (require_closed = false: open scans legitimately keep boundaries).
+/// Deterministic for a given input, options and seed, independent of `threads`.
 /// \throw InvalidInputError for empty / too small clouds, sites < 4 or > usable points, bad options.
 ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P, const ReconstructionOptions& options = {},
                                          const ReconstructionCallback& progress = {});
+
+/// Area-uniform random points on the triangle mesh (V, F) (std::mt19937 seeded with `seed`), plus
+/// isotropic Gaussian noise of standard deviation `noise_sigma` (input units) per coordinate.
+/// Used to build test and benchmark clouds from meshes. Returns count by 3.
+/// \throw InvalidInputError on an empty / zero-area mesh, count < 1 or noise_sigma < 0.
+Eigen::MatrixX3d sample_surface(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, int count,
+                                std::uint32_t seed = 1, double noise_sigma = 0.0);
+
+/// Distances between two triangle meshes A and B, measured from `samples` area-uniform points on
+/// each to the other surface (exact point–triangle distances, CGAL AABB tree).
+struct SurfaceDistance {
+  double mean_a_to_b = 0, mean_b_to_a = 0;
+  double mean = 0;       ///< (mean_a_to_b + mean_b_to_a) / 2: the two-sided mean distance
+  double hausdorff = 0;  ///< max over both sample sets (a sampled, one-sided-max-of-both estimate)
+};
+/// \throw InvalidInputError on empty meshes or samples < 1.
+SurfaceDistance surface_distance(const Eigen::MatrixX3d& VA, const Eigen::MatrixX3i& FA, const Eigen::MatrixX3d& VB,
+                                 const Eigen::MatrixX3i& FB, int samples = 20000, std::uint32_t seed = 7);
 
 }  // namespace heatcvt

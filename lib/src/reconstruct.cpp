@@ -1,0 +1,872 @@
+// Surface reconstruction from point clouds: point Laplacian -> heat CVT -> dual triangles ->
+// fitted site positions -> orientation / manifold clean-up / small-hole filling -> validation.
+#include "heatcvt/reconstruct.h"
+
+#include <pcl/filters/statistical_outlier_removal.h>
+#include <pcl/filters/voxel_grid.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <map>
+#include <set>
+#include <random>
+#include <string>
+#include <tuple>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "heatcvt/closest_point.h"
+#include "heatcvt/cloud_io.h"
+#include "heatcvt/cvt.h"
+#include "heatcvt/dual_mesh.h"
+#include "heatcvt/errors.h"
+#include "heatcvt/laplacian.h"
+#include "heatcvt/normals.h"
+#include "heatcvt/parallel.h"
+#include "heatcvt/point_laplacian.h"
+
+namespace heatcvt {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+void check_options(const ReconstructionOptions& o) {
+  auto bad = [](const std::string& m) { throw InvalidInputError("reconstruct_surface: " + m); };
+  if (o.sites < 4) bad("sites = " + std::to_string(o.sites) + " (need at least 4)");
+  if (o.iterations < 0) bad("iterations = " + std::to_string(o.iterations) + " (must be >= 0)");
+  if (o.neighbors < 6) bad("neighbors = " + std::to_string(o.neighbors) + " (need at least 6)");
+  if (!(o.anisotropy >= 0) || !std::isfinite(o.anisotropy)) bad("anisotropy must be a finite number >= 0");
+  if (!(o.voxel_size >= 0) || !std::isfinite(o.voxel_size)) bad("voxel_size must be a finite number >= 0");
+  if (!(o.time_coefficient > 0) || !std::isfinite(o.time_coefficient)) bad("time_coefficient must be > 0");
+  if (o.threads < 0) bad("threads must be >= 0");
+  if (o.max_hole_edges < 0) bad("max_hole_edges must be >= 0");
+  if (o.relaxation_iterations < 0) bad("relaxation_iterations must be >= 0");
+  if (o.denoise && o.denoise_neighbors < 2) bad("denoise_neighbors must be >= 2");
+  if (o.denoise && (!(o.denoise_stddev > 0) || !std::isfinite(o.denoise_stddev))) bad("denoise_stddev must be > 0");
+}
+
+pcl::PointCloud<pcl::PointXYZ>::Ptr to_pcl(const Eigen::MatrixX3d& P) {
+  pcl::PointCloud<pcl::PointXYZ>::Ptr c(new pcl::PointCloud<pcl::PointXYZ>);
+  c->resize(P.rows());
+  for (Eigen::Index i = 0; i < P.rows(); ++i)
+    (*c)[i] = pcl::PointXYZ(static_cast<float>(P(i, 0)), static_cast<float>(P(i, 1)), static_cast<float>(P(i, 2)));
+  c->width = static_cast<std::uint32_t>(P.rows());
+  c->height = 1;
+  c->is_dense = true;
+  return c;
+}
+
+// Weighted least-squares quadratic height field over the PCA plane of `nb` (indices into P);
+// returns the projection of x onto it and the fitted normal (oriented like `orient`).
+void fit_and_project(const Eigen::MatrixX3d& P, const std::vector<int>& nb, const Eigen::Vector3d& x,
+                     const Eigen::Vector3d& orient, Eigen::Vector3d& out_pos, Eigen::Vector3d& out_normal) {
+  const int m = static_cast<int>(nb.size());
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (int j : nb) mean += P.row(j).transpose();
+  mean /= m;
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  for (int j : nb) {
+    const Eigen::Vector3d d = P.row(j).transpose() - mean;
+    C += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
+  Eigen::Vector3d n = es.eigenvectors().col(0);
+  if (n.dot(orient) < 0) n = -n;
+  Eigen::Vector3d u = es.eigenvectors().col(2), v = n.cross(u);
+  const Eigen::Vector3d xl = x - mean;
+  const double sx = xl.dot(u), tx = xl.dot(v);
+  // Gaussian weights in the plane around the query; bandwidth = RMS planar radius.
+  std::vector<double> s(m), t(m), h(m), w(m);
+  double r2 = 0;
+  for (int q = 0; q < m; ++q) {
+    const Eigen::Vector3d d = P.row(nb[q]).transpose() - mean;
+    s[q] = d.dot(u);
+    t[q] = d.dot(v);
+    h[q] = d.dot(n);
+    r2 += (s[q] - sx) * (s[q] - sx) + (t[q] - tx) * (t[q] - tx);
+  }
+  r2 = std::max(r2 / m, 1e-300);
+  for (int q = 0; q < m; ++q) w[q] = std::exp(-((s[q] - sx) * (s[q] - sx) + (t[q] - tx) * (t[q] - tx)) / r2);
+  // Local coordinates centred at the query for conditioning.
+  Eigen::MatrixXd A(m, 6);
+  Eigen::VectorXd b(m);
+  for (int q = 0; q < m; ++q) {
+    const double a = s[q] - sx, c = t[q] - tx, sw = std::sqrt(w[q]);
+    A.row(q) << sw, sw * a, sw * c, sw * a * a, sw * a * c, sw * c * c;
+    b[q] = sw * h[q];
+  }
+  const double radius = std::sqrt(r2);
+  double z = 0, gx = 0, gy = 0;
+  bool ok = false;
+  if (m >= 10) {
+    // Scale the columns so that the quadratic terms are O(1).
+    Eigen::VectorXd scale(6);
+    scale << 1, radius, radius, radius * radius, radius * radius, radius * radius;
+    Eigen::MatrixXd As = A * scale.cwiseInverse().asDiagonal();
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(As);
+    qr.setThreshold(1e-8);
+    if (qr.rank() == 6) {
+      const Eigen::VectorXd coef = scale.cwiseInverse().asDiagonal() * qr.solve(b);
+      z = coef[0];
+      gx = coef[1];
+      gy = coef[2];
+      ok = std::isfinite(z) && std::isfinite(gx) && std::isfinite(gy) && std::abs(z - xl.dot(n)) < 2 * radius;
+    }
+  }
+  if (!ok) {  // plane fallback: weighted mean height
+    double sw = 0, sh = 0;
+    for (int q = 0; q < m; ++q) {
+      sw += w[q];
+      sh += w[q] * h[q];
+    }
+    z = sw > 0 ? sh / sw : 0;
+    gx = gy = 0;
+  }
+  out_pos = mean + sx * u + tx * v + z * n;
+  out_normal = (n - gx * u - gy * v).normalized();
+}
+
+struct EdgeKey {
+  static long long make(int a, int b) { return (static_cast<long long>(a) << 32) | static_cast<unsigned>(b); }
+};
+
+double tri_min_angle(const Eigen::MatrixX3d& V, int a, int b, int c) {
+  const Eigen::Vector3d p[3] = {V.row(a), V.row(b), V.row(c)};
+  double best = M_PI;
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
+    const double n1 = e1.norm(), n2 = e2.norm();
+    if (n1 == 0 || n2 == 0) return 0;
+    best = std::min(best, std::acos(std::clamp(e1.dot(e2) / (n1 * n2), -1.0, 1.0)));
+  }
+  return best;
+}
+
+// Groups the faces around vertex v into fans (connected through edges incident to v).
+std::vector<std::vector<int>> vertex_fans(int v, const std::vector<int>& faces, const std::vector<std::array<int, 3>>& F) {
+  const int m = static_cast<int>(faces.size());
+  std::vector<int> parent(m);
+  for (int i = 0; i < m; ++i) parent[i] = i;
+  std::function<int(int)> find = [&](int i) { return parent[i] == i ? i : parent[i] = find(parent[i]); };
+  std::map<int, int> first_with_other;  // other vertex -> face slot
+  for (int i = 0; i < m; ++i) {
+    const auto& f = F[faces[i]];
+    for (int k = 0; k < 3; ++k) {
+      const int o = f[k];
+      if (o == v) continue;
+      auto it = first_with_other.find(o);
+      if (it == first_with_other.end())
+        first_with_other[o] = i;
+      else
+        parent[find(i)] = find(it->second);
+    }
+  }
+  std::map<int, std::vector<int>> groups;
+  for (int i = 0; i < m; ++i) groups[find(i)].push_back(faces[i]);
+  std::vector<std::vector<int>> out;
+  for (auto& g : groups) out.push_back(std::move(g.second));
+  return out;
+}
+
+// Max-min-angle triangulation of a small polygon loop (indices into V), skipping diagonals in
+// `forbidden`. Emits triangles whose orientation is opposite to the loop direction.
+bool fill_loop(const std::vector<int>& loop, const Eigen::MatrixX3d& V,
+               const std::unordered_map<long long, int>& edge_count, std::vector<std::array<int, 3>>& out) {
+  const int L = static_cast<int>(loop.size());
+  auto is_edge = [&](int i, int j) {
+    const int a = std::min(loop[i], loop[j]), b = std::max(loop[i], loop[j]);
+    return edge_count.count(EdgeKey::make(a, b)) > 0;
+  };
+  const double NEG = -1.0;
+  std::vector<double> best(L * L, NEG);
+  std::vector<int> split(L * L, -1);
+  for (int i = 0; i + 1 < L; ++i) best[i * L + i + 1] = M_PI;  // a polygon edge: neutral
+  for (int len = 2; len < L; ++len)
+    for (int i = 0; i + len < L; ++i) {
+      const int j = i + len;
+      // The chord (i, j) must not already be an edge of the mesh (except the closing edge 0..L-1).
+      if (!(i == 0 && j == L - 1) && is_edge(i, j)) continue;
+      for (int k = i + 1; k < j; ++k) {
+        const double a = best[i * L + k], b = best[k * L + j];
+        if (a < 0 || b < 0) continue;
+        const double q = std::min({a, b, tri_min_angle(V, loop[i], loop[k], loop[j])});
+        if (q > best[i * L + j]) {
+          best[i * L + j] = q;
+          split[i * L + j] = k;
+        }
+      }
+    }
+  if (best[0 * L + L - 1] < 0) return false;
+  std::vector<std::pair<int, int>> stack = {{0, L - 1}};
+  while (!stack.empty()) {
+    auto [i, j] = stack.back();
+    stack.pop_back();
+    if (j - i < 2) continue;
+    const int k = split[i * L + j];
+    out.push_back({loop[i], loop[j], loop[k]});  // reversed w.r.t. loop order i<k<j
+    stack.push_back({i, k});
+    stack.push_back({k, j});
+  }
+  return true;
+}
+
+// Max-min-angle edge flips on a consistently oriented manifold mesh (the dual of a CVT is
+// Delaunay-like; flips repair the few diagonals the discrete labels got wrong). A flip is done
+// only when the new edge does not exist yet, both end vertices keep valence >= 3, the smallest
+// angle of the pair increases, and the two new triangles stay within `max_normal_deviation` of
+// the old pair's normal (no folds). Returns the number of flips.
+int improve_by_flips(const Eigen::MatrixX3d& V, std::vector<std::array<int, 3>>& F, int max_passes) {
+  std::unordered_map<long long, int> dir;  // directed edge -> face
+  auto key = [](int a, int b) { return EdgeKey::make(a, b); };
+  std::vector<int> valence(V.rows(), 0);
+  std::unordered_map<long long, char> undirected;
+  for (int f = 0; f < static_cast<int>(F.size()); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = F[f][k], b = F[f][(k + 1) % 3];
+      dir[key(a, b)] = f;
+      if (!undirected.count(key(std::min(a, b), std::max(a, b)))) {
+        undirected[key(std::min(a, b), std::max(a, b))] = 1;
+        ++valence[a];
+        ++valence[b];
+      }
+    }
+  auto normal = [&](int a, int b, int c) -> Eigen::Vector3d {
+    return (V.row(b) - V.row(a)).cross(V.row(c) - V.row(a)).transpose();
+  };
+  int flips = 0;
+  for (int pass = 0; pass < max_passes; ++pass) {
+    int pass_flips = 0;
+    for (int f1 = 0; f1 < static_cast<int>(F.size()); ++f1)
+      for (int k = 0; k < 3; ++k) {
+        const int a = F[f1][k], b = F[f1][(k + 1) % 3], c = F[f1][(k + 2) % 3];
+        auto it = dir.find(key(b, a));
+        if (it == dir.end()) continue;
+        const int f2 = it->second;
+        int d = -1;
+        for (int q = 0; q < 3; ++q)
+          if (F[f2][q] != a && F[f2][q] != b) d = F[f2][q];
+        if (d < 0 || d == c) continue;
+        if (undirected.count(key(std::min(c, d), std::max(c, d)))) continue;
+        if (valence[a] <= 3 || valence[b] <= 3) continue;
+        const double before = std::min(tri_min_angle(V, a, b, c), tri_min_angle(V, b, a, d));
+        const double after = std::min(tri_min_angle(V, c, a, d), tri_min_angle(V, d, b, c));
+        if (!(after > before + 1e-9)) continue;
+        const Eigen::Vector3d n1 = normal(a, b, c), n2 = normal(b, a, d);
+        const Eigen::Vector3d m1 = normal(c, a, d), m2 = normal(d, b, c);
+        const Eigen::Vector3d avg = (n1.normalized() + n2.normalized()).normalized();
+        if (!(m1.norm() > 0) || !(m2.norm() > 0) || !avg.allFinite()) continue;
+        const double cos_limit = std::cos(30.0 * M_PI / 180.0);
+        if (m1.normalized().dot(avg) < cos_limit || m2.normalized().dot(avg) < cos_limit) continue;
+        // Flip: (a,b,c),(b,a,d) -> (c,a,d),(d,b,c).
+        for (int q = 0; q < 3; ++q) {
+          dir.erase(key(F[f1][q], F[f1][(q + 1) % 3]));
+          dir.erase(key(F[f2][q], F[f2][(q + 1) % 3]));
+        }
+        undirected.erase(key(std::min(a, b), std::max(a, b)));
+        undirected[key(std::min(c, d), std::max(c, d))] = 1;
+        --valence[a], --valence[b], ++valence[c], ++valence[d];
+        F[f1] = {c, a, d};
+        F[f2] = {d, b, c};
+        for (int q = 0; q < 3; ++q) {
+          dir[key(F[f1][q], F[f1][(q + 1) % 3])] = f1;
+          dir[key(F[f2][q], F[f2][(q + 1) % 3])] = f2;
+        }
+        ++pass_flips;
+        break;  // F[f1] changed: move on to the next face
+      }
+    flips += pass_flips;
+    if (pass_flips == 0) break;
+  }
+  return flips;
+}
+
+}  // namespace
+
+ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const ReconstructionOptions& options,
+                                         const ReconstructionCallback& progress) {
+  const auto t_start = Clock::now();
+  check_options(options);
+  auto report = [&](const std::string& stage, double f) {
+    if (progress) progress(stage, std::clamp(f, 0.0, 1.0));
+  };
+  ReconstructionResult res;
+  res.points_input = static_cast<int>(P_in.rows());
+  if (P_in.rows() == 0) throw InvalidInputError("reconstruct_surface: the point cloud is empty");
+  for (Eigen::Index i = 0; i < P_in.rows(); ++i)
+    if (!P_in.row(i).allFinite())
+      throw InvalidInputError("reconstruct_surface: point " + std::to_string(i) + " has a NaN or infinite coordinate");
+
+  // 1. Clean-up, frame, optional denoising / downsampling.
+  PointCloud cloud;
+  cloud.P = P_in;
+  CloudReadReport clean_report;
+  clean_cloud(cloud, &clean_report);
+  res.points_merged = static_cast<int>(clean_report.duplicates_merged);
+  const CloudFrame frame = normalize_cloud(cloud);
+  Eigen::MatrixX3d P = cloud.P;
+  report("preprocess", 0);
+  if (options.denoise && P.rows() > options.denoise_neighbors + 1) {
+    pcl::StatisticalOutlierRemoval<pcl::PointXYZ> sor;
+    sor.setInputCloud(to_pcl(P));
+    sor.setMeanK(options.denoise_neighbors);
+    sor.setStddevMulThresh(options.denoise_stddev);
+    pcl::Indices kept;
+    sor.filter(kept);
+    std::sort(kept.begin(), kept.end());
+    Eigen::MatrixX3d Q(kept.size(), 3);
+    for (size_t i = 0; i < kept.size(); ++i) Q.row(i) = P.row(kept[i]);
+    res.points_denoised = static_cast<int>(P.rows() - Q.rows());
+    P = Q;
+  }
+  if (options.voxel_size > 0 && P.rows() > 0) {
+    pcl::VoxelGrid<pcl::PointXYZ> vg;
+    vg.setInputCloud(to_pcl(P));
+    const float leaf = static_cast<float>(options.voxel_size / frame.scale);
+    vg.setLeafSize(leaf, leaf, leaf);
+    pcl::PointCloud<pcl::PointXYZ> out;
+    vg.filter(out);
+    Eigen::MatrixX3d Q(out.size(), 3);
+    for (size_t i = 0; i < out.size(); ++i) Q.row(i) << out[i].x, out[i].y, out[i].z;
+    res.points_voxel_removed = static_cast<int>(P.rows() - Q.rows());
+    P = Q;
+    if (P.rows() > 0) {  // voxel centroids may coincide in float: merge again
+      PointCloud c2;
+      c2.P = P;
+      clean_cloud(c2);
+      P = c2.P;
+    }
+  }
+  const int n = static_cast<int>(P.rows());
+  res.points_used = n;
+  if (n < options.neighbors + 1)
+    throw InvalidInputError("reconstruct_surface: only " + std::to_string(n) + " usable points, need at least " +
+                            std::to_string(options.neighbors + 1) + " (neighbors + 1)");
+  if (options.sites > n)
+    throw InvalidInputError("reconstruct_surface: " + std::to_string(options.sites) + " sites requested but only " +
+                            std::to_string(n) + " usable points");
+
+  // 2. Point Laplacian, normals.
+  report("laplacian", 0);
+  auto t0 = Clock::now();
+  PointLaplacianOptions lopt;
+  lopt.k = options.neighbors;
+  lopt.threads = options.threads;
+  PointLaplacian pl = point_laplacian(P, lopt);
+  const Eigen::MatrixXi knn = k_nearest_neighbors(P, options.neighbors, options.threads);
+  Eigen::MatrixX3d N = pl.normals;
+  orient_normals_mst(P, N, std::min(10, options.neighbors), options.threads);
+  const Eigen::MatrixX3i& T = pl.triangles;
+  Laplacian lap;
+  Eigen::VectorXd metric_area;
+  if (options.anisotropy > 0) {
+    Eigen::MatrixXd X(n, 6);
+    X.leftCols(3) = P;
+    X.rightCols(3) = options.anisotropy * N;
+    const Eigen::MatrixX3d lengths = face_edge_lengths(X, T);
+    lap = cotan_laplacian_from_lengths(lengths, T, n);
+    metric_area.resize(T.rows());
+    for (Eigen::Index f = 0; f < T.rows(); ++f) {
+      const double a = lengths(f, 0), b = lengths(f, 1), c = lengths(f, 2), s = 0.5 * (a + b + c);
+      metric_area[f] = std::sqrt(std::max(0.0, s * (s - a) * (s - b) * (s - c)));
+    }
+  } else {
+    lap = std::move(pl.laplacian);
+  }
+  res.laplacian_seconds = since(t0);
+  report("laplacian", 1);
+
+  // 3. Heat CVT on the points.
+  CvtOptions copt;
+  copt.sites = options.sites;
+  copt.iterations = options.iterations;
+  copt.seed = options.seed;
+  copt.threads = options.threads;
+  copt.time_coefficient = options.time_coefficient;
+  copt.build_dual = false;
+  t0 = Clock::now();
+  report("cvt", 0);
+  const CvtResult cvt = centroidal_voronoi(
+      P, T, lap, copt, {},
+      [&](const CvtIterationStats& st) {
+        report("cvt", options.iterations > 0 ? static_cast<double>(st.iteration) / options.iterations : 1.0);
+        return true;
+      },
+      metric_area);
+  res.cvt_seconds = since(t0);
+  res.factor_seconds = cvt.factor_seconds;
+  res.iterations = static_cast<int>(cvt.iterations.size());
+  for (const auto& st : cvt.iterations) res.iteration_seconds.push_back(st.seconds);
+  report("mesh", 0);
+
+  // 4. Cell label of every point (original vertices keep their indices in the refined mesh).
+  const VoronoiDiagram& D = cvt.diagram;
+  const int ns = D.num_cells();
+  std::vector<int> label(n, -1);
+  for (Eigen::Index r = 0; r < D.F.rows(); ++r)
+    for (int k = 0; k < 3; ++k) {
+      const int v = D.F(r, k);
+      if (v < n && label[v] < 0) label[v] = D.face_cell[r];
+    }
+
+  // 5. Site positions on the fitted surface, fitted normals.
+  Eigen::MatrixX3d S(ns, 3), SN(ns, 3);
+#pragma omp parallel for num_threads(resolve_threads(options.threads)) schedule(static)
+  for (int s = 0; s < ns; ++s) {
+    const SurfacePoint& sp = cvt.sites[s];
+    int corner = 0;
+    sp.bary.maxCoeff(&corner);
+    const int c = T(sp.face, corner);
+    std::vector<int> nb(knn.cols() + 1);
+    nb[0] = c;
+    for (Eigen::Index q = 0; q < knn.cols(); ++q) nb[q + 1] = knn(c, q);
+    Eigen::Vector3d orient = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) orient += sp.bary[k] * N.row(T(sp.face, k)).transpose();
+    if (orient.norm() == 0) orient = N.row(c).transpose();
+    Eigen::Vector3d pos, nrm;
+    fit_and_project(P, nb, cvt.positions.row(s).transpose(), orient, pos, nrm);
+    S.row(s) = pos.transpose();
+    SN.row(s) = nrm.transpose();
+  }
+
+  // 6. Candidate dual triangles witnessed by local triangles with three different labels.
+  std::vector<std::array<int, 3>> cand;
+  for (Eigen::Index t = 0; t < T.rows(); ++t) {
+    std::array<int, 3> l = {label[T(t, 0)], label[T(t, 1)], label[T(t, 2)]};
+    if (l[0] < 0 || l[1] < 0 || l[2] < 0 || l[0] == l[1] || l[1] == l[2] || l[0] == l[2]) continue;
+    std::sort(l.begin(), l.end());
+    cand.push_back(l);
+  }
+  // Voronoi vertices of the exact tessellation (three or more cells meeting inside / on a point
+  // triangle) witness their triples too; where > 3 cells meet every triple is a candidate and the
+  // greedy extraction picks a consistent subset.
+  for (const VoronoiVertex& vv : D.voronoi_vertices) {
+    const auto& c = vv.cells;
+    if (c.size() > 6) continue;
+    for (size_t x = 0; x < c.size(); ++x)
+      for (size_t y = x + 1; y < c.size(); ++y)
+        for (size_t z = y + 1; z < c.size(); ++z) cand.push_back({c[x], c[y], c[z]});
+  }
+  std::sort(cand.begin(), cand.end());
+  struct Candidate {
+    std::array<int, 3> f;
+    int witnesses;
+    double quality;
+  };
+  std::vector<Candidate> cands;
+  for (size_t i = 0; i < cand.size();) {
+    size_t j = i;
+    while (j < cand.size() && cand[j] == cand[i]) ++j;
+    std::array<int, 3> f = cand[i];
+    const Eigen::Vector3d a = S.row(f[0]), b = S.row(f[1]), c = S.row(f[2]);
+    const Eigen::Vector3d fn = (b - a).cross(c - a);
+    const Eigen::Vector3d vn = SN.row(f[0]) + SN.row(f[1]) + SN.row(f[2]);
+    if (fn.dot(vn) < 0) std::swap(f[1], f[2]);
+    const double q = tri_min_angle(S, f[0], f[1], f[2]);
+    if (q > 0) cands.push_back({f, static_cast<int>(j - i), q});
+    i = j;
+  }
+  res.candidate_triangles = static_cast<int>(cands.size());
+  if (std::getenv("HEATCVT_RECON_DEBUG")) {
+    std::map<int, int> hist;
+    for (const auto& c : cands) ++hist[c.witnesses];
+    for (auto [w, c] : hist) std::fprintf(stderr, "witness %d: %d candidates\n", w, c);
+    DualMesh dm = dual_mesh(cvt.diagram, S);
+    const TriangleQuality q1 = triangle_quality(S, dm.F);
+    const TriangleQuality q2 = triangle_quality(cvt.positions, dm.F);
+    std::fprintf(stderr, "dual_mesh: F %ld open_fans %d dup %d flipped %d; quality fitted %.2f/%.2f raw %.2f/%.2f\n",
+                 (long)dm.F.rows(), dm.open_fans, dm.duplicate_triangles, dm.flipped_against_input, q1.min_angle_deg,
+                 q1.mean_min_angle_deg, q2.min_angle_deg, q2.mean_min_angle_deg);
+    for (size_t i = 1; i < cvt.iterations.size(); i += 5)
+      std::fprintf(stderr, "it %d max_move %.5f mean_move %.5f var %.3g\n", cvt.iterations[i].iteration,
+                   cvt.iterations[i].max_move, cvt.iterations[i].mean_move, cvt.iterations[i].area_variance);
+  }
+  std::stable_sort(cands.begin(), cands.end(), [](const Candidate& x, const Candidate& y) {
+    if (x.witnesses != y.witnesses) return x.witnesses > y.witnesses;
+    if (x.quality != y.quality) return x.quality > y.quality;
+    return x.f < y.f;
+  });
+
+  // Greedy manifold, consistently oriented extraction.
+  std::unordered_map<long long, int> directed;   // directed edge -> face
+  std::unordered_map<long long, int> undirected; // undirected edge -> face count
+  std::vector<std::array<int, 3>> F;
+  for (const Candidate& c : cands) {
+    bool ok = true;
+    for (int k = 0; k < 3 && ok; ++k) {
+      const int a = c.f[k], b = c.f[(k + 1) % 3];
+      if (directed.count(EdgeKey::make(a, b))) ok = false;
+      auto it = undirected.find(EdgeKey::make(std::min(a, b), std::max(a, b)));
+      if (it != undirected.end() && it->second >= 2) ok = false;
+    }
+    if (!ok) {
+      ++res.rejected_triangles;
+      continue;
+    }
+    const int id = static_cast<int>(F.size());
+    F.push_back(c.f);
+    for (int k = 0; k < 3; ++k) {
+      const int a = c.f[k], b = c.f[(k + 1) % 3];
+      directed[EdgeKey::make(a, b)] = id;
+      ++undirected[EdgeKey::make(std::min(a, b), std::max(a, b))];
+    }
+  }
+
+  auto rebuild_edges = [&]() {
+    directed.clear();
+    undirected.clear();
+    for (int id = 0; id < static_cast<int>(F.size()); ++id)
+      for (int k = 0; k < 3; ++k) {
+        const int a = F[id][k], b = F[id][(k + 1) % 3];
+        directed[EdgeKey::make(a, b)] = id;
+        ++undirected[EdgeKey::make(std::min(a, b), std::max(a, b))];
+      }
+  };
+  // Non-manifold vertices: keep the largest fan; tiny components (< 4 faces) dropped.
+  auto make_vertices_manifold = [&]() {
+    for (int round = 0; round < 10; ++round) {
+      std::vector<std::vector<int>> vf(ns);
+      for (int id = 0; id < static_cast<int>(F.size()); ++id)
+        for (int k = 0; k < 3; ++k) vf[F[id][k]].push_back(id);
+      std::vector<char> drop(F.size(), 0);
+      bool changed = false;
+      for (int v = 0; v < ns; ++v) {
+        if (vf[v].size() < 2) continue;
+        auto fans = vertex_fans(v, vf[v], F);
+        if (fans.size() < 2) continue;
+        size_t keep = 0;
+        for (size_t i = 1; i < fans.size(); ++i)
+          if (fans[i].size() > fans[keep].size()) keep = i;
+        for (size_t i = 0; i < fans.size(); ++i)
+          if (i != keep)
+            for (int f : fans[i]) drop[f] = 1, changed = true;
+      }
+      if (!changed) break;
+      std::vector<std::array<int, 3>> G;
+      for (size_t i = 0; i < F.size(); ++i)
+        if (!drop[i]) G.push_back(F[i]);
+        else ++res.removed_triangles;
+      F.swap(G);
+    }
+    // Components by shared edges.
+    std::vector<int> parent(F.size());
+    for (size_t i = 0; i < F.size(); ++i) parent[i] = static_cast<int>(i);
+    std::function<int(int)> find = [&](int i) { return parent[i] == i ? i : parent[i] = find(parent[i]); };
+    std::unordered_map<long long, int> first;
+    for (int id = 0; id < static_cast<int>(F.size()); ++id)
+      for (int k = 0; k < 3; ++k) {
+        const int a = F[id][k], b = F[id][(k + 1) % 3];
+        const long long key = EdgeKey::make(std::min(a, b), std::max(a, b));
+        auto it = first.find(key);
+        if (it == first.end()) first[key] = id;
+        else parent[find(id)] = find(it->second);
+      }
+    std::unordered_map<int, int> size;
+    for (size_t i = 0; i < F.size(); ++i) ++size[find(static_cast<int>(i))];
+    std::vector<std::array<int, 3>> G;
+    for (size_t i = 0; i < F.size(); ++i)
+      if (size[find(static_cast<int>(i))] >= 4) G.push_back(F[i]);
+      else ++res.removed_triangles;
+    F.swap(G);
+    rebuild_edges();
+  };
+  make_vertices_manifold();
+
+  // Second pass: candidates that were rejected or removed may fit now, if they keep every edge
+  // and every vertex manifold.
+  {
+    std::set<std::array<int, 3>> present;
+    auto canon = [](std::array<int, 3> f) {
+      std::sort(f.begin(), f.end());
+      return f;
+    };
+    for (const auto& f : F) present.insert(canon(f));
+    std::vector<std::vector<int>> vf(ns);
+    for (int id = 0; id < static_cast<int>(F.size()); ++id)
+      for (int k = 0; k < 3; ++k) vf[F[id][k]].push_back(id);
+    int added = 0;
+    for (const Candidate& c : cands) {
+      if (present.count(canon(c.f))) continue;
+      bool ok = true;
+      for (int k = 0; k < 3 && ok; ++k) {
+        const int a = c.f[k], b = c.f[(k + 1) % 3];
+        if (directed.count(EdgeKey::make(a, b))) ok = false;
+        auto it = undirected.find(EdgeKey::make(std::min(a, b), std::max(a, b)));
+        if (it != undirected.end() && it->second >= 2) ok = false;
+      }
+      if (!ok) continue;
+      const int id = static_cast<int>(F.size());
+      F.push_back(c.f);
+      for (int k = 0; k < 3 && ok; ++k) {
+        std::vector<int> faces = vf[c.f[k]];
+        faces.push_back(id);
+        if (vertex_fans(c.f[k], faces, F).size() > 1) ok = false;
+      }
+      if (!ok) {
+        F.pop_back();
+        continue;
+      }
+      present.insert(canon(c.f));
+      for (int k = 0; k < 3; ++k) {
+        const int a = c.f[k], b = c.f[(k + 1) % 3];
+        directed[EdgeKey::make(a, b)] = id;
+        ++undirected[EdgeKey::make(std::min(a, b), std::max(a, b))];
+        vf[c.f[k]].push_back(id);
+      }
+      ++added;
+    }
+    res.rejected_triangles -= added;
+  }
+
+  // Small holes: boundary loops of <= max_hole_edges edges.
+  for (int pass = 0; pass < 3; ++pass) {
+    std::unordered_map<int, std::vector<int>> next;  // boundary half-edge a->b (face side) by start vertex
+    std::vector<std::pair<int, int>> bedges;
+    for (const auto& f : F)
+      for (int k = 0; k < 3; ++k) {
+        const int a = f[k], b = f[(k + 1) % 3];
+        if (!directed.count(EdgeKey::make(b, a))) {
+          next[a].push_back(b);
+          bedges.push_back({a, b});
+        }
+      }
+    if (bedges.empty()) break;
+    std::sort(bedges.begin(), bedges.end());
+    std::unordered_map<long long, char> used;
+    std::vector<std::array<int, 3>> added;
+    int filled = 0;
+    for (const auto& [a0, b0] : bedges) {
+      if (used.count(EdgeKey::make(a0, b0))) continue;
+      std::vector<int> loop = {a0};
+      int cur = b0;
+      bool simple = true;
+      used[EdgeKey::make(a0, b0)] = 1;
+      while (cur != a0 && static_cast<int>(loop.size()) <= options.max_hole_edges + 1) {
+        auto it = next.find(cur);
+        if (it == next.end() || it->second.size() != 1) {
+          simple = false;
+          break;
+        }
+        loop.push_back(cur);
+        used[EdgeKey::make(cur, it->second[0])] = 1;
+        cur = it->second[0];
+      }
+      if (!simple || cur != a0 || static_cast<int>(loop.size()) > options.max_hole_edges || loop.size() < 3) continue;
+      std::vector<int> sorted = loop;
+      std::sort(sorted.begin(), sorted.end());
+      if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) continue;
+      std::vector<std::array<int, 3>> tris;
+      if (loop.size() == 3) {
+        // A 3-loop that is the back of an existing face would duplicate it: skip.
+        if (directed.count(EdgeKey::make(loop[1], loop[0])) && directed.count(EdgeKey::make(loop[2], loop[1])) &&
+            directed.count(EdgeKey::make(loop[0], loop[2])) &&
+            directed[EdgeKey::make(loop[1], loop[0])] == directed[EdgeKey::make(loop[2], loop[1])] &&
+            directed[EdgeKey::make(loop[2], loop[1])] == directed[EdgeKey::make(loop[0], loop[2])])
+          continue;
+      }
+      if (!fill_loop(loop, S, undirected, tris)) continue;
+      for (const auto& t : tris) added.push_back(t);
+      ++filled;
+    }
+    if (added.empty()) break;
+    for (const auto& t : added) F.push_back(t);
+    res.holes_filled += filled;
+    make_vertices_manifold();
+  }
+
+  // Max-min-angle flips of wrongly chosen diagonals.
+  res.flipped_edges = improve_by_flips(S, F, 20);
+
+  // Optional polish: tangential relaxation of every vertex towards the area-weighted centroid of
+  // its one-ring, re-projected onto the fitted surface of the cloud, alternating with flips.
+  if (options.relaxation_iterations > 0) {
+    // Anchor (nearest cloud point) of every site, followed by a greedy walk on the kNN graph.
+    std::vector<int> anchor(ns);
+    for (int s = 0; s < ns; ++s) {
+      int corner = 0;
+      cvt.sites[s].bary.maxCoeff(&corner);
+      anchor[s] = T(cvt.sites[s].face, corner);
+    }
+    auto walk = [&](int start, const Eigen::Vector3d& x) {
+      int cur = start;
+      double best = (P.row(cur).transpose() - x).squaredNorm();
+      for (int step = 0; step < 1000; ++step) {
+        int nxt = cur;
+        for (Eigen::Index q = 0; q < knn.cols(); ++q) {
+          const double d = (P.row(knn(cur, q)).transpose() - x).squaredNorm();
+          if (d < best) best = d, nxt = knn(cur, q);
+        }
+        if (nxt == cur) break;
+        cur = nxt;
+      }
+      return cur;
+    };
+    for (int it = 0; it < options.relaxation_iterations; ++it) {
+      Eigen::MatrixX3d C = Eigen::MatrixX3d::Zero(ns, 3);
+      Eigen::VectorXd W = Eigen::VectorXd::Zero(ns);
+      for (const auto& f : F) {
+        const Eigen::Vector3d a = S.row(f[0]), b = S.row(f[1]), c = S.row(f[2]);
+        const double area = 0.5 * (b - a).cross(c - a).norm();
+        const Eigen::Vector3d g = (a + b + c) / 3.0;
+        for (int v : f) {
+          C.row(v) += area * g.transpose();
+          W[v] += area;
+        }
+      }
+      Eigen::MatrixX3d S2 = S, SN2 = SN;
+#pragma omp parallel for num_threads(resolve_threads(options.threads)) schedule(static)
+      for (int v = 0; v < ns; ++v) {
+        if (!(W[v] > 0)) continue;
+        const Eigen::Vector3d x = S.row(v), nv = SN.row(v);
+        Eigen::Vector3d d = C.row(v).transpose() / W[v] - x;
+        d -= d.dot(nv) * nv;
+        const Eigen::Vector3d target = x + d;
+        const int c = walk(anchor[v], target);
+        std::vector<int> nb(knn.cols() + 1);
+        nb[0] = c;
+        for (Eigen::Index q = 0; q < knn.cols(); ++q) nb[q + 1] = knn(c, q);
+        Eigen::Vector3d pos, nrm;
+        fit_and_project(P, nb, target, N.row(c).transpose(), pos, nrm);
+        S2.row(v) = pos.transpose();
+        SN2.row(v) = nrm.transpose();
+        anchor[v] = c;
+      }
+      // Keep a move only if none of the vertex's triangles flips against its normal.
+      std::vector<std::vector<int>> vf(ns);
+      for (int id = 0; id < static_cast<int>(F.size()); ++id)
+        for (int v : F[id]) vf[v].push_back(id);
+      for (int v = 0; v < ns; ++v) {
+        bool ok = true;
+        for (int id : vf[v]) {
+          Eigen::Vector3d p[3];
+          for (int k = 0; k < 3; ++k) p[k] = (F[id][k] == v ? S2 : S).row(F[id][k]).transpose();
+          const Eigen::Vector3d fn = (p[1] - p[0]).cross(p[2] - p[0]);
+          if (!(fn.dot(SN2.row(v).transpose()) > 0)) ok = false;
+        }
+        if (ok) {
+          S.row(v) = S2.row(v);
+          SN.row(v) = SN2.row(v);
+        }
+      }
+      res.flipped_edges += improve_by_flips(S, F, 5);
+    }
+  }
+
+  // 7. Compact: drop unused sites, restore the frame.
+  std::vector<int> remap(ns, -1);
+  int nv = 0;
+  for (const auto& f : F)
+    for (int v : f)
+      if (remap[v] < 0) remap[v] = nv++;
+  // Keep vertex order by site index for determinism / readability.
+  nv = 0;
+  std::vector<char> used_site(ns, 0);
+  for (const auto& f : F)
+    for (int v : f) used_site[v] = 1;
+  for (int s = 0; s < ns; ++s) remap[s] = used_site[s] ? nv++ : -1;
+  res.unused_sites = ns - nv;
+  if (F.empty()) throw Error("reconstruct_surface: no triangle could be extracted from the Voronoi diagram of " +
+                             std::to_string(ns) + " sites on " + std::to_string(n) + " points");
+  res.mesh.V.resize(nv, 3);
+  for (int s = 0; s < ns; ++s)
+    if (remap[s] >= 0) res.mesh.V.row(remap[s]) = S.row(s);
+  res.mesh.F.resize(F.size(), 3);
+  for (size_t i = 0; i < F.size(); ++i)
+    for (int k = 0; k < 3; ++k) res.mesh.F(i, k) = remap[F[i][k]];
+  restore_frame(res.mesh.V, frame);
+
+  const TriangleQuality tq = triangle_quality(res.mesh.V, res.mesh.F);
+  if (std::getenv("HEATCVT_RECON_DEBUG")) {
+    const Eigen::VectorXd a = smallest_angles(res.mesh.V, res.mesh.F) * (180.0 / M_PI);
+    int h[7] = {0};
+    for (Eigen::Index i = 0; i < a.size(); ++i) ++h[std::min(6, static_cast<int>(a[i] / 10))];
+    for (Eigen::Index f = 0; f < a.size(); ++f)
+      if (a[f] < 15)
+        std::fprintf(stderr, "small angle %.2f at face %ld (%d %d %d) pos %.3f %.3f %.3f\n", a[f], (long)f, res.mesh.F(f, 0),
+                     res.mesh.F(f, 1), res.mesh.F(f, 2), res.mesh.V(res.mesh.F(f, 0), 0), res.mesh.V(res.mesh.F(f, 0), 1),
+                     res.mesh.V(res.mesh.F(f, 0), 2));
+    std::fprintf(stderr, "min-angle histogram (10 deg bins): %d %d %d %d %d %d %d\n", h[0], h[1], h[2], h[3], h[4], h[5], h[6]);
+  }
+  res.min_angle_deg = tq.min_angle_deg;
+  res.mean_min_angle_deg = tq.mean_min_angle_deg;
+  report("validate", 0);
+  ValidationOptions vopt;
+  vopt.require_closed = false;
+  res.validation = validate_triangle_mesh(res.mesh.V, res.mesh.F, vopt);
+  report("validate", 1);
+  res.total_seconds = since(t_start);
+  return res;
+}
+
+}  // namespace heatcvt
+
+namespace heatcvt {
+
+Eigen::MatrixX3d sample_surface(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, int count, std::uint32_t seed,
+                                double noise_sigma) {
+  if (count < 1) throw InvalidInputError("sample_surface: count must be >= 1");
+  if (!(noise_sigma >= 0) || !std::isfinite(noise_sigma)) throw InvalidInputError("sample_surface: noise_sigma must be >= 0");
+  if (F.rows() == 0) throw InvalidInputError("sample_surface: the mesh has no faces");
+  const Eigen::VectorXd A = face_areas(V, F);
+  std::vector<double> cum(A.size());
+  double total = 0;
+  for (Eigen::Index f = 0; f < A.size(); ++f) cum[f] = (total += A[f]);
+  if (!(total > 0)) throw InvalidInputError("sample_surface: the mesh has zero area");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  Eigen::MatrixX3d P(count, 3);
+  for (int i = 0; i < count; ++i) {
+    const double r = uni(rng) * total;
+    const int f = static_cast<int>(std::min<std::ptrdiff_t>(std::lower_bound(cum.begin(), cum.end(), r) - cum.begin(),
+                                                            static_cast<std::ptrdiff_t>(cum.size()) - 1));
+    double a = uni(rng), b = uni(rng);
+    if (a + b > 1) a = 1 - a, b = 1 - b;
+    Eigen::Vector3d p = (1 - a - b) * V.row(F(f, 0)).transpose() + a * V.row(F(f, 1)).transpose() +
+                        b * V.row(F(f, 2)).transpose();
+    if (noise_sigma > 0) {
+      const double g0 = gauss(rng), g1 = gauss(rng), g2 = gauss(rng);
+      p += noise_sigma * Eigen::Vector3d(g0, g1, g2);
+    }
+    P.row(i) = p.transpose();
+  }
+  return P;
+}
+
+SurfaceDistance surface_distance(const Eigen::MatrixX3d& VA, const Eigen::MatrixX3i& FA, const Eigen::MatrixX3d& VB,
+                                 const Eigen::MatrixX3i& FB, int samples, std::uint32_t seed) {
+  if (samples < 1) throw InvalidInputError("surface_distance: samples must be >= 1");
+  if (FA.rows() == 0 || FB.rows() == 0) throw InvalidInputError("surface_distance: empty mesh");
+  SurfaceDistance d;
+  auto one_side = [&](const Eigen::MatrixX3d& V1, const Eigen::MatrixX3i& F1, const Eigen::MatrixX3d& V2,
+                      const Eigen::MatrixX3i& F2, std::uint32_t s, double& mean, double& mx) {
+    const Eigen::MatrixX3d Q = sample_surface(V1, F1, samples, s);
+    const std::vector<SurfacePoint> cp = closest_surface_points(V2, F2, Q);
+    double sum = 0;
+    mx = 0;
+    for (int i = 0; i < samples; ++i) {
+      const double e = (position(V2, F2, cp[i]) - Q.row(i).transpose()).norm();
+      sum += e;
+      mx = std::max(mx, e);
+    }
+    mean = sum / samples;
+  };
+  double h1 = 0, h2 = 0;
+  one_side(VA, FA, VB, FB, seed, d.mean_a_to_b, h1);
+  one_side(VB, FB, VA, FA, seed + 1, d.mean_b_to_a, h2);
+  d.mean = 0.5 * (d.mean_a_to_b + d.mean_b_to_a);
+  d.hausdorff = std::max(h1, h2);
+  return d;
+}
+
+}  // namespace heatcvt
