@@ -1,12 +1,6 @@
 #include "heatcvt/normals.h"
 
-#include <CGAL/Orthogonal_k_neighbor_search.h>
-#include <CGAL/Search_traits_3.h>
-#include <CGAL/Search_traits_adapter.h>
-#include <CGAL/Simple_cartesian.h>
-#include <CGAL/property_map.h>
-#include <boost/iterator/zip_iterator.hpp>
-#include <boost/tuple/tuple.hpp>
+#include <flann/flann.hpp>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -40,33 +34,31 @@ void check_cloud(const Eigen::MatrixX3d& P, int k, int min_k, const char* what) 
 Eigen::MatrixXi k_nearest_neighbors(const Eigen::MatrixX3d& P, int k, int threads) {
   check_cloud(P, k, 1, "k_nearest_neighbors");
   const int n = static_cast<int>(P.rows());
-  // Exact kd-tree search (CGAL spatial searching, double precision). FLANN is not used here:
-  // instantiating its index classes pulls in LZ4 symbols that libheatcvt does not link.
-  using Kernel = CGAL::Simple_cartesian<double>;
-  using Point = Kernel::Point_3;
-  using PointAndIndex = boost::tuple<Point, int>;
-  using Traits = CGAL::Search_traits_adapter<PointAndIndex, CGAL::Nth_of_tuple_property_map<0, PointAndIndex>,
-                                             CGAL::Search_traits_3<Kernel>>;
-  using Search = CGAL::Orthogonal_k_neighbor_search<Traits>;
-  std::vector<Point> pts;
-  std::vector<int> ids(n);
-  pts.reserve(n);
-  for (int i = 0; i < n; ++i) {
-    pts.emplace_back(P(i, 0), P(i, 1), P(i, 2));
-    ids[i] = i;
-  }
-  Search::Tree tree(boost::make_zip_iterator(boost::make_tuple(pts.begin(), ids.begin())),
-                    boost::make_zip_iterator(boost::make_tuple(pts.end(), ids.end())));
-  tree.build();  // build before the concurrent (const) queries
+  // Exact kNN with FLANN: a single kd-tree (KDTreeSingleIndex) searched exhaustively
+  // (checks = unlimited, eps = 0), squared L2 distances in double precision. Each row of results
+  // is then re-sorted by (distance, index) so that ties are ordered deterministically.
+  std::vector<double> data(static_cast<size_t>(n) * 3);
+  for (int i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) data[static_cast<size_t>(i) * 3 + c] = P(i, c);
+  const flann::Matrix<double> dataset(data.data(), n, 3);
+  flann::Index<flann::L2<double>> index(dataset, flann::KDTreeSingleIndexParams(10));
+  index.buildIndex();
 
-  const int kq = k + 1;  // the point itself is (normally) its own nearest neighbour
+  const int kq = std::min(k + 1, n);  // the point itself is (normally) its own nearest neighbour
   std::vector<int> idx(static_cast<size_t>(n) * kq, -1);
-#pragma omp parallel for num_threads(resolve_threads(threads)) schedule(dynamic, 256)
+  std::vector<double> dist(static_cast<size_t>(n) * kq, 0.0);
+  flann::Matrix<int> indices(idx.data(), n, kq);
+  flann::Matrix<double> dists(dist.data(), n, kq);
+  flann::SearchParams params(flann::FLANN_CHECKS_UNLIMITED, 0.0f, true);
+  params.cores = resolve_threads(threads);
+  index.knnSearch(dataset, indices, dists, static_cast<size_t>(kq), params);
+#pragma omp parallel for num_threads(resolve_threads(threads)) schedule(static)
   for (int i = 0; i < n; ++i) {
-    Search search(tree, pts[i], static_cast<unsigned int>(kq), 0.0, true, Search::Distance(), true);
-    int q = 0;
-    for (auto it = search.begin(); it != search.end() && q < kq; ++it, ++q)
-      idx[static_cast<size_t>(i) * kq + q] = boost::get<1>(it->first);
+    std::vector<std::pair<double, int>> row(kq);
+    for (int q = 0; q < kq; ++q)
+      row[q] = {dist[static_cast<size_t>(i) * kq + q], idx[static_cast<size_t>(i) * kq + q]};
+    std::sort(row.begin(), row.end());
+    for (int q = 0; q < kq; ++q) idx[static_cast<size_t>(i) * kq + q] = row[q].second;
   }
 
   Eigen::MatrixXi out(n, k);
