@@ -513,6 +513,7 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
   if (!(options.tolerance >= 0)) throw InvalidInputError("centroidal_voronoi: tolerance must be >= 0");
   if (options.voronoi_rings < 0 || options.centroid_rings < 0 || options.voronoi_rings_settled < 0)
     throw InvalidInputError("centroidal_voronoi: ring counts must be >= 0");
+  if (options.quality_every < 0) throw InvalidInputError("centroidal_voronoi: quality_every must be >= 0");
   if (options.keep_sites_per_vertex < 1) throw InvalidInputError("centroidal_voronoi: keep_sites_per_vertex must be >= 1");
   if (face_metric_area.size() != 0 && face_metric_area.size() != F.rows())
     throw InvalidInputError("centroidal_voronoi: face_metric_area has " + std::to_string(face_metric_area.size()) +
@@ -674,7 +675,36 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
     st.max_move = max_move;
     st.mean_move = sum_move / ns;
     st.seconds = since(t0);
+    bool stop_for_quality = false;
+    if (options.quality_every > 0 && it % options.quality_every == 0) {
+      const auto tq = Clock::now();
+      const int saved = rings;
+      rings = options.voronoi_rings;
+      VoronoiOptions vo;
+      vo.keep_sites_per_vertex = options.keep_sites_per_vertex;
+      vo.threads = threads;
+      VoronoiDiagram d = tessellate(V, F, heat_field(), vo);
+      rings = saved;
+      Eigen::MatrixX3d P(ns, 3);
+      for (int s = 0; s < ns; ++s) P.row(s) = position(V, F, sites[s]).transpose();
+      DualMesh dual = dual_mesh(d, P);
+      const TriangleQuality q = triangle_quality(dual.V, dual.F);
+      st.phi_min_deg = q.min_angle_deg;
+      st.phi_mean_deg = q.mean_min_angle_deg;
+      st.quality_seconds = since(tq);
+      if (options.target_phi_mean_deg > 0 && options.target_phi_min_deg > 0 &&
+          q.mean_min_angle_deg >= options.target_phi_mean_deg && q.min_angle_deg >= options.target_phi_min_deg) {
+        stop_for_quality = true;
+        result.reached_quality = true;
+        result.diagram = std::move(d);
+        result.dual = std::move(dual);
+      }
+    }
     result.iterations.push_back(st);
+    if (stop_for_quality) {
+      if (callback) callback(st);
+      break;
+    }
     if (max_move < 0.25 * spacing) rings = std::min(rings, options.voronoi_rings_settled);
     bool go_on = true;
     if (callback) go_on = callback(st);
@@ -687,7 +717,7 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
 
   // Final exact diagram of the final sites (voronoi.h's conforming tessellation) and its dual.
   rings = options.voronoi_rings;
-  {
+  if (!result.reached_quality) {
     VoronoiOptions vo;
     vo.exact = true;
     vo.keep_sites_per_vertex = options.keep_sites_per_vertex;
@@ -698,7 +728,7 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
   result.sites = sites;
   result.positions.resize(ns, 3);
   for (int s = 0; s < ns; ++s) result.positions.row(s) = position(V, F, sites[s]).transpose();
-  if (options.build_dual) result.dual = dual_mesh(result.diagram, result.positions);
+  if (options.build_dual && !result.reached_quality) result.dual = dual_mesh(result.diagram, result.positions);
   result.total_seconds = since(start);
   return result;
 }

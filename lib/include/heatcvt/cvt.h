@@ -62,6 +62,14 @@ struct CvtOptions {
   int keep_sites_per_vertex = 8;
   /// Build the dual triangulation of the final diagram. Default true.
   bool build_dual = true;
+  /// Every this many iterations, build the exact diagram and dual of the current sites and record
+  /// φmin / φm in the iteration's stats (costs about one final step each). 0 = never. Default 0.
+  int quality_every = 0;
+  /// Stop at the first quality evaluation where φm ≥ target_phi_mean_deg and φmin ≥
+  /// target_phi_min_deg (both must be set > 0; needs quality_every > 0). The evaluated diagram
+  /// becomes the result. Default 0 (off).
+  double target_phi_mean_deg = 0.0;
+  double target_phi_min_deg = 0.0;
 };
 
 /// Statistics of one Lloyd iteration.
@@ -76,6 +84,9 @@ struct CvtIterationStats {
   double mean_move = 0;
   double area_variance = 0;    ///< variance of the cell areas of the diagram this iteration started from
   double mean_index_set = 0;   ///< mean |I| of the Voronoi solves
+  double phi_min_deg = -1;     ///< quality of the dual of this iteration's sites (−1 = not evaluated)
+  double phi_mean_deg = -1;
+  double quality_seconds = 0;  ///< time of that evaluation (not included in `seconds`)
   int revived_sites = 0;       ///< sites whose cell was empty, moved into the largest cell this iteration
 };
 
@@ -87,6 +98,7 @@ struct CvtResult {
   DualMesh dual;                     ///< its dual triangulation (if options.build_dual)
   std::vector<CvtIterationStats> iterations;
   bool converged = false;            ///< stopped by the tolerance
+  bool reached_quality = false;      ///< stopped by the quality targets
   double factor_seconds = 0;         ///< Cholesky factorisation of M − tL
   std::size_t factor_bytes = 0;      ///< memory of the factor
   double setup_seconds = 0;          ///< factorisation + adjacency + initial sites

@@ -1,0 +1,222 @@
+// Table 1 of the paper (§7.1) on meshes from ../shared/data, Loop-subdivided to Table-1 sizes, with
+// CGAL's isotropic remeshing (5 iterations, same vertex count) side by side and the time to quality
+// (φm ≥ 51°, φmin ≥ 25°).
+//
+//   bench_cvt [--iterations N] [--threads T] [--quality-every K] [--only NAME] [--quick]
+//
+// Time to quality of the CVT = Laplacian + factorisation + set-up + the Lloyd iterations up to the
+// first evaluation that meets both targets + one final diagram/dual (the evaluation's own time):
+// what `meshcvt --target-phi-m 51 --target-phi-min 25 --quality-every K` spends. For CGAL it is the
+// remeshing time when its result meets the targets.
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/remesh.h>
+#include <CGAL/Surface_mesh.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "bench_util.h"
+#include "heatcvt/cvt.h"
+#include "heatcvt/dual_mesh.h"
+#include "heatcvt/laplacian.h"
+#include "heatcvt/mesh_io.h"
+#include "heatcvt/parallel.h"
+#include "heatcvt/subdivision.h"
+#include "heatcvt/validate.h"
+
+using namespace heatcvt;
+
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using CgalMesh = CGAL::Surface_mesh<Kernel::Point_3>;
+namespace PMP = CGAL::Polygon_mesh_processing;
+
+constexpr double kTargetMean = 51.0, kTargetMin = 25.0;
+
+struct PaperRow {
+  const char* model;
+  const char* vertices;
+  int generators;
+  double factor_s, memory_mb, phi_min, phi_m, per_iteration_s;
+};
+
+struct Case {
+  const char* name;
+  const char* file;
+  int subdivisions;
+  int sites;
+  PaperRow paper;  // model "" = no comparable row
+};
+
+struct CgalResult {
+  int vertices = 0;
+  double seconds = 0;
+  TriangleQuality quality;
+  bool valid = false;
+};
+
+CgalResult cgal_remesh(const TriangleMesh& m, int target_vertices) {
+  std::vector<Kernel::Point_3> points;
+  for (int v = 0; v < m.V.rows(); ++v) points.emplace_back(m.V(v, 0), m.V(v, 1), m.V(v, 2));
+  std::vector<std::vector<std::size_t>> polygons;
+  for (int f = 0; f < m.F.rows(); ++f)
+    polygons.push_back({static_cast<std::size_t>(m.F(f, 0)), static_cast<std::size_t>(m.F(f, 1)),
+                        static_cast<std::size_t>(m.F(f, 2))});
+  CgalMesh mesh;
+  PMP::polygon_soup_to_polygon_mesh(points, polygons, mesh);
+  // Equilateral triangles: a closed mesh with N vertices has ~2N triangles of area (√3/4)L².
+  const double L = std::sqrt(2.0 * surface_area(m.V, m.F) / (std::sqrt(3.0) * target_vertices));
+  const double t0 = bench::now_seconds();
+  PMP::isotropic_remeshing(faces(mesh), L, mesh, CGAL::parameters::number_of_iterations(5));
+  mesh.collect_garbage();
+  CgalResult r;
+  r.seconds = bench::now_seconds() - t0;
+  r.vertices = static_cast<int>(num_vertices(mesh));
+  Eigen::MatrixX3d V(num_vertices(mesh), 3);
+  Eigen::MatrixX3i F(num_faces(mesh), 3);
+  for (auto v : mesh.vertices()) {
+    const auto& p = mesh.point(v);
+    V.row(v.idx()) << p.x(), p.y(), p.z();
+  }
+  int f = 0;
+  for (auto face : mesh.faces()) {
+    int k = 0;
+    for (auto v : vertices_around_face(mesh.halfedge(face), mesh)) F(f, k++) = static_cast<int>(v.idx());
+    ++f;
+  }
+  r.quality = triangle_quality(V, F);
+  ValidationOptions vo;
+  vo.check_self_intersections = false;
+  vo.expected_genus = mesh_genus(m.F, static_cast<int>(m.V.rows()));
+  r.valid = validate_triangle_mesh(V, F, vo).ok();
+  return r;
+}
+
+std::string fmt(double x, const char* f) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, f, x);
+  return buf;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int iterations = 100, threads = 0, quality_every = 5;
+  std::string only;
+  bool quick = false;
+  for (int i = 1; i < argc; ++i) {
+    auto next = [&]() -> const char* {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "bench_cvt: %s needs a value\n", argv[i]);
+        std::exit(1);
+      }
+      return argv[++i];
+    };
+    if (!std::strcmp(argv[i], "--iterations")) iterations = std::atoi(next());
+    else if (!std::strcmp(argv[i], "--threads")) threads = std::atoi(next());
+    else if (!std::strcmp(argv[i], "--quality-every")) quality_every = std::atoi(next());
+    else if (!std::strcmp(argv[i], "--only")) only = next();
+    else if (!std::strcmp(argv[i], "--quick")) quick = true;
+    else {
+      std::fprintf(stderr,
+                   "usage: bench_cvt [--iterations N] [--threads T] [--quality-every K] [--only NAME] [--quick]\n");
+      return 1;
+    }
+  }
+  const std::string data = HEATCVT_DATA_DIR;
+  const std::vector<Case> cases = {
+      {"armadillo", "meshes/armadillo.obj", 0, 1000, {"", "", 0, 0, 0, 0, 0, 0}},
+      {"armadillo-L1", "meshes/armadillo.obj", 1, 1644, {"", "", 0, 0, 0, 0, 0, 0}},
+      {"casting-L2", "meshes/casting.obj", 2, 1000, {"Casting", "109k", 1000, 0.437, 54, 23.2, 50.6, 0.564}},
+      {"dragon-L1", "meshes/dragon_23k.obj", 1, 1500, {"Dragon", "153k", 1500, 0.479, 71, 27.6, 51.6, 0.786}},
+      {"kitten-L2", "meshes/kitten.obj", 2, 2000, {"Kitten", "442k", 2000, 3.069, 244, 38.4, 53.6, 3.536}},
+      {"fertility-L3", "meshes/fertility.off", 3, 2000, {"Fertility", "499k", 2000, 3.290, 277, 35.6, 53.2, 3.646}},
+  };
+  std::printf("bench_cvt: %d Lloyd iterations, %d threads (paper: 4 threads, i7 3.9 GHz), quality every %d "
+              "iterations, targets phi_m >= %.0f, phi_min >= %.0f\n\n",
+              quick ? std::min(iterations, 20) : iterations, resolve_threads(threads), quality_every, kTargetMean,
+              kTargetMin);
+  struct Row {
+    std::string text;
+  };
+  std::vector<std::string> rows;
+  for (const Case& c : cases) {
+    if (!only.empty() && only != c.name) continue;
+    if (quick && c.subdivisions > 1) continue;
+    TriangleMesh m = read_mesh(data + "/" + c.file);
+    for (int s = 0; s < c.subdivisions; ++s) m = loop_subdivide(m);
+    const int nv = static_cast<int>(m.V.rows());
+    std::fprintf(stderr, "%s: %d vertices, %d sites ...\n", c.name, nv, c.sites);
+
+    double t0 = bench::now_seconds();
+    Laplacian lap = cotan_laplacian(m.V, m.F);
+    const double laplacian_s = bench::now_seconds() - t0;
+    CvtOptions o;
+    o.sites = c.sites;
+    o.iterations = quick ? std::min(iterations, 20) : iterations;
+    o.threads = threads;
+    o.quality_every = quality_every;
+    double ttq = -1, elapsed = 0;
+    int ttq_iteration = -1;
+    CvtResult r = centroidal_voronoi(m.V, m.F, lap, o, {}, [&](const CvtIterationStats& s) {
+      elapsed += s.seconds;
+      if (ttq < 0 && s.phi_mean_deg >= kTargetMean && s.phi_min_deg >= kTargetMin) {
+        ttq = elapsed + s.quality_seconds;
+        ttq_iteration = s.iteration;
+      }
+      return true;
+    });
+    if (ttq >= 0) ttq += laplacian_s + r.setup_seconds;
+    double per_iteration = 0;
+    for (const auto& s : r.iterations) per_iteration += s.seconds;
+    per_iteration /= std::max<size_t>(1, r.iterations.size());
+    const TriangleQuality q = triangle_quality(r.dual.V, r.dual.F);
+    ValidationOptions vo;
+    vo.expected_genus = mesh_genus(m.F, nv);
+    vo.check_self_intersections = false;
+    const bool valid = validate_triangle_mesh(r.dual.V, r.dual.F, vo).ok();
+    // best quality seen during the run (evaluations) and when
+    double best_m = -1;
+    int best_it = 0;
+    for (const auto& s : r.iterations)
+      if (s.phi_mean_deg > best_m) best_m = s.phi_mean_deg, best_it = s.iteration;
+
+    const CgalResult cg = cgal_remesh(m, c.sites);
+    const bool cg_ok = cg.quality.mean_min_angle_deg >= kTargetMean && cg.quality.min_angle_deg >= kTargetMin;
+
+    std::string row = std::string("| ") + c.name + " | " + std::to_string(nv) + " | " + std::to_string(c.sites) +
+                      " | " + fmt(r.factor_seconds, "%.3f s") + " | " + fmt(r.factor_bytes / 1e6, "%.0f MB") + " | " +
+                      fmt(q.min_angle_deg, "%.1f°") + " | " + fmt(q.mean_min_angle_deg, "%.1f°") + " | " +
+                      fmt(per_iteration, "%.3f s") + " | " + (valid ? "yes" : "NO") + " | " +
+                      (ttq >= 0 ? fmt(ttq, "%.1f s") + " (it " + std::to_string(ttq_iteration) + ")"
+                                : std::string("not reached (best φm ") + fmt(best_m, "%.1f") + " at it " +
+                                      std::to_string(best_it) + ")") +
+                      " | " + std::to_string(cg.vertices) + " | " + fmt(cg.quality.min_angle_deg, "%.1f°") + " | " +
+                      fmt(cg.quality.mean_min_angle_deg, "%.1f°") + " | " + fmt(cg.seconds, "%.1f s") +
+                      (cg_ok ? "" : " (targets not met)") + (cg.valid ? "" : " (invalid)") + " |";
+    std::string paper = c.paper.model[0] ? std::string("| paper: ") + c.paper.model + " | " + c.paper.vertices +
+                                               " | " + std::to_string(c.paper.generators) + " | " +
+                                               fmt(c.paper.factor_s, "%.3f s") + " | " +
+                                               fmt(c.paper.memory_mb, "%.0f MB") + " | " +
+                                               fmt(c.paper.phi_min, "%.1f°") + " | " + fmt(c.paper.phi_m, "%.1f°") +
+                                               " | " + fmt(c.paper.per_iteration_s, "%.3f s") +
+                                               " | | | | | | |"
+                                         : std::string();
+    std::printf("%s\n", row.c_str());
+    if (!paper.empty()) std::printf("%s\n", paper.c_str());
+    std::fflush(stdout);
+    rows.push_back(row);
+    if (!paper.empty()) rows.push_back(paper);
+  }
+  std::printf("\n| model | vertices | sites | factor time | factor memory | φmin | φm | time / iteration | dual valid | "
+              "time to quality | CGAL vertices | CGAL φmin | CGAL φm | CGAL time |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  for (const auto& r : rows) std::printf("%s\n", r.c_str());
+  return 0;
+}
