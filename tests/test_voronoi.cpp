@@ -524,3 +524,47 @@ TEST(HeatVoronoi, CoincidentAndNearlyCoincidentSites) {
   EXPECT_GT(d.cell_area[2], 0.0);
   EXPECT_GT(d.cell_area[4] + d.cell_area[7], 0.0);
 }
+
+// Randomised adversarial configurations: duplicated sites, sites 1e-3..1e-14 apart, sites on
+// mesh vertices and on edges, truncated fields (keep 1..8). Every diagram must be valid.
+TEST(HeatVoronoi, RandomDegenerateConfigurationsStayConforming) {
+  auto m = test::icosphere(2);
+  HeatSolver solver(cotan_laplacian(m.V, m.F));
+  std::mt19937 rng(2024);
+  std::uniform_int_distribution<int> face(0, static_cast<int>(m.F.rows()) - 1);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int trial = 0; trial < 40; ++trial) {
+    const int n = 2 + static_cast<int>(rng() % 30);
+    std::vector<SurfacePoint> sites;
+    for (int i = 0; i < n; ++i) {
+      const int kind = static_cast<int>(rng() % 5);
+      SurfacePoint s;
+      if (kind == 0 && !sites.empty()) {
+        s = sites[rng() % sites.size()];
+      } else if (kind == 1 && !sites.empty()) {
+        s = sites[rng() % sites.size()];
+        const double e = std::pow(10.0, -3.0 - static_cast<double>(rng() % 12));
+        s.bary = (s.bary + Eigen::Vector3d(e, -e, 0)).cwiseMax(0.0);
+        s.bary /= s.bary.sum();
+      } else if (kind == 2) {
+        s.face = face(rng);
+        s.bary = Eigen::Vector3d::Unit(static_cast<int>(rng() % 3));
+      } else if (kind == 3) {
+        s.face = face(rng);
+        const double u = unit(rng);
+        s.bary = Eigen::Vector3d(u, 1 - u, 0);
+      } else {
+        s.face = face(rng);
+        s.bary = Eigen::Vector3d(unit(rng), unit(rng), unit(rng)) + Eigen::Vector3d::Constant(1e-3);
+        s.bary /= s.bary.sum();
+      }
+      sites.push_back(s);
+    }
+    VoronoiOptions opt;
+    opt.keep_sites_per_vertex = 1 + static_cast<int>(rng() % 8);
+    VoronoiDiagram d = heat_voronoi(m.V, m.F, solver, sites, opt);
+    SCOPED_TRACE("trial " + std::to_string(trial));
+    check_diagram(m.V, m.F, d, true);
+    if (::testing::Test::HasFailure()) break;
+  }
+}

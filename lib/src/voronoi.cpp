@@ -8,7 +8,10 @@
 // of Fig. 2 and terminates by construction. Points on original edges are computed only from the
 // edge's own data (a 1D upper envelope walked in a canonical orientation), so both faces of an
 // edge produce bit-identical points that are welded into one refined vertex: the refined mesh is
-// conforming and the cell boundaries form polylines.
+// conforming and the cell boundaries form polylines. Inside a face, polygon vertices are keyed
+// combinatorially (corner, edge pair, triple point) and welded; a per-face validity check
+// (exact single positive cover, boundary = canonical edge points) falls back to a centroid fan
+// labelled per triangle in the rare near-degenerate faces (nearly coincident sites).
 #include "heatcvt/voronoi.h"
 
 #include <Eigen/LU>
@@ -507,16 +510,92 @@ FaceResult tessellate_face(const Eigen::MatrixX3i& F, const HeatField& field, in
     }
     while (ids.size() > 1 && ids.back() == ids.front()) ids.pop_back();
     if (ids.size() < 3) continue;
-    for (size_t i = 1; i + 1 < ids.size(); ++i) {
+    // Fan from a corner of the polygon, unless a vertex is flat (lies on a straight side, e.g.
+    // an edge point where a measure-zero cell touches): then fan from the polygon's centroid,
+    // a point private to this polygon, so no zero-area triangle turns a side into a diagonal.
+    const size_t np = ids.size();
+    bool flat = false;
+    for (size_t i = 0; i < np && !flat; ++i)
+      flat = std::abs(bary_det(res.points[ids[(i + np - 1) % np]].bary, res.points[ids[i]].bary,
+                               res.points[ids[(i + 1) % np]].bary)) < 1e-13;
+    if (np > 3 && flat) {
+      LocalPoint c;
+      c.kind = LocalPoint::Interior;
+      c.bary = Eigen::Vector3d::Zero();
+      for (int id : ids) c.bary += res.points[id].bary;
+      c.bary /= static_cast<double>(np);
+      const int ci = static_cast<int>(res.points.size());
+      res.points.push_back(c);
+      for (size_t i = 0; i < np; ++i) {
+        res.tris.push_back({ci, ids[i], ids[(i + 1) % np]});
+        res.cells.push_back(sites[s]);
+      }
+      continue;
+    }
+    for (size_t i = 1; i + 1 < np; ++i) {
       if (ids[0] == ids[i] || ids[i] == ids[i + 1] || ids[0] == ids[i + 1]) continue;
       res.tris.push_back({ids[0], ids[i], ids[i + 1]});
       res.cells.push_back(sites[s]);
     }
   }
-  if (res.tris.empty()) {
-    // cannot happen for finite input (some site is the largest somewhere); keep the face whole
-    res.tris.push_back({0, 1, 2});
-    res.cells.push_back(sites[l0]);
+  // Safety net for near-degenerate configurations (nearly coincident sites, ties under
+  // truncation): the pieces must tile the face exactly once, positively oriented, and meet the
+  // face boundary exactly in the canonical edge points. Otherwise the face is fanned from its
+  // centroid over the canonical boundary points, each triangle labelled by its own centroid:
+  // still conforming and area-exact, only the cut inside this one face is approximate.
+  std::vector<int> chain;  // boundary points counter-clockwise: corner k, points of edge k, ...
+  for (int k = 0; k < 3; ++k) {
+    chain.push_back(k);
+    const bool forward = vtx[k] < vtx[(k + 1) % 3];
+    if (forward)
+      chain.insert(chain.end(), edge_point_ids[k].begin(), edge_point_ids[k].end());
+    else
+      chain.insert(chain.end(), edge_point_ids[k].rbegin(), edge_point_ids[k].rend());
+  }
+  bool valid = !res.tris.empty();
+  if (valid) {
+    std::map<std::pair<int, int>, int> directed;
+    double total = 0;
+    for (const auto& t : res.tris) {
+      const double det = bary_det(res.points[t[0]].bary, res.points[t[1]].bary, res.points[t[2]].bary);
+      total += det;
+      if (!(det > -1e-14)) valid = false;
+      for (int c = 0; c < 3; ++c)
+        if (++directed[{t[c], t[(c + 1) % 3]}] > 1) valid = false;
+    }
+    if (std::abs(total - 1.0) > 1e-9) valid = false;
+    std::map<std::pair<int, int>, int> boundary;
+    for (size_t i = 0; i < chain.size(); ++i) boundary[{chain[i], chain[(i + 1) % chain.size()]}] = 1;
+    for (const auto& [e, n] : directed) {
+      if (directed.count({e.second, e.first})) continue;
+      if (!boundary.count(e)) valid = false;  // a crack or a T-junction on the face boundary
+    }
+    for (const auto& [e, n] : boundary)
+      if (!directed.count(e)) valid = false;
+  }
+  if (!valid) {
+    res.tris.clear();
+    res.cells.clear();
+    LocalPoint centre;
+    centre.kind = LocalPoint::Interior;
+    centre.bary = Eigen::Vector3d::Constant(1.0 / 3);
+    const int ci = static_cast<int>(res.points.size());
+    res.points.push_back(centre);
+    for (size_t i = 0; i < chain.size(); ++i) {
+      const int a = chain[i], b = chain[(i + 1) % chain.size()];
+      const Eigen::Vector3d x = (centre.bary + res.points[a].bary + res.points[b].bary) / 3.0;
+      int best = cand[0];
+      double best_u = -std::numeric_limits<double>::infinity();
+      for (int r : cand) {
+        const double u = U[r][0] * x[0] + U[r][1] * x[1] + U[r][2] * x[2];
+        if (u > best_u) {
+          best_u = u;
+          best = r;
+        }
+      }
+      res.tris.push_back({ci, a, b});
+      res.cells.push_back(sites[best]);
+    }
   }
   return res;
 }
