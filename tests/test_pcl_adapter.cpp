@@ -3,6 +3,7 @@
 // matches the heat Voronoi labels (largest heat, eq. 15/17), and bad inputs give PCL_ERROR + an
 // empty result.
 #include <gtest/gtest.h>
+#include <pcl/conversions.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/point_types.h>
 
@@ -15,7 +16,12 @@
 #include <string>
 #include <vector>
 
+#include "heatcvt/cloud_io.h"
 #include "heatcvt/heat_solver.h"
+#include "heatcvt/heatcvt.h"
+#include "heatcvt/mesh_io.h"
+#include "heatcvt/pcl/heat_cvt_reconstruction.h"
+#include "heatcvt/reconstruct.h"
 #include "heatcvt/pcl/heat_voronoi_segmentation.h"
 #include "heatcvt/point_laplacian.h"
 #include "test_support.h"
@@ -302,6 +308,355 @@ TEST(HeatVoronoiSegmentation, BadInputsGivePclErrorAndEmptyResult) {
     EXPECT_TRUE(c.empty());
     EXPECT_NE(err.find(tag), std::string::npos) << err;
   }
+}
+
+
+// ---------------------------------------------------------------------------------------------
+// HeatCVTReconstruction
+
+heatcvt::ReconstructionOptions small_options() {
+  heatcvt::ReconstructionOptions opt;
+  opt.sites = 120;
+  opt.iterations = 8;
+  opt.neighbors = 20;
+  opt.seed = 3;
+  return opt;
+}
+
+template <typename PointT>
+void configure(heatcvt::HeatCVTReconstruction<PointT>& rec, const heatcvt::ReconstructionOptions& opt) {
+  rec.setNumberOfSites(opt.sites);
+  rec.setMaximumIterations(opt.iterations);
+  rec.setKSearch(opt.neighbors);
+  rec.setSeed(opt.seed);
+  rec.setTimeCoefficient(opt.time_coefficient);
+  rec.setAnisotropy(opt.anisotropy);
+}
+
+// Exactly the same mesh: vertices bit-identical after the float conversion of PolygonMesh, faces identical.
+void expect_same_mesh(const pcl::PolygonMesh& mesh, const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F) {
+  pcl::PointCloud<pcl::PointXYZ> pts;
+  pcl::fromPCLPointCloud2(mesh.cloud, pts);
+  ASSERT_EQ(static_cast<Eigen::Index>(pts.size()), V.rows());
+  ASSERT_EQ(static_cast<Eigen::Index>(mesh.polygons.size()), F.rows());
+  for (Eigen::Index v = 0; v < V.rows(); ++v) {
+    ASSERT_EQ(pts[static_cast<std::size_t>(v)].x, static_cast<float>(V(v, 0))) << "vertex " << v;
+    ASSERT_EQ(pts[static_cast<std::size_t>(v)].y, static_cast<float>(V(v, 1))) << "vertex " << v;
+    ASSERT_EQ(pts[static_cast<std::size_t>(v)].z, static_cast<float>(V(v, 2))) << "vertex " << v;
+  }
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const auto& poly = mesh.polygons[static_cast<std::size_t>(f)].vertices;
+    ASSERT_EQ(poly.size(), 3u);
+    for (int c = 0; c < 3; ++c) ASSERT_EQ(static_cast<int>(poly[static_cast<std::size_t>(c)]), F(f, c)) << "face " << f;
+  }
+}
+
+TEST(HeatCVTReconstruction, SameMeshAsReconstructSurfaceAndCloud2mesh) {
+  const std::string path = data_path("clouds/pcl_bun0.pcd");
+  const heatcvt::ReconstructionOptions opt = small_options();
+
+  // Core path, as cloud2mesh does it: read_cloud (clean-up) then reconstruct_surface.
+  const heatcvt::PointCloud core_cloud = heatcvt::read_cloud(path);
+  heatcvt::ReconstructionOptions core_opt = opt;
+  core_opt.threads = 1;
+  const heatcvt::ReconstructionResult core = heatcvt::reconstruct_surface(core_cloud.P, core_opt);
+  ASSERT_GT(core.mesh.F.rows(), 100);
+
+  // PCL path, other thread count.
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+  ASSERT_EQ(pcl::io::loadPCDFile(path, *cloud), 0);
+  heatcvt::HeatCVTReconstruction<pcl::PointXYZ> rec;
+  rec.setInputCloud(cloud);
+  configure(rec, opt);
+  rec.setNumberOfThreads(2);
+  EXPECT_EQ(rec.getNumberOfSites(), 120);
+  EXPECT_EQ(rec.getMaximumIterations(), 8);
+  EXPECT_EQ(rec.getKSearch(), 20);
+  EXPECT_EQ(rec.getSeed(), 3u);
+  EXPECT_EQ(rec.getNumberOfThreads(), 2);
+  pcl::PolygonMesh mesh;
+  rec.reconstruct(mesh);
+  const heatcvt::TriangleMesh& m = rec.getReconstructionResult().mesh;
+  ASSERT_EQ(m.V.rows(), core.mesh.V.rows());
+  ASSERT_EQ(m.F.rows(), core.mesh.F.rows());
+  EXPECT_TRUE(m.V == core.mesh.V);
+  EXPECT_TRUE(m.F == core.mesh.F);
+  expect_same_mesh(mesh, core.mesh.V, core.mesh.F);
+  EXPECT_EQ(mesh.header.frame_id, cloud->header.frame_id);
+
+  // The (points, polygons) overload gives the same mesh.
+  pcl::PointCloud<pcl::PointXYZ> points;
+  std::vector<pcl::Vertices> polygons;
+  rec.reconstruct(points, polygons);
+  ASSERT_EQ(points.size(), mesh.cloud.width * mesh.cloud.height);
+  ASSERT_EQ(polygons.size(), mesh.polygons.size());
+  for (std::size_t f = 0; f < polygons.size(); ++f) EXPECT_EQ(polygons[f].vertices, mesh.polygons[f].vertices);
+
+  // cloud2mesh with the same options writes the same mesh (PLY with double coordinates).
+  heatcvt::test::ScratchDir dir("pcl_adapter");
+  const std::string out = dir.path("bun0.ply");
+  const auto run = heatcvt::test::run_tool(
+      "cloud2mesh", path + " -n 120 -i 8 -k 20 --seed 3 --threads 2 --quiet -o " + out);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const heatcvt::PolygonSoup soup = heatcvt::read_polygon_soup(out);
+  EXPECT_TRUE(soup.V == m.V);
+  ASSERT_EQ(soup.num_polygons(), static_cast<int>(m.F.rows()));
+  for (int f = 0; f < soup.num_polygons(); ++f) {
+    ASSERT_EQ(soup.polygon_start[static_cast<std::size_t>(f) + 1] - soup.polygon_start[static_cast<std::size_t>(f)], 3);
+    for (int c = 0; c < 3; ++c)
+      EXPECT_EQ(soup.polygon_index[static_cast<std::size_t>(soup.polygon_start[static_cast<std::size_t>(f)] + c)], m.F(f, c));
+  }
+}
+
+TEST(HeatCVTReconstruction, IndicesNanAndDuplicatesAreCleanedLikeTheCore) {
+  const auto sphere = sphere_cloud(1500, 21);
+  // Cloud: the sphere, NaN points, exact duplicates, and 300 far points excluded by the indices.
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>(*sphere));
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int i = 0; i < 20; ++i) cloud->push_back(pcl::PointXYZ(nan, 1, 2));
+  for (int i = 0; i < 20; ++i) cloud->push_back((*sphere)[static_cast<std::size_t>(50 * i)]);
+  for (int i = 0; i < 300; ++i) cloud->push_back(pcl::PointXYZ(10.f + 0.01f * static_cast<float>(i), 5.f, 5.f));
+  pcl::IndicesPtr indices(new pcl::Indices);
+  for (int i = 0; i < 1540; ++i) indices->push_back(i);
+
+  heatcvt::ReconstructionOptions opt = small_options();
+  opt.sites = 150;
+  heatcvt::HeatCVTReconstruction<pcl::PointXYZ> rec;
+  rec.setInputCloud(cloud);
+  rec.setIndices(indices);
+  configure(rec, opt);
+  pcl::PolygonMesh mesh;
+  rec.reconstruct(mesh);
+  ASSERT_FALSE(mesh.polygons.empty());
+
+  const heatcvt::ReconstructionResult core = heatcvt::reconstruct_surface(to_eigen(*sphere), opt);
+  expect_same_mesh(mesh, core.mesh.V, core.mesh.F);
+  // A closed sphere: genus 0, no boundary, every vertex near the unit sphere.
+  EXPECT_TRUE(rec.getReconstructionResult().validation.ok());
+  EXPECT_EQ(rec.getReconstructionResult().validation.genus, 0);
+  EXPECT_EQ(rec.getReconstructionResult().validation.boundary_loops, 0);
+}
+
+TEST(HeatCVTReconstruction, PointTypeWithColourAndNormals) {
+  const auto sphere = sphere_cloud(1500, 8);
+  pcl::PointCloud<pcl::PointXYZRGBNormal>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZRGBNormal>);
+  for (const auto& p : *sphere) {
+    pcl::PointXYZRGBNormal q;
+    q.x = p.x;
+    q.y = p.y;
+    q.z = p.z;
+    q.r = p.z > 0 ? 255 : 0;  // red upper half, blue lower half
+    q.g = 0;
+    q.b = p.z > 0 ? 0 : 255;
+    q.normal_x = q.normal_y = q.normal_z = 0;  // ignored by the reconstruction
+    cloud->push_back(q);
+  }
+  heatcvt::HeatCVTReconstruction<pcl::PointXYZRGBNormal> rec;
+  rec.setInputCloud(cloud);
+  configure(rec, small_options());
+  pcl::PointCloud<pcl::PointXYZRGBNormal> points;
+  std::vector<pcl::Vertices> polygons;
+  rec.reconstruct(points, polygons);
+  ASSERT_GT(points.size(), 100u);
+  ASSERT_FALSE(polygons.empty());
+  // Same geometry as the XYZ path.
+  const heatcvt::ReconstructionResult core = heatcvt::reconstruct_surface(to_eigen(*sphere), small_options());
+  ASSERT_EQ(static_cast<Eigen::Index>(points.size()), core.mesh.V.rows());
+  int sign = 0;
+  for (std::size_t v = 0; v < points.size(); ++v) {
+    const auto& p = points[v];
+    EXPECT_EQ(p.x, static_cast<float>(core.mesh.V(static_cast<Eigen::Index>(v), 0)));
+    // Colour of the nearest input point: away from the equator it is the colour of the half.
+    if (p.z > 0.15f) EXPECT_EQ(static_cast<int>(p.r), 255);
+    if (p.z < -0.15f) EXPECT_EQ(static_cast<int>(p.b), 255);
+    // Unit vertex normals, radial on a sphere, consistently oriented.
+    const Eigen::Vector3f n(p.normal_x, p.normal_y, p.normal_z), x(p.x, p.y, p.z);
+    EXPECT_NEAR(n.norm(), 1.0f, 1e-4f);
+    const float c = n.dot(x.normalized());
+    EXPECT_GT(std::abs(c), 0.95f);
+    if (sign == 0) sign = c > 0 ? 1 : -1;
+    EXPECT_EQ(c > 0 ? 1 : -1, sign) << "vertex " << v;
+  }
+}
+
+// Runs reconstruct() into a non-empty PolygonMesh and returns (mesh, captured stderr).
+std::pair<pcl::PolygonMesh, std::string> reconstruct_capturing(heatcvt::HeatCVTReconstruction<pcl::PointXYZ>& rec) {
+  pcl::PolygonMesh mesh;
+  mesh.polygons.resize(2);
+  mesh.cloud.width = 7;
+  mesh.cloud.data.resize(12);
+  testing::internal::CaptureStderr();
+  rec.reconstruct(mesh);
+  return {mesh, testing::internal::GetCapturedStderr()};
+}
+
+void expect_empty(const pcl::PolygonMesh& mesh) {
+  EXPECT_TRUE(mesh.polygons.empty());
+  EXPECT_TRUE(mesh.cloud.data.empty());
+  EXPECT_EQ(mesh.cloud.width * mesh.cloud.height, 0u);
+}
+
+TEST(HeatCVTReconstruction, BadInputsGivePclErrorAndEmptyResult) {
+  const std::string tag = "[heatcvt::HeatCVTReconstruction::reconstruct]";
+  {
+    heatcvt::HeatCVTReconstruction<pcl::PointXYZ> rec;  // no input
+    const auto [mesh, err] = reconstruct_capturing(rec);
+    expect_empty(mesh);
+    EXPECT_NE(err.find(tag + " No input cloud"), std::string::npos) << err;
+  }
+  {
+    heatcvt::HeatCVTReconstruction<pcl::PointXYZ> rec;  // empty cloud
+    rec.setInputCloud(pcl::PointCloud<pcl::PointXYZ>::Ptr(new pcl::PointCloud<pcl::PointXYZ>));
+    const auto [mesh, err] = reconstruct_capturing(rec);
+    expect_empty(mesh);
+    EXPECT_NE(err.find(tag + " The input cloud is empty"), std::string::npos) << err;
+  }
+  {
+    pcl::PointCloud<pcl::PointXYZ>::Ptr nan_cloud(new pcl::PointCloud<pcl::PointXYZ>);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (int i = 0; i < 100; ++i) nan_cloud->push_back(pcl::PointXYZ(0, nan, 0));
+    nan_cloud->is_dense = false;
+    heatcvt::HeatCVTReconstruction<pcl::PointXYZ> rec;  // only NaN points
+    rec.setInputCloud(nan_cloud);
+    const auto [mesh, err] = reconstruct_capturing(rec);
+    expect_empty(mesh);
+    EXPECT_NE(err.find("no finite point"), std::string::npos) << err;
+  }
+  const auto cloud = sphere_cloud(300, 2);
+  {
+    heatcvt::HeatCVTReconstruction<pcl::PointXYZ> rec;  // too many sites (default 3000 > 300 points)
+    rec.setInputCloud(cloud);
+    const auto [mesh, err] = reconstruct_capturing(rec);
+    expect_empty(mesh);
+    EXPECT_NE(err.find(tag + " Too many sites: 3000 requested but only 300 usable points"), std::string::npos) << err;
+    // The other overload too.
+    pcl::PointCloud<pcl::PointXYZ> points;
+    points.push_back(pcl::PointXYZ(1, 2, 3));
+    std::vector<pcl::Vertices> polygons(3);
+    testing::internal::CaptureStderr();
+    rec.reconstruct(points, polygons);
+    EXPECT_NE(testing::internal::GetCapturedStderr().find("Too many sites"), std::string::npos);
+    EXPECT_TRUE(points.empty());
+    EXPECT_TRUE(polygons.empty());
+  }
+  {
+    heatcvt::HeatCVTReconstruction<pcl::PointXYZ> rec;  // exception of the core: too few sites
+    rec.setInputCloud(cloud);
+    rec.setNumberOfSites(2);
+    const auto [mesh, err] = reconstruct_capturing(rec);
+    expect_empty(mesh);
+    EXPECT_NE(err.find(tag), std::string::npos) << err;
+  }
+  {
+    heatcvt::HeatCVTReconstruction<pcl::PointXYZ> rec;  // exception of the core: bad time coefficient
+    rec.setInputCloud(cloud);
+    rec.setNumberOfSites(50);
+    rec.setTimeCoefficient(-1);
+    const auto [mesh, err] = reconstruct_capturing(rec);
+    expect_empty(mesh);
+    EXPECT_NE(err.find(tag), std::string::npos) << err;
+  }
+  {
+    heatcvt::HeatCVTReconstruction<pcl::PointXYZ> rec;  // index outside the cloud
+    rec.setInputCloud(cloud);
+    rec.setNumberOfSites(50);
+    rec.setIndices(pcl::IndicesPtr(new pcl::Indices{0, 1, 2, 5000}));
+    const auto [mesh, err] = reconstruct_capturing(rec);
+    expect_empty(mesh);
+    EXPECT_NE(err.find(tag), std::string::npos) << err;
+  }
+}
+
+
+// ---------------------------------------------------------------------------------------------
+// One-call C++ API of heatcvt.h (Eigen in, Eigen out)
+
+TEST(OneCallApi, RemeshCvtGivesTheDualOfTheCvtDeterministically) {
+  const heatcvt::TriangleMesh input = heatcvt::read_mesh(data_path("meshes/bun_zipper_res4.ply"));
+  heatcvt::RemeshOptions opt;
+  opt.sites = 100;
+  opt.iterations = 5;
+  opt.seed = 2;
+  opt.threads = 2;
+  const heatcvt::RemeshResult r = heatcvt::remesh_cvt(input, opt);
+  ASSERT_EQ(r.mesh.V.rows(), 100);
+  ASSERT_EQ(r.sites.size(), 100u);
+  EXPECT_EQ(r.iterations, 5);
+  EXPECT_EQ(r.quality.triangles, static_cast<int>(r.mesh.F.rows()));
+  EXPECT_GT(r.quality.mean_min_angle_deg, 30.0);
+  // Vertex i of the output is site i on the input surface.
+  for (int i = 0; i < 100; ++i)
+    EXPECT_LT((r.mesh.V.row(i).transpose() - heatcvt::position(input.V, input.F, r.sites[static_cast<std::size_t>(i)])).norm(),
+              1e-12);
+  // Same result with one thread.
+  opt.threads = 1;
+  const heatcvt::RemeshResult again = heatcvt::remesh_cvt(input, opt);
+  EXPECT_TRUE(again.mesh.V == r.mesh.V);
+  EXPECT_TRUE(again.mesh.F == r.mesh.F);
+
+  heatcvt::RemeshOptions bad = opt;
+  bad.sites = static_cast<int>(input.V.rows()) + 1;
+  EXPECT_THROW(heatcvt::remesh_cvt(input, bad), heatcvt::InvalidInputError);
+}
+
+TEST(OneCallApi, HeatVoronoiDiagramOfTwoSitesOnAPlaneIsTheBisector) {
+  const heatcvt::TriangleMesh plane = heatcvt::test::grid(40);  // unit square
+  // Sites at the vertices nearest to (0.3, 0.5) and (0.7, 0.5).
+  auto site_at = [&](double x, double y) {
+    Eigen::Index best = 0;
+    (plane.V.rowwise() - Eigen::RowVector3d(x, y, 0)).rowwise().squaredNorm().minCoeff(&best);
+    for (Eigen::Index f = 0; f < plane.F.rows(); ++f)
+      for (int c = 0; c < 3; ++c)
+        if (plane.F(f, c) == best) {
+          heatcvt::SurfacePoint p;
+          p.face = static_cast<int>(f);
+          p.bary = Eigen::Vector3d::Zero();
+          p.bary[c] = 1;
+          return p;
+        }
+    return heatcvt::SurfacePoint{};
+  };
+  const std::vector<heatcvt::SurfacePoint> sites = {site_at(0.3, 0.5), site_at(0.7, 0.5)};
+  const Eigen::RowVector3d a = heatcvt::position(plane.V, plane.F, sites[0]).transpose();
+  const Eigen::RowVector3d b = heatcvt::position(plane.V, plane.F, sites[1]).transpose();
+  const heatcvt::VoronoiDiagram d = heatcvt::heat_voronoi_diagram(plane, sites);
+  ASSERT_EQ(d.num_cells(), 2);
+  EXPECT_NEAR(d.cell_area.sum(), 1.0, 1e-12);
+  EXPECT_NEAR(d.cell_area[0], 0.5, 0.02);
+  // Area-weighted share of refined faces on the Euclidean-nearer side of their site.
+  double right = 0;
+  for (Eigen::Index r = 0; r < d.F.rows(); ++r) {
+    const Eigen::RowVector3d c = (d.V.row(d.F(r, 0)) + d.V.row(d.F(r, 1)) + d.V.row(d.F(r, 2))) / 3.0;
+    const int nearer = (c - a).norm() < (c - b).norm() ? 0 : 1;
+    if (d.face_cell[r] == nearer) right += d.face_area[r];
+  }
+  EXPECT_GT(right, 0.99);
+}
+
+TEST(OneCallApi, HeatCentroidOfAHemisphereIsItsPole) {
+  // Two antipodal sites on a sphere: the cells are hemispheres, whose heat centroids are the poles.
+  const heatcvt::TriangleMesh sphere = heatcvt::test::icosphere(3);
+  auto vertex_site = [&](Eigen::Index v) {
+    for (Eigen::Index f = 0; f < sphere.F.rows(); ++f)
+      for (int c = 0; c < 3; ++c)
+        if (sphere.F(f, c) == v) {
+          heatcvt::SurfacePoint p;
+          p.face = static_cast<int>(f);
+          p.bary = Eigen::Vector3d::Zero();
+          p.bary[c] = 1;
+          return p;
+        }
+    return heatcvt::SurfacePoint{};
+  };
+  Eigen::Index antipode = 0;
+  (sphere.V.rowwise() + sphere.V.row(0)).rowwise().squaredNorm().minCoeff(&antipode);
+  const heatcvt::HeatCentroids hc = heatcvt::heat_centroids_of(sphere, {vertex_site(0), vertex_site(antipode)});
+  ASSERT_EQ(hc.centroids.size(), 2u);
+  const double h = heatcvt::mean_edge_length(sphere.V, sphere.F);
+  EXPECT_NEAR(hc.diagram.cell_area[0], hc.diagram.cell_area[1], 1e-9 * hc.diagram.cell_area.sum());
+  EXPECT_LT((hc.positions.row(0) - sphere.V.row(0)).norm(), 0.5 * h);
+  EXPECT_LT((hc.positions.row(1) - sphere.V.row(antipode)).norm(), 0.5 * h);
+  EXPECT_THROW(heatcvt::heat_centroids_of(sphere, {}), heatcvt::InvalidInputError);
 }
 
 }  // namespace

@@ -1,0 +1,149 @@
+#pragma once
+/// \file pcl/heat_cvt_reconstruction.h
+/// PCL-style surface reconstruction with heat CVT (paper §7–8, METHOD.md §7): the
+/// pcl::SurfaceReconstruction contract (setInputCloud, setIndices, setSearchMethod,
+/// camelCase parameters, reconstruct(pcl::PolygonMesh&)) around heatcvt::reconstruct_surface().
+///
+/// Explicitly instantiated in heatcvt_pcl (target heatcvt::pcl) for pcl::PointXYZ,
+/// pcl::PointNormal and pcl::PointXYZRGBNormal. For another point type with x, y, z fields,
+/// define PCL_NO_PRECOMPILE before including this header (the template bodies in
+/// impl/heat_cvt_reconstruction.hpp are then compiled in your translation unit).
+#include <pcl/PolygonMesh.h>
+#include <pcl/Vertices.h>
+#include <pcl/point_cloud.h>
+#include <pcl/surface/reconstruction.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "heatcvt/reconstruct.h"
+
+namespace heatcvt {
+
+/// Reconstructs a triangle mesh from a point cloud with a heat centroidal Voronoi tessellation
+/// computed directly on the points (point Laplacian → Lloyd iterations with heat Voronoi cells
+/// (eq. 15–20) and heat centroids (eq. 21–23) → dual triangulation), i.e. the pipeline of
+/// `cloud2mesh`, as a PCL surface reconstruction class.
+///
+/// Input: the points of `setInputCloud()` restricted to `setIndices()` (all points if none
+/// given). Points with a NaN/inf coordinate are skipped and exact duplicates merged (first
+/// occurrence kept), exactly as `cloud2mesh` does after reading a file, so the same points,
+/// options and seed give the same mesh as `cloud2mesh` (and as reconstruct_surface()).
+/// Normals and other fields of the input are not used by the reconstruction (it estimates its
+/// own normals).
+///
+/// Output (input units): #sites vertices (fewer if some sites are in no triangle) and
+/// consistently oriented triangles. reconstruct(pcl::PolygonMesh&) fills `output.cloud` with
+/// the fields of PointT; reconstruct(points, polygons) returns the vertices as PointT. Fields
+/// other than x, y, z are copied from the nearest input point found with the search method
+/// (a pcl::search::KdTree is built over the indexed input when none was set), except normals
+/// (normal_x/y/z, when PointT has them), which are set to the area-weighted unit vertex normals
+/// of the output mesh (curvature copied from the nearest point).
+///
+/// Errors: no input, an empty cloud (or no finite point among the indices), more sites than
+/// usable points, bad parameters, and any heatcvt exception are reported with
+/// `PCL_ERROR("[heatcvt::HeatCVTReconstruction::reconstruct] ...")` and give an empty result
+/// (no points, no polygons). Nothing is thrown.
+///
+/// Cost: dominated by the CVT, about (sites) × (a few cells) per iteration; see cloud2mesh.
+template <typename PointT>
+class HeatCVTReconstruction : public pcl::SurfaceReconstruction<PointT> {
+ public:
+  using Ptr = pcl::shared_ptr<HeatCVTReconstruction<PointT>>;
+  using ConstPtr = pcl::shared_ptr<const HeatCVTReconstruction<PointT>>;
+  using PointCloud = pcl::PointCloud<PointT>;
+  using KdTree = pcl::search::Search<PointT>;
+  using KdTreePtr = typename KdTree::Ptr;
+
+  using pcl::SurfaceReconstruction<PointT>::input_;
+  using pcl::SurfaceReconstruction<PointT>::indices_;
+  using pcl::SurfaceReconstruction<PointT>::tree_;
+  using pcl::SurfaceReconstruction<PointT>::initCompute;
+  using pcl::SurfaceReconstruction<PointT>::deinitCompute;
+
+  /// Defaults are those of ReconstructionOptions (= `cloud2mesh --help`): 3000 sites,
+  /// 30 iterations, k = 30, t = 1·h̄², anisotropy 0, all threads, seed 1.
+  HeatCVTReconstruction() = default;
+  ~HeatCVTReconstruction() override = default;
+
+  /// Number of CVT sites = vertices of the output mesh. Must be ≥ 4 and ≤ the number of
+  /// usable points. Default 3000.
+  void setNumberOfSites(int sites) { options_.sites = sites; }
+  int getNumberOfSites() const { return options_.sites; }
+
+  /// Maximum number of Lloyd iterations (≥ 0). Default 30.
+  void setMaximumIterations(int iterations) { options_.iterations = iterations; }
+  int getMaximumIterations() const { return options_.iterations; }
+
+  /// k of the kNN neighbourhoods of the point Laplacian (≥ 3). Default 30.
+  void setKSearch(int k) { options_.neighbors = k; }
+  int getKSearch() const { return options_.neighbors; }
+
+  /// Time coefficient C of the diffusion time t = C·h̄² (h̄ = mean edge length of the
+  /// Laplacian's local triangles; paper §2, eq. 7, default of Crane et al.). > 0. Default 1.
+  void setTimeCoefficient(double coefficient) { options_.time_coefficient = coefficient; }
+  double getTimeCoefficient() const { return options_.time_coefficient; }
+
+  /// λ of the anisotropic lift (p, λ n) of paper §7.1 (Fig. 9; paper value 0.05, in units of
+  /// the bounding box); 0 = isotropic. ≥ 0. Default 0.
+  void setAnisotropy(double lambda) { options_.anisotropy = lambda; }
+  double getAnisotropy() const { return options_.anisotropy; }
+
+  /// Threads (OpenMP); 0 = all hardware threads. The mesh does not depend on it. Default 0.
+  void setNumberOfThreads(int threads) { options_.threads = threads; }
+  int getNumberOfThreads() const { return options_.threads; }
+
+  /// Seed of the random initial sites (std::mt19937). Default 1.
+  void setSeed(std::uint32_t seed) { options_.seed = seed; }
+  std::uint32_t getSeed() const { return options_.seed; }
+
+  /// Statistical outlier removal before the reconstruction (cloud2mesh --denoise). Default false.
+  void setDenoise(bool denoise) { options_.denoise = denoise; }
+  bool getDenoise() const { return options_.denoise; }
+
+  /// Voxel-grid downsampling edge length in input units; 0 = off. Default 0.
+  void setVoxelSize(double size) { options_.voxel_size = size; }
+  double getVoxelSize() const { return options_.voxel_size; }
+
+  /// All options at once (the same struct as reconstruct_surface() and cloud2mesh).
+  void setOptions(const ReconstructionOptions& options) { options_ = options; }
+  const ReconstructionOptions& getOptions() const { return options_; }
+
+  /// Optional progress callback (stage name, fraction in [0, 1]). Default none.
+  void setProgressCallback(const ReconstructionCallback& callback) { progress_ = callback; }
+
+  /// Result of the last successful reconstruction (mesh in input units, CGAL validation report,
+  /// timings, φmin / φm); empty after a failure.
+  const ReconstructionResult& getReconstructionResult() const { return result_; }
+
+  /// Reconstructs into `output` (cloud with the fields of PointT, triangles as pcl::Vertices,
+  /// header of the input). On failure: PCL_ERROR and an empty mesh.
+  void reconstruct(pcl::PolygonMesh& output) override;
+
+  /// Reconstructs into `points` (#vertices PointT, see the class comment for the fields) and
+  /// `polygons` (triangles indexing `points`). On failure: PCL_ERROR, both empty.
+  void reconstruct(pcl::PointCloud<PointT>& points, std::vector<pcl::Vertices>& polygons) override;
+
+ protected:
+  std::string getClassName() const override { return "heatcvt::HeatCVTReconstruction"; }
+
+  /// Runs the reconstruction on input_/indices_ (after initCompute and the search set-up).
+  void performReconstruction(pcl::PolygonMesh& output) override;
+  /// Same, returning PointT vertices and polygons.
+  void performReconstruction(pcl::PointCloud<PointT>& points, std::vector<pcl::Vertices>& polygons) override;
+
+ private:
+  /// Common path of both overloads; false (after PCL_ERROR) on failure.
+  bool run(const char* method, pcl::PointCloud<PointT>& points, std::vector<pcl::Vertices>& polygons);
+
+  ReconstructionOptions options_;
+  ReconstructionCallback progress_;
+  ReconstructionResult result_;
+};
+
+}  // namespace heatcvt
+
+#ifdef PCL_NO_PRECOMPILE
+#include "heatcvt/pcl/impl/heat_cvt_reconstruction.hpp"
+#endif
