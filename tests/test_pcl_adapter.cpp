@@ -23,6 +23,8 @@
 #include "heatcvt/pcl/heat_cvt_reconstruction.h"
 #include "heatcvt/reconstruct.h"
 #include "heatcvt/pcl/heat_voronoi_segmentation.h"
+// Template bodies, for a point type that heatcvt_pcl does not instantiate (pcl::PointXYZI).
+#include "heatcvt/pcl/impl/heat_voronoi_segmentation.hpp"
 #include "heatcvt/point_laplacian.h"
 #include "test_support.h"
 
@@ -228,6 +230,33 @@ TEST(HeatVoronoiSegmentation, CvtClustersAreConnectedAndEvenedOut) {
     EXPECT_LE(seg.getSitePositions().row(s).norm(), 1.0 + 1e-6);
     EXPECT_GE(seg.getSitePositions().row(s).norm(), 0.98);
   }
+}
+
+TEST(HeatVoronoiSegmentation, OtherPointTypeThroughTheImplHeader) {
+  // pcl::PointXYZI is not explicitly instantiated; including impl/*.hpp compiles it here and
+  // gives the same clusters as the PointXYZ instantiation of the library.
+  const auto xyz = sphere_cloud(800, 4);
+  pcl::PointCloud<pcl::PointXYZI>::Ptr xyzi(new pcl::PointCloud<pcl::PointXYZI>);
+  for (const auto& p : *xyz) {
+    pcl::PointXYZI q;
+    q.x = p.x;
+    q.y = p.y;
+    q.z = p.z;
+    q.intensity = 1.0f;
+    xyzi->push_back(q);
+  }
+  heatcvt::HeatVoronoiSegmentation<pcl::PointXYZ> a;
+  heatcvt::HeatVoronoiSegmentation<pcl::PointXYZI> b;
+  a.setInputCloud(xyz);
+  b.setInputCloud(xyzi);
+  a.setSiteIndices({1, 100, 200, 300});
+  b.setSiteIndices({1, 100, 200, 300});
+  std::vector<pcl::PointIndices> ca, cb;
+  a.extract(ca);
+  b.extract(cb);
+  ASSERT_EQ(ca.size(), 4u);
+  ASSERT_EQ(cb.size(), 4u);
+  for (std::size_t c = 0; c < 4; ++c) EXPECT_EQ(ca[c].indices, cb[c].indices);
 }
 
 // Runs extract() and returns (clusters, captured stderr).

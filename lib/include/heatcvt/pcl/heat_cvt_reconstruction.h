@@ -6,8 +6,8 @@
 ///
 /// Explicitly instantiated in heatcvt_pcl (target heatcvt::pcl) for pcl::PointXYZ,
 /// pcl::PointNormal and pcl::PointXYZRGBNormal. For another point type with x, y, z fields,
-/// define PCL_NO_PRECOMPILE before including this header (the template bodies in
-/// impl/heat_cvt_reconstruction.hpp are then compiled in your translation unit).
+/// include heatcvt/pcl/impl/heat_cvt_reconstruction.hpp (or define PCL_NO_PRECOMPILE before
+/// including this header): the template bodies are then compiled in your translation unit.
 #include <pcl/PolygonMesh.h>
 #include <pcl/Vertices.h>
 #include <pcl/point_cloud.h>

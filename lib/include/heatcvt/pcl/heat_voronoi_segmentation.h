@@ -6,7 +6,9 @@
 /// site, like pcl::EuclideanClusterExtraction::extract().
 ///
 /// Explicitly instantiated in heatcvt_pcl (target heatcvt::pcl) for pcl::PointXYZ,
-/// pcl::PointNormal and pcl::PointXYZRGBNormal; define PCL_NO_PRECOMPILE for other point types.
+/// pcl::PointNormal and pcl::PointXYZRGBNormal. For other point types with x, y, z fields,
+/// include heatcvt/pcl/impl/heat_voronoi_segmentation.hpp (or define PCL_NO_PRECOMPILE before
+/// including this header).
 #include <pcl/PointIndices.h>
 #include <pcl/pcl_base.h>
 #include <pcl/point_cloud.h>
