@@ -31,6 +31,8 @@ int main(int argc, char** argv) {
   int sites = cvt.sites, iterations = cvt.iterations, threads = cvt.threads;
   unsigned seed = cvt.seed;
   double anisotropy = 0.0, tolerance = cvt.tolerance, t_coef = cvt.time_coefficient;
+  int quality_every = cvt.quality_every;
+  double target_mean = cvt.target_phi_mean_deg, target_min = cvt.target_phi_min_deg;
   bool quiet = false;
   app.add_option("MESH", mesh_path, "input triangle mesh (.obj .off .ply .stl)")->required();
   app.add_option("-n,--sites", sites, "number of sites = vertices of the output")->capture_default_str();
@@ -39,6 +41,13 @@ int main(int argc, char** argv) {
   app.add_option("--tolerance", tolerance,
                  "stop when no site moves more than TOL * sqrt(area / sites) (0 = run all iterations)")
       ->capture_default_str();
+  app.add_option("--quality-every", quality_every,
+                 "every K iterations build the dual of the current sites and measure phi_min / phi_m (0 = never)")
+      ->capture_default_str();
+  app.add_option("--target-phi-m", target_mean,
+                 "with --quality-every: stop once phi_m >= this and phi_min >= --target-phi-min (0 = off)")
+      ->capture_default_str();
+  app.add_option("--target-phi-min", target_min, "see --target-phi-m (degrees; 0 = off)")->capture_default_str();
   app.add_option("--anisotropy", anisotropy,
                  "lambda of the anisotropic CVT: lift to (p, lambda n) in R^6 after scaling to the unit bounding "
                  "box (paper: 0.05; 0 = isotropic)")
@@ -74,6 +83,11 @@ int main(int argc, char** argv) {
     if (!(anisotropy >= 0) || !std::isfinite(anisotropy)) throw InvalidInputError("--anisotropy must be >= 0");
     if (!(t_coef > 0) || !std::isfinite(t_coef)) throw InvalidInputError("--t-coef must be a positive number");
     if (threads < 0) throw InvalidInputError("--threads must be >= 0");
+    if (quality_every < 0) throw InvalidInputError("--quality-every must be >= 0");
+    if (!(target_mean >= 0 && target_mean <= 60) || !(target_min >= 0 && target_min <= 60))
+      throw InvalidInputError("--target-phi-m / --target-phi-min must be angles in [0, 60] degrees");
+    if ((target_mean > 0 || target_min > 0) && quality_every == 0)
+      throw InvalidInputError("--target-phi-m / --target-phi-min need --quality-every K > 0");
     cli::check_output_path(out_path, {".obj", ".ply", ".off"});
     cli::check_output_path(cells_path, {".ply"});
     cli::check_output_path(report_path, {".json"});
@@ -108,6 +122,9 @@ int main(int argc, char** argv) {
     cvt.seed = seed;
     cvt.threads = threads;
     cvt.time_coefficient = t_coef;
+    cvt.quality_every = quality_every;
+    cvt.target_phi_mean_deg = target_mean > 0 ? target_mean : (target_min > 0 ? 1e-9 : 0.0);
+    cvt.target_phi_min_deg = target_min > 0 ? target_min : (target_mean > 0 ? 1e-9 : 0.0);
     cvt.initialization = init == "farthest" ? CvtInitialization::farthest_point : CvtInitialization::random;
     cli::Progress progress("lloyd", iterations, quiet);
     CvtResult r = centroidal_voronoi(mesh.V, mesh.F, lap, cvt, {},
@@ -148,7 +165,7 @@ int main(int argc, char** argv) {
       rep.add("input", mesh_path).add("vertices", nv).add("faces", static_cast<long>(mesh.F.rows()))
           .add("input_genus", input_genus).add("sites", static_cast<int>(r.sites.size()))
           .add("anisotropy", anisotropy).add("seed", static_cast<long>(seed)).add("iterations", done)
-          .add("converged", r.converged).add("laplacian_s", laplacian_s).add("factor_s", r.factor_seconds)
+          .add("converged", r.converged).add("reached_quality_target", r.reached_quality).add("laplacian_s", laplacian_s).add("factor_s", r.factor_seconds)
           .add("factor_memory_bytes", static_cast<long>(r.factor_bytes)).add("time_per_iteration_s", per_iter)
           .add("total_s", total_s).add("cell_area_variance", r.final_area_variance)
           .add("revived_sites", revived).add("triangles", q.triangles).add("phi_min_deg", q.min_angle_deg)
@@ -177,7 +194,7 @@ int main(int argc, char** argv) {
       std::printf("meshcvt: %s (%d vertices) -> %s (%d vertices, %d triangles)\n", mesh_path.c_str(), nv,
                   out_path.c_str(), static_cast<int>(r.dual.V.rows()), q.triangles);
       std::printf("  factor: %.3f s, %.1f MB; %d iterations%s, %.4f s per iteration; total %.2f s\n", r.factor_seconds,
-                  r.factor_bytes / 1e6, done, r.converged ? " (converged)" : "", per_iter, total_s);
+                  r.factor_bytes / 1e6, done, r.converged ? " (converged)" : (r.reached_quality ? " (quality target reached)" : ""), per_iter, total_s);
       std::printf("  quality: phi_min %.2f deg, phi_m %.2f deg, %.2f%% of triangles below 30 deg\n", q.min_angle_deg,
                   q.mean_min_angle_deg, 100.0 * q.below_30_fraction);
       std::printf("  cell-area variance %.4g%s\n", r.final_area_variance,
