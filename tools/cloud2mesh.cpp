@@ -42,8 +42,12 @@ int main(int argc, char** argv) {
   app.add_flag("-q,--quiet", quiet, "no progress and no summary");
   try {
     app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
+  } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    // One clear line (CLI11 would add a "Run with --help" line).
+    std::cerr << "cloud2mesh: error: " << e.what() << " (see cloud2mesh --help)" << std::endl;
+    return 2;
   }
 
   return cli::run_tool("cloud2mesh", [&]() -> int {

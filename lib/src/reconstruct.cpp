@@ -226,7 +226,8 @@ bool fill_loop(const std::vector<int>& loop, const Eigen::MatrixX3d& V,
 // only when the new edge does not exist yet, both end vertices keep valence >= 3, the smallest
 // angle of the pair increases, and the two new triangles stay within `max_normal_deviation` of
 // the old pair's normal (no folds). Returns the number of flips.
-int improve_by_flips(const Eigen::MatrixX3d& V, std::vector<std::array<int, 3>>& F, int max_passes) {
+int improve_by_flips(const Eigen::MatrixX3d& V, std::vector<std::array<int, 3>>& F, int max_passes,
+                     bool valence_mode = false) {
   std::unordered_map<long long, int> dir;  // directed edge -> face
   auto key = [](int a, int b) { return EdgeKey::make(a, b); };
   std::vector<int> valence(V.rows(), 0);
@@ -261,7 +262,21 @@ int improve_by_flips(const Eigen::MatrixX3d& V, std::vector<std::array<int, 3>>&
         if (valence[a] <= 3 || valence[b] <= 3) continue;
         const double before = std::min(tri_min_angle(V, a, b, c), tri_min_angle(V, b, a, d));
         const double after = std::min(tri_min_angle(V, c, a, d), tri_min_angle(V, d, b, c));
-        if (!(after > before + 1e-9)) continue;
+        if (valence_mode) {
+          // Botsch–Kobbelt: flip when it brings the four valences closer to 6 (interior target),
+          // as long as the smallest angle of the pair stays above 25 degrees or improves.
+          auto dev = [](int x) { return (x - 6) * (x - 6); };
+          const int dv_before = dev(valence[a]) + dev(valence[b]) + dev(valence[c]) + dev(valence[d]);
+          const int dv_after = dev(valence[a] - 1) + dev(valence[b] - 1) + dev(valence[c] + 1) + dev(valence[d] + 1);
+          if (dv_after >= dv_before) continue;
+          // Only where the pair is nearly flat (dihedral < 20 degrees): never across creases or
+          // thin parts, where a valence flip can fold the surface through itself.
+          const Eigen::Vector3d o1 = normal(a, b, c).normalized(), o2 = normal(b, a, d).normalized();
+          if (!(o1.dot(o2) > std::cos(20.0 * M_PI / 180.0))) continue;
+          if (!(after > before || after > 30.0 * M_PI / 180.0)) continue;
+        } else if (!(after > before + 1e-9)) {
+          continue;
+        }
         const Eigen::Vector3d n1 = normal(a, b, c), n2 = normal(b, a, d);
         const Eigen::Vector3d m1 = normal(c, a, d), m2 = normal(d, b, c);
         const Eigen::Vector3d avg = (n1.normalized() + n2.normalized()).normalized();
@@ -477,20 +492,6 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     i = j;
   }
   res.candidate_triangles = static_cast<int>(cands.size());
-  if (std::getenv("HEATCVT_RECON_DEBUG")) {
-    std::map<int, int> hist;
-    for (const auto& c : cands) ++hist[c.witnesses];
-    for (auto [w, c] : hist) std::fprintf(stderr, "witness %d: %d candidates\n", w, c);
-    DualMesh dm = dual_mesh(cvt.diagram, S);
-    const TriangleQuality q1 = triangle_quality(S, dm.F);
-    const TriangleQuality q2 = triangle_quality(cvt.positions, dm.F);
-    std::fprintf(stderr, "dual_mesh: F %ld open_fans %d dup %d flipped %d; quality fitted %.2f/%.2f raw %.2f/%.2f\n",
-                 (long)dm.F.rows(), dm.open_fans, dm.duplicate_triangles, dm.flipped_against_input, q1.min_angle_deg,
-                 q1.mean_min_angle_deg, q2.min_angle_deg, q2.mean_min_angle_deg);
-    for (size_t i = 1; i < cvt.iterations.size(); i += 5)
-      std::fprintf(stderr, "it %d max_move %.5f mean_move %.5f var %.3g\n", cvt.iterations[i].iteration,
-                   cvt.iterations[i].max_move, cvt.iterations[i].mean_move, cvt.iterations[i].area_variance);
-  }
   std::stable_sort(cands.begin(), cands.end(), [](const Candidate& x, const Candidate& y) {
     if (x.witnesses != y.witnesses) return x.witnesses > y.witnesses;
     if (x.quality != y.quality) return x.quality > y.quality;
@@ -628,7 +629,28 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     res.rejected_triangles -= added;
   }
 
-  // Small holes: boundary loops of <= max_hole_edges edges.
+  // Small holes: boundary loops of <= max_hole_edges edges. A loop of up to 4x that length is
+  // filled too when it is a hole of the extraction, not a scan boundary: the centre of the loop
+  // is away from every triangle (> h/4, h = mean loop edge) but has cloud points near it (< h/2).
+  auto is_sampled_hole = [&](const std::vector<int>& loop) {
+    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    double h = 0;
+    for (size_t i = 0; i < loop.size(); ++i) {
+      g += S.row(loop[i]).transpose();
+      h += (S.row(loop[i]) - S.row(loop[(i + 1) % loop.size()])).norm();
+    }
+    g /= static_cast<double>(loop.size());
+    h /= static_cast<double>(loop.size());
+    double dp = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < n; ++i) dp = std::min(dp, (P.row(i).transpose() - g).squaredNorm());
+    if (!(std::sqrt(dp) < 0.5 * h)) return false;
+    for (const auto& f : F) {
+      const Eigen::Vector3d a = S.row(f[0]), b = S.row(f[1]), c = S.row(f[2]);
+      const Eigen::Vector3d bc = closest_point_barycentric(g, a, b, c);
+      if ((bc[0] * a + bc[1] * b + bc[2] * c - g).norm() < 0.25 * h) return false;
+    }
+    return true;
+  };
   for (int pass = 0; pass < 3; ++pass) {
     std::unordered_map<int, std::vector<int>> next;  // boundary half-edge a->b (face side) by start vertex
     std::vector<std::pair<int, int>> bedges;
@@ -651,7 +673,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
       int cur = b0;
       bool simple = true;
       used[EdgeKey::make(a0, b0)] = 1;
-      while (cur != a0 && static_cast<int>(loop.size()) <= options.max_hole_edges + 1) {
+      while (cur != a0 && static_cast<int>(loop.size()) <= 4 * options.max_hole_edges + 1) {
         auto it = next.find(cur);
         if (it == next.end() || it->second.size() != 1) {
           simple = false;
@@ -661,7 +683,9 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
         used[EdgeKey::make(cur, it->second[0])] = 1;
         cur = it->second[0];
       }
-      if (!simple || cur != a0 || static_cast<int>(loop.size()) > options.max_hole_edges || loop.size() < 3) continue;
+      if (!simple || cur != a0 || static_cast<int>(loop.size()) > 4 * options.max_hole_edges || loop.size() < 3)
+        continue;
+      if (static_cast<int>(loop.size()) > options.max_hole_edges && !is_sampled_hole(loop)) continue;
       std::vector<int> sorted = loop;
       std::sort(sorted.begin(), sorted.end());
       if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) continue;
@@ -689,6 +713,10 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
 
   // Optional polish: tangential relaxation of every vertex towards the area-weighted centroid of
   // its one-ring, re-projected onto the fitted surface of the cloud, alternating with flips.
+  const Eigen::MatrixX3d S_unpolished = S, SN_unpolished = SN;
+  const std::vector<std::array<int, 3>> F_unpolished = F;
+  const int flips_unpolished = res.flipped_edges;
+  auto polish = [&](bool use_valence) {
   if (options.relaxation_iterations > 0) {
     // Anchor (nearest cloud point) of every site, followed by a greedy walk on the kNN graph.
     std::vector<int> anchor(ns);
@@ -758,8 +786,43 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
           SN.row(v) = SN2.row(v);
         }
       }
-      res.flipped_edges += improve_by_flips(S, F, 5);
+      // Valence-equalising flips in the first iterations, Delaunay (max-min-angle) flips in the
+      // last two so that no flip that hurts the smallest angle survives.
+      const bool valence_phase = use_valence && it + 2 < options.relaxation_iterations;
+      res.flipped_edges += improve_by_flips(S, F, 5, valence_phase);
     }
+  }
+
+  };
+  // Valence flips can fold thin parts through themselves: if the polished mesh self-intersects,
+  // polish again from the unpolished mesh with Delaunay flips only.
+  auto self_intersections = [&]() -> long {
+    std::vector<int> map(ns, -1);
+    int m = 0;
+    for (const auto& f : F)
+      for (int v : f)
+        if (map[v] < 0) map[v] = m++;
+    if (m == 0) return 0;
+    Eigen::MatrixX3d VV(m, 3);
+    for (int v = 0; v < ns; ++v)
+      if (map[v] >= 0) VV.row(map[v]) = S.row(v);
+    Eigen::MatrixX3i FF(F.size(), 3);
+    for (size_t i = 0; i < F.size(); ++i)
+      for (int k = 0; k < 3; ++k) FF(i, k) = map[F[i][k]];
+    ValidationOptions vo;
+    vo.require_closed = false;
+    vo.max_listed = 1;
+    const ValidationReport rep = validate_triangle_mesh(VV, FF, vo);
+    return std::max(0L, rep.self_intersecting_pairs);
+  };
+  polish(true);
+  if (options.relaxation_iterations > 0 && self_intersections() > 0) {
+    S = S_unpolished;
+    SN = SN_unpolished;
+    F = F_unpolished;
+    res.flipped_edges = flips_unpolished;
+    res.polish_fallback = true;
+    polish(false);
   }
 
   // 7. Compact: drop unused sites, restore the frame.
@@ -786,17 +849,6 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   restore_frame(res.mesh.V, frame);
 
   const TriangleQuality tq = triangle_quality(res.mesh.V, res.mesh.F);
-  if (std::getenv("HEATCVT_RECON_DEBUG")) {
-    const Eigen::VectorXd a = smallest_angles(res.mesh.V, res.mesh.F) * (180.0 / M_PI);
-    int h[7] = {0};
-    for (Eigen::Index i = 0; i < a.size(); ++i) ++h[std::min(6, static_cast<int>(a[i] / 10))];
-    for (Eigen::Index f = 0; f < a.size(); ++f)
-      if (a[f] < 15)
-        std::fprintf(stderr, "small angle %.2f at face %ld (%d %d %d) pos %.3f %.3f %.3f\n", a[f], (long)f, res.mesh.F(f, 0),
-                     res.mesh.F(f, 1), res.mesh.F(f, 2), res.mesh.V(res.mesh.F(f, 0), 0), res.mesh.V(res.mesh.F(f, 0), 1),
-                     res.mesh.V(res.mesh.F(f, 0), 2));
-    std::fprintf(stderr, "min-angle histogram (10 deg bins): %d %d %d %d %d %d %d\n", h[0], h[1], h[2], h[3], h[4], h[5], h[6]);
-  }
   res.min_angle_deg = tq.min_angle_deg;
   res.mean_min_angle_deg = tq.mean_min_angle_deg;
   report("validate", 0);

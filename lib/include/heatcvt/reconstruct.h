@@ -28,14 +28,18 @@ struct ReconstructionOptions {
   int threads = 0;                ///< 0 = all cores. Default 0.
   // --- additive fields (not in the first pinned version) ---
   /// Boundary loops of the extracted mesh with at most this many edges are treated as holes of
-  /// the extraction (not scan boundaries) and filled. Default 8.
+  /// the extraction (not scan boundaries) and filled. Loops of up to 4× this many edges are
+  /// filled only if their centre is > h/4 away from every triangle yet < h/2 from a cloud point
+  /// (h = mean loop edge length): a hole in sampled surface, not the border of a scan. Default 8.
   int max_hole_edges = 8;
+  /// Final polish: iterations of tangential relaxation (each vertex towards the area-weighted
+  /// centroid of its one-ring, re-projected to the fitted surface) alternating with edge flips
+  /// (valence-equalising on nearly flat pairs, max-min-angle in the last two iterations; if the
+  /// result self-intersects the polish is redone with max-min-angle flips only).
+  /// 0 = the plain dual of the heat CVT (max-min-angle flips only). Default 10.
+  int relaxation_iterations = 10;
   /// Statistical outlier removal: neighbours and standard-deviation multiplier (PCL
   /// StatisticalOutlierRemoval). Defaults 20 and 2.0. Only used with `denoise`.
-  /// Final polish: iterations of tangential relaxation (each vertex towards the area-weighted
-  /// centroid of its one-ring, re-projected to the fitted surface) alternating with max-min-angle
-  /// edge flips. 0 = the plain dual of the heat CVT (edge flips only). Default 10.
-  int relaxation_iterations = 10;
   int denoise_neighbors = 20;
   double denoise_stddev = 2.0;
 };
@@ -62,7 +66,8 @@ struct ReconstructionResult {
   int rejected_triangles = 0;      ///< candidates not kept (non-manifold or orientation conflict)
   int removed_triangles = 0;       ///< kept, then removed to make vertices manifold / drop tiny pieces
   int holes_filled = 0;            ///< boundary loops with ≤ max_hole_edges edges that were filled
-  int flipped_edges = 0;           ///< max-min-angle edge flips on the extracted mesh
+  int flipped_edges = 0;           ///< edge flips on the extracted mesh (max-min-angle and valence)
+  bool polish_fallback = false;    ///< the valence-flip polish self-intersected; redone with Delaunay flips only
   int unused_sites = 0;            ///< sites that ended in no triangle (dropped from the mesh)
 };
 
@@ -75,15 +80,17 @@ struct ReconstructionResult {
 ///     from the edge lengths of the local triangles lifted to (p, λ n) ∈ R⁶ (paper §7.1);
 ///  3. centroidal_voronoi() on (points, local triangles, Laplacian): `sites` sites, `iterations`
 ///     Lloyd steps, seeded random start;
-///  4. dual triangles: every local triangle whose three corner points lie in three different cells
-///     witnesses the triangle of those three sites; candidates ordered by witness count, then
+///  4. dual triangles: every local triangle whose three corner points lie in three different cells,
+///     and every Voronoi vertex of the exact tessellation (each triple of its cells), witnesses
+///     the triangle of those three sites; candidates ordered by witness count, then
 ///     by smallest angle, and accepted greedily when every edge stays shared by ≤ 2 triangles
 ///     traversed in opposite directions (orientation from the MST-oriented normals);
 ///  5. site positions projected to a weighted least-squares quadratic height field fitted to the
 ///     k nearest points (PCA frame);
 ///  6. non-manifold vertices resolved (largest fan kept), components of < 4 triangles dropped,
-///     boundary loops of ≤ max_hole_edges edges filled (max-min-angle triangulation), unused
-///     sites removed;
+///     a second greedy pass over the remaining candidates, holes filled (see max_hole_edges;
+///     max-min-angle triangulation), max-min-angle edge flips, then the polish of
+///     `relaxation_iterations` (tangential relaxation + flips), unused sites removed;
 ///  7. validate_triangle_mesh() (require_closed = false: open scans legitimately keep boundaries).
 /// Deterministic for a given input, options and seed, independent of `threads`.
 /// \throw InvalidInputError for empty / too small clouds, sites < 4 or > usable points, bad options.
