@@ -3,6 +3,14 @@
 // (φm ≥ 51°, φmin ≥ 25°).
 //
 //   bench_cvt [--iterations N] [--threads T] [--quality-every K] [--only NAME] [--quick] [--no-cgal]
+//             [--config default|paper|both]
+//
+// Two CVT configurations per model: `default` = fast_cvt_options() (meshcvt's defaults:
+// farthest-point + graph-Lloyd start during the factorisation, over-relaxed Lloyd, quality checked
+// every iteration, cells split where too big for thin parts; stops at quality, at most N
+// iterations) and `paper` = CvtOptions{} (random start, plain Lloyd, N iterations, quality every K).
+// For `default` the time to quality is Laplacian + the whole centroidal_voronoi() call (set-up,
+// factorisation, iterations, evaluations, final diagram and dual) when it stopped at quality.
 //
 // Time to quality of the CVT = Laplacian + factorisation + set-up + the Lloyd iterations up to the
 // first evaluation that meets both targets + one final diagram/dual (the evaluation's own time):
@@ -110,6 +118,7 @@ int main(int argc, char** argv) {
   int iterations = 100, threads = 0, quality_every = 5;
   std::string only;
   bool quick = false, no_cgal = false;
+  std::string config = "both";
   for (int i = 1; i < argc; ++i) {
     auto next = [&]() -> const char* {
       if (i + 1 >= argc) {
@@ -124,9 +133,11 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--only")) only = next();
     else if (!std::strcmp(argv[i], "--quick")) quick = true;
     else if (!std::strcmp(argv[i], "--no-cgal")) no_cgal = true;
+    else if (!std::strcmp(argv[i], "--config")) config = next();
     else {
       std::fprintf(stderr,
-                   "usage: bench_cvt [--iterations N] [--threads T] [--quality-every K] [--only NAME] [--quick] [--no-cgal]\n");
+                   "usage: bench_cvt [--iterations N] [--threads T] [--quality-every K] [--only NAME] [--quick] [--no-cgal] "
+                   "[--config default|paper|both]\n");
       return 1;
     }
   }
@@ -147,6 +158,10 @@ int main(int argc, char** argv) {
     std::string text;
   };
   std::vector<std::string> rows;
+  if (config != "default" && config != "paper" && config != "both") {
+    std::fprintf(stderr, "bench_cvt: --config must be default, paper or both\n");
+    return 1;
+  }
   for (const Case& c : cases) {
     if (!only.empty() && only != c.name) continue;
     if (quick && c.subdivisions > 1) continue;
@@ -158,6 +173,55 @@ int main(int argc, char** argv) {
     double t0 = bench::now_seconds();
     Laplacian lap = cotan_laplacian(m.V, m.F);
     const double laplacian_s = bench::now_seconds() - t0;
+    ValidationOptions vo;
+    vo.expected_genus = mesh_genus(m.F, nv);
+    vo.check_self_intersections = false;
+    // (CGAL 5.5's remeshing spent > 8 minutes in Euler::does_satisfy_link_condition on dragon-L1
+    // here; --no-cgal skips it.)
+    const CgalResult cg = no_cgal ? CgalResult{} : cgal_remesh(m, c.sites);
+    const bool cg_ok = cg.quality.mean_min_angle_deg >= kTargetMean && cg.quality.min_angle_deg >= kTargetMin;
+    const std::string cgal_cols = std::to_string(cg.vertices) + " | " + fmt(cg.quality.min_angle_deg, "%.1f°") + " | " +
+                                  fmt(cg.quality.mean_min_angle_deg, "%.1f°") + " | " + fmt(cg.seconds, "%.1f s") +
+                                  (cg_ok ? "" : " (targets not met)") + (cg.valid ? "" : " (invalid)") + " |";
+    std::string row;
+    if (config != "paper") {
+      CvtOptions o = fast_cvt_options(c.sites);
+      o.iterations = quick ? std::min(iterations, 20) : iterations;
+      o.threads = threads;
+      // development overrides of the default configuration (not used for the README table)
+      if (const char* e = std::getenv("CVT_RELAXATION")) o.relaxation = std::atof(e);
+      if (const char* e = std::getenv("CVT_GRAPH_LLOYD")) o.graph_lloyd_iterations = std::atoi(e);
+      if (const char* e = std::getenv("CVT_SPLIT")) o.split_nonmanifold_cells = std::atoi(e) != 0;
+      if (const char* e = std::getenv("CVT_INIT_RANDOM")) o.initialization = CvtInitialization::random;
+      CvtResult r = centroidal_voronoi(m.V, m.F, lap, o, {}, [&](const CvtIterationStats& s) {
+        std::fprintf(stderr, "  it %d: %.3f s, phi_min %.1f phi_m %.2f, spots %d, inserted %d, omega %.2f, move %.3g\n",
+                     s.iteration, s.seconds, s.phi_min_deg, s.phi_mean_deg, s.nonmanifold_spots, s.inserted_sites,
+                     s.relaxation, s.max_move);
+        return true;
+      });
+      double per_iteration = 0;
+      for (const auto& s : r.iterations) per_iteration += s.seconds;
+      per_iteration /= std::max<size_t>(1, r.iterations.size());
+      const TriangleQuality q = triangle_quality(r.dual.V, r.dual.F);
+      const bool valid = validate_triangle_mesh(r.dual.V, r.dual.F, vo).ok();
+      const double ttq = laplacian_s + r.total_seconds;
+      std::fprintf(stderr, "  default: factor %.3f s, graph Lloyd %d it %.3f s, setup %.3f s, total %.3f s\n",
+                   r.factor_seconds, r.graph_lloyd_iterations, r.graph_lloyd_seconds, r.setup_seconds, r.total_seconds);
+      row = std::string("| ") + c.name + " | " + std::to_string(nv) + " | " +
+            (r.inserted_sites ? std::to_string(c.sites) + " + " + std::to_string(r.inserted_sites)
+                              : std::to_string(c.sites)) +
+            " | " + fmt(r.factor_seconds, "%.3f s") + " | " + fmt(r.factor_bytes / 1e6, "%.0f MB") + " | " +
+            fmt(q.min_angle_deg, "%.1f°") + " | " + fmt(q.mean_min_angle_deg, "%.1f°") + " | " +
+            fmt(per_iteration, "%.3f s") + " | " + (valid ? "yes" : "NO") + " | " +
+            (r.reached_quality ? fmt(ttq, "%.1f s") + " (" + std::to_string(r.iterations.size()) + " it)"
+                               : "not reached in " + std::to_string(r.iterations.size()) + " it (" +
+                                     fmt(ttq, "%.1f s") + ")") +
+            " | " + cgal_cols;
+      std::printf("%s\n", row.c_str());
+      std::fflush(stdout);
+      rows.push_back(row);
+    }
+    if (config != "default") {
     CvtOptions o;
     o.sites = c.sites;
     o.iterations = quick ? std::min(iterations, 20) : iterations;
@@ -178,31 +242,24 @@ int main(int argc, char** argv) {
     for (const auto& s : r.iterations) per_iteration += s.seconds;
     per_iteration /= std::max<size_t>(1, r.iterations.size());
     const TriangleQuality q = triangle_quality(r.dual.V, r.dual.F);
-    ValidationOptions vo;
-    vo.expected_genus = mesh_genus(m.F, nv);
-    vo.check_self_intersections = false;
     const bool valid = validate_triangle_mesh(r.dual.V, r.dual.F, vo).ok();
     // best quality seen during the run (evaluations) and when
     double best_m = -1;
     int best_it = 0;
     for (const auto& s : r.iterations)
       if (s.phi_mean_deg > best_m) best_m = s.phi_mean_deg, best_it = s.iteration;
-
-    // (CGAL 5.5's remeshing spent > 8 minutes in Euler::does_satisfy_link_condition on dragon-L1
-    // here; --no-cgal skips it.)
-    const CgalResult cg = no_cgal ? CgalResult{} : cgal_remesh(m, c.sites);
-    const bool cg_ok = cg.quality.mean_min_angle_deg >= kTargetMean && cg.quality.min_angle_deg >= kTargetMin;
-
-    std::string row = std::string("| ") + c.name + " | " + std::to_string(nv) + " | " + std::to_string(c.sites) +
+    row = std::string("| ") + c.name + " (paper config) | " + std::to_string(nv) + " | " + std::to_string(c.sites) +
                       " | " + fmt(r.factor_seconds, "%.3f s") + " | " + fmt(r.factor_bytes / 1e6, "%.0f MB") + " | " +
                       fmt(q.min_angle_deg, "%.1f°") + " | " + fmt(q.mean_min_angle_deg, "%.1f°") + " | " +
                       fmt(per_iteration, "%.3f s") + " | " + (valid ? "yes" : "NO") + " | " +
                       (ttq >= 0 ? fmt(ttq, "%.1f s") + " (it " + std::to_string(ttq_iteration) + ")"
                                 : std::string("not reached (best φm ") + fmt(best_m, "%.1f") + " at it " +
                                       std::to_string(best_it) + ")") +
-                      " | " + std::to_string(cg.vertices) + " | " + fmt(cg.quality.min_angle_deg, "%.1f°") + " | " +
-                      fmt(cg.quality.mean_min_angle_deg, "%.1f°") + " | " + fmt(cg.seconds, "%.1f s") +
-                      (cg_ok ? "" : " (targets not met)") + (cg.valid ? "" : " (invalid)") + " |";
+                      " | " + cgal_cols;
+    std::printf("%s\n", row.c_str());
+    std::fflush(stdout);
+    rows.push_back(row);
+    }
     std::string paper = c.paper.model[0] ? std::string("| paper: ") + c.paper.model + " | " + c.paper.vertices +
                                                " | " + std::to_string(c.paper.generators) + " | " +
                                                fmt(c.paper.factor_s, "%.3f s") + " | " +
@@ -211,10 +268,8 @@ int main(int argc, char** argv) {
                                                " | " + fmt(c.paper.per_iteration_s, "%.3f s") +
                                                " | | | | | | |"
                                          : std::string();
-    std::printf("%s\n", row.c_str());
     if (!paper.empty()) std::printf("%s\n", paper.c_str());
     std::fflush(stdout);
-    rows.push_back(row);
     if (!paper.empty()) rows.push_back(paper);
   }
   std::printf("\n| model | vertices | sites | factor time | factor memory | φmin | φm | time / iteration | dual valid | "

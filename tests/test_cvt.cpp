@@ -180,3 +180,120 @@ TEST(Cvt, GivenInitialSitesAreUsedAndBadInputThrows) {
   EXPECT_THROW(centroidal_voronoi(sphere.V, sphere.F, lap, o, bad), InvalidInputError);
   EXPECT_THROW(anisotropic_laplacian(sphere.V, sphere.F, -1.0), InvalidInputError);
 }
+
+// ---- accelerations (fast_cvt_options) ----
+
+TEST(CvtAcceleration, OverRelaxedLloydEqualisesAtLeastAsFastAsPlainLloyd) {
+  // Same random start on the unit-area sphere; after the same number of iterations the
+  // over-relaxed (safeguarded) Lloyd step has a cell-area variance no larger than plain Lloyd's.
+  auto sphere = test::icosphere(5);
+  test::scale_to_area(sphere, 1.0);
+  const Laplacian lap = cotan_laplacian(sphere.V, sphere.F);
+  CvtOptions o;
+  o.sites = 300;
+  o.iterations = 12;
+  o.seed = 4;
+  CvtResult plain = centroidal_voronoi(sphere.V, sphere.F, lap, o);
+  o.relaxation = 1.5;
+  CvtResult fast = centroidal_voronoi(sphere.V, sphere.F, lap, o);
+  std::printf("[ info ] sphere, 300 sites, 12 iterations: variance plain %.3g, over-relaxed %.3g (start %.3g)\n",
+              plain.final_area_variance, fast.final_area_variance, plain.iterations.front().area_variance);
+  EXPECT_EQ(plain.iterations.front().area_variance, fast.iterations.front().area_variance);  // same start
+  EXPECT_LE(fast.final_area_variance, plain.final_area_variance);
+  for (const auto& s : fast.iterations) EXPECT_GE(s.relaxation, 1.0);
+  // the relaxed sites are on the surface (unit-area sphere: radius 1/sqrt(4 pi), up to the chord error)
+  const double radius = std::sqrt(1.0 / (4 * M_PI));
+  for (int s = 0; s < fast.positions.rows(); ++s) EXPECT_NEAR(fast.positions.row(s).norm(), radius, 2e-3 * radius);
+}
+
+TEST(CvtAcceleration, GraphLloydStartIsCloserToCentroidalThanRandomStart) {
+  auto sphere = test::icosphere(5);
+  test::scale_to_area(sphere, 1.0);
+  const Laplacian lap = cotan_laplacian(sphere.V, sphere.F);
+  CvtOptions o;
+  o.sites = 300;
+  o.iterations = 1;
+  CvtResult random_start = centroidal_voronoi(sphere.V, sphere.F, lap, o);
+  o.initialization = CvtInitialization::farthest_point;
+  CvtResult fps = centroidal_voronoi(sphere.V, sphere.F, lap, o);
+  o.graph_lloyd_iterations = 20;
+  CvtResult graph = centroidal_voronoi(sphere.V, sphere.F, lap, o);
+  const double v_random = random_start.iterations.front().area_variance;
+  const double v_fps = fps.iterations.front().area_variance;
+  const double v_graph = graph.iterations.front().area_variance;
+  std::printf("[ info ] initial cell-area variance, 300 sites: random %.3g, farthest point %.3g, + graph Lloyd %.3g (%d it)\n",
+              v_random, v_fps, v_graph, graph.graph_lloyd_iterations);
+  EXPECT_GT(graph.graph_lloyd_iterations, 0);
+  EXPECT_LT(v_fps, 0.5 * v_random);
+  EXPECT_LT(v_graph, v_fps);
+}
+
+TEST(CvtAcceleration, FastOptionsAreDeterministicAcrossThreadCounts) {
+  // the graph Lloyd runs beside the factorisation with 2 threads, inline with 1
+  TriangleMesh m = read_mesh(test::data_path("meshes/torus.obj"));
+  CvtOptions o = fast_cvt_options(150);
+  o.iterations = 6;
+  o.target_phi_mean_deg = 60;  // unreachable: run all iterations, evaluating every one
+  const Laplacian lap = cotan_laplacian(m.V, m.F);
+  o.threads = 1;
+  CvtResult a = centroidal_voronoi(m.V, m.F, lap, o);
+  o.threads = 2;
+  CvtResult b = centroidal_voronoi(m.V, m.F, lap, o);
+  ASSERT_EQ(a.sites.size(), b.sites.size());
+  EXPECT_EQ(a.positions, b.positions);
+  EXPECT_EQ(a.dual.F, b.dual.F);
+  EXPECT_EQ(a.inserted_sites, b.inserted_sites);
+  for (const auto& s : a.iterations) EXPECT_GE(s.phi_mean_deg, 0.0);  // evaluated every iteration
+}
+
+TEST(CvtAcceleration, FastOptionsReachTheQualityTargetOnTheSphere) {
+  auto sphere = test::icosphere(5);
+  CvtOptions o = fast_cvt_options(400);
+  CvtResult r = centroidal_voronoi(sphere.V, sphere.F, cotan_laplacian(sphere.V, sphere.F), o);
+  ASSERT_TRUE(r.reached_quality);
+  const TriangleQuality q = triangle_quality(r.dual.V, r.dual.F);
+  std::printf("[ info ] sphere, 400 sites, fast options: quality after %zu iterations: phi_min %.1f, phi_m %.2f\n",
+              r.iterations.size(), q.min_angle_deg, q.mean_min_angle_deg);
+  EXPECT_GE(q.mean_min_angle_deg, 51.0);
+  EXPECT_GE(q.min_angle_deg, 25.0);
+  EXPECT_LT(r.iterations.size(), 30u);
+  // the returned dual is the dual of the returned diagram of the returned sites
+  const DualMesh again = dual_mesh(r.diagram, r.positions);
+  EXPECT_EQ(again.F, r.dual.F);
+  EXPECT_EQ(r.diagram.num_cells(), static_cast<int>(r.sites.size()));
+  ValidationOptions vo;
+  vo.expected_genus = 0;
+  EXPECT_TRUE(validate_triangle_mesh(r.dual.V, r.dual.F, vo).ok());
+}
+
+TEST(CvtAcceleration, SplittingCellsTooBigForThinPartsGivesAValidDualOfTheInputGenus) {
+  // Casting (genus 9, thin walls) with too few sites for its thin parts: the plain run's dual is
+  // not a manifold of genus 9; with split_nonmanifold_cells the added sites make it one (the dual
+  // of the heat Voronoi diagram of all final sites, checked by CGAL).
+  TriangleMesh m = read_mesh(test::data_path("meshes/casting.obj"));
+  m = loop_subdivide(m);
+  const Laplacian lap = cotan_laplacian(m.V, m.F);
+  ValidationOptions vo;
+  vo.expected_genus = 9;
+  vo.expected_components = 1;
+  CvtOptions o;
+  o.sites = 700;
+  o.iterations = 20;
+  o.initialization = CvtInitialization::farthest_point;
+  CvtResult plain = centroidal_voronoi(m.V, m.F, lap, o);
+  const ValidationReport plain_rep = validate_triangle_mesh(plain.dual.V, plain.dual.F, vo);
+  o.split_nonmanifold_cells = true;
+  o.quality_every = 1;
+  CvtResult split = centroidal_voronoi(m.V, m.F, lap, o);
+  const ValidationReport rep = validate_triangle_mesh(split.dual.V, split.dual.F, vo);
+  std::printf("[ info ] casting-L1, 700 sites: plain dual valid %d; split: +%d sites, valid %d\n", plain_rep.ok(),
+              split.inserted_sites, rep.ok());
+  EXPECT_FALSE(plain_rep.ok());
+  EXPECT_GT(split.inserted_sites, 0);
+  EXPECT_LE(split.inserted_sites, 175);
+  EXPECT_TRUE(rep.ok()) << rep.summary();
+  EXPECT_EQ(split.sites.size(), 700u + split.inserted_sites);
+  EXPECT_EQ(split.diagram.num_cells(), static_cast<int>(split.sites.size()));
+  const DualMesh again = dual_mesh(split.diagram, split.positions);
+  EXPECT_EQ(again.F, split.dual.F);
+}

@@ -26,8 +26,15 @@ using Clock = std::chrono::steady_clock;
 int main(int argc, char** argv) {
   CLI::App app{"meshcvt: remesh a triangle mesh by an intrinsic centroidal Voronoi tessellation with heat "
                "diffusion (Herholz, Haase, Alexa 2017, §7.1); writes the dual triangulation"};
-  CvtOptions cvt;  // defaults shown by --help come from here
-  std::string mesh_path, out_path, cells_path, report_path, init = "random";
+  // Defaults shown by --help: the best measured configuration (fast_cvt_options); --paper switches
+  // every option not given explicitly to the paper's plain Lloyd (CvtOptions{}).
+  CvtOptions cvt = fast_cvt_options(CvtOptions{}.sites);
+  const CvtOptions paper_cvt;
+  std::string mesh_path, out_path, cells_path, report_path,
+      init = cvt.initialization == CvtInitialization::farthest_point ? "farthest" : "random";
+  double relaxation = cvt.relaxation;
+  int graph_lloyd = cvt.graph_lloyd_iterations;
+  bool no_split = !cvt.split_nonmanifold_cells, paper = false;
   int sites = cvt.sites, iterations = cvt.iterations, threads = cvt.threads;
   unsigned seed = cvt.seed;
   double anisotropy = 0.0, tolerance = cvt.tolerance, t_coef = cvt.time_coefficient;
@@ -61,6 +68,17 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--cells", cells_path, "also write the tessellated input with a cell id per face (.ply)");
   app.add_option("--report", report_path, "also write the final report as JSON");
+  app.add_option("--relaxation", relaxation,
+                 "Lloyd over-relaxation omega in [1, 2) (1 = plain Lloyd; safeguarded by the cell-area variance)")
+      ->capture_default_str();
+  app.add_option("--graph-lloyd", graph_lloyd,
+                 "graph-Lloyd iterations on the initial sites, run during the factorisation (0 = off)")
+      ->capture_default_str();
+  app.add_flag("--no-split", no_split,
+               "keep the site count: do not add sites to cells that are too big for thin parts (non-manifold dual)");
+  app.add_flag("--paper", paper,
+               "the paper's configuration for every option not given: random start, plain Lloyd, 100 iterations, "
+               "no quality evaluation or target, no splitting");
   app.add_flag("-q,--quiet", quiet, "no progress and no report on the terminal");
   try {
     app.parse(argc, argv);
@@ -76,7 +94,21 @@ int main(int argc, char** argv) {
     return 1;
   }
 
+  if (paper) {
+    auto given = [&](const char* name) { return app.count(name) > 0; };
+    if (!given("--iterations")) iterations = paper_cvt.iterations;
+    if (!given("--quality-every")) quality_every = paper_cvt.quality_every;
+    if (!given("--target-phi-m")) target_mean = paper_cvt.target_phi_mean_deg;
+    if (!given("--target-phi-min")) target_min = paper_cvt.target_phi_min_deg;
+    if (!given("--init")) init = "random";
+    if (!given("--relaxation")) relaxation = paper_cvt.relaxation;
+    if (!given("--graph-lloyd")) graph_lloyd = paper_cvt.graph_lloyd_iterations;
+    if (!given("--no-split")) no_split = !paper_cvt.split_nonmanifold_cells;
+    cvt = paper_cvt;
+  }
   const int rc = cli::run_tool("meshcvt", [&]() -> int {
+    if (!(relaxation >= 1 && relaxation < 2)) throw InvalidInputError("--relaxation must be in [1, 2)");
+    if (graph_lloyd < 0) throw InvalidInputError("--graph-lloyd must be >= 0");
     if (sites < 1) throw InvalidInputError("--sites must be at least 1, got " + std::to_string(sites));
     if (iterations < 0) throw InvalidInputError("--iterations must be >= 0, got " + std::to_string(iterations));
     if (!(tolerance >= 0) || !std::isfinite(tolerance)) throw InvalidInputError("--tolerance must be >= 0");
@@ -126,6 +158,9 @@ int main(int argc, char** argv) {
     cvt.target_phi_mean_deg = target_mean > 0 ? target_mean : (target_min > 0 ? 1e-9 : 0.0);
     cvt.target_phi_min_deg = target_min > 0 ? target_min : (target_mean > 0 ? 1e-9 : 0.0);
     cvt.initialization = init == "farthest" ? CvtInitialization::farthest_point : CvtInitialization::random;
+    cvt.relaxation = relaxation;
+    cvt.graph_lloyd_iterations = graph_lloyd;
+    cvt.split_nonmanifold_cells = !no_split;
     cli::Progress progress("lloyd", iterations, quiet);
     CvtResult r = centroidal_voronoi(mesh.V, mesh.F, lap, cvt, {},
                                      [&](const CvtIterationStats& s) {
@@ -168,7 +203,8 @@ int main(int argc, char** argv) {
           .add("converged", r.converged).add("reached_quality_target", r.reached_quality).add("laplacian_s", laplacian_s).add("factor_s", r.factor_seconds)
           .add("factor_memory_bytes", static_cast<long>(r.factor_bytes)).add("time_per_iteration_s", per_iter)
           .add("total_s", total_s).add("cell_area_variance", r.final_area_variance)
-          .add("revived_sites", revived).add("triangles", q.triangles).add("phi_min_deg", q.min_angle_deg)
+          .add("revived_sites", revived).add("inserted_sites", r.inserted_sites)
+          .add("graph_lloyd_iterations", r.graph_lloyd_iterations).add("triangles", q.triangles).add("phi_min_deg", q.min_angle_deg)
           .add("phi_mean_deg", q.mean_min_angle_deg).add("share_below_30", q.below_30_fraction)
           .add("split_voronoi_vertices", r.dual.split_vertices)
           .add("duplicate_triangles", r.dual.duplicate_triangles)
@@ -199,6 +235,8 @@ int main(int argc, char** argv) {
                   q.mean_min_angle_deg, 100.0 * q.below_30_fraction);
       std::printf("  cell-area variance %.4g%s\n", r.final_area_variance,
                   revived ? (", " + std::to_string(revived) + " vanished cells re-seeded").c_str() : "");
+      if (r.inserted_sites)
+        std::printf("  %d sites added to cells too big for thin parts (%d requested)\n", r.inserted_sites, sites);
       std::printf("  checks (CGAL):\n");
       for (const auto& c : checks.checks)
         std::printf("    %s %-24s %s\n", c.ran ? (c.passed ? "PASS" : "FAIL") : "SKIP", c.name.c_str(), c.detail.c_str());

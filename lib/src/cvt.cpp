@@ -13,8 +13,12 @@
 #include <queue>
 #include <random>
 #include <string>
+#include <exception>
+#include <memory>
+#include <thread>
 
 #include "heatcvt/centroid.h"
+#include "heatcvt/closest_point.h"
 #include "heatcvt/errors.h"
 #include "heatcvt/heat_solver.h"
 #include "heatcvt/localized_solve.h"
@@ -404,6 +408,146 @@ double variance(const Eigen::VectorXd& x) {
   return (x.array() - mean).square().sum() / static_cast<double>(x.size());
 }
 
+SurfacePoint vertex_point(const Eigen::MatrixX3i& F, const std::vector<std::vector<int>>& vfaces, int v) {
+  SurfacePoint p;
+  p.face = vfaces[v].front();
+  int k = 0;
+  while (F(p.face, k) != v) ++k;
+  p.bary = Eigen::Vector3d::Unit(k);
+  return p;
+}
+
+// Graph Lloyd: cells = multi-source Dijkstra on the edge graph, new source = the vertex of the
+// cell closest to the cell's area-weighted mean position. Deterministic (ties: smaller index).
+std::vector<int> graph_lloyd(const Graph& g, const Eigen::MatrixX3d& V, const Eigen::VectorXd& vertex_area,
+                             std::vector<int> src, int iterations, int* done) {
+  const int n = static_cast<int>(V.rows());
+  const int ns = static_cast<int>(src.size());
+  *done = 0;
+  std::vector<Eigen::Vector3d> sum(ns);
+  std::vector<double> mass(ns), best(ns);
+  for (int it = 0; it < iterations; ++it) {
+    const std::vector<int> label = graph_voronoi(g, src);
+    std::fill(sum.begin(), sum.end(), Eigen::Vector3d::Zero());
+    std::fill(mass.begin(), mass.end(), 0.0);
+    for (int v = 0; v < n; ++v)
+      if (label[v] >= 0) {
+        sum[label[v]] += vertex_area[v] * V.row(v).transpose();
+        mass[label[v]] += vertex_area[v];
+      }
+    for (int s = 0; s < ns; ++s)
+      if (mass[s] > 0) sum[s] /= mass[s];
+    std::vector<int> next = src;
+    std::fill(best.begin(), best.end(), std::numeric_limits<double>::infinity());
+    for (int v = 0; v < n; ++v) {
+      const int s = label[v];
+      if (s < 0 || !(mass[s] > 0)) continue;
+      const double d = (V.row(v).transpose() - sum[s]).squaredNorm();
+      if (d < best[s]) best[s] = d, next[s] = v;
+    }
+    ++*done;
+    const bool changed = next != src;
+    src.swap(next);
+    if (!changed) break;
+  }
+  return src;
+}
+
+// Closest point to p on the surface, by a greedy walk over faces sharing a corner with the
+// current face, starting at `start` (local: used for short over-relaxation steps).
+SurfacePoint project_local(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
+                           const std::vector<std::vector<int>>& vfaces, const SurfacePoint& start,
+                           const Eigen::Vector3d& p) {
+  auto eval = [&](int f, Eigen::Vector3d& bary) {
+    const Eigen::Vector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
+    bary = closest_point_barycentric(p, a, b, c);
+    return (bary[0] * a + bary[1] * b + bary[2] * c - p).squaredNorm();
+  };
+  SurfacePoint cur = start;
+  double best = eval(cur.face, cur.bary);
+  for (int step = 0; step < 256; ++step) {
+    int best_face = -1;
+    Eigen::Vector3d best_bary, bary;
+    for (int k = 0; k < 3; ++k)
+      for (int f : vfaces[F(cur.face, k)]) {
+        if (f == cur.face) continue;
+        const double d = eval(f, bary);
+        if (d < best * (1 - 1e-12) && (best_face < 0 || d < eval(best_face, best_bary))) {
+          best_face = f;
+          best_bary = bary;
+        }
+      }
+    if (best_face < 0) break;
+    cur.face = best_face;
+    best = eval(best_face, cur.bary);
+  }
+  return cur;
+}
+
+// Cells at non-manifold spots of a dual triangulation (see CvtOptions::split_nonmanifold_cells).
+std::vector<int> nonmanifold_cells(const DualMesh& dual, int ns, bool closed, int* spots) {
+  std::vector<unsigned char> flag(ns, 0);
+  *spots = 0;
+  std::vector<std::pair<std::int64_t, int>> edges;
+  edges.reserve(3 * dual.F.rows());
+  std::vector<std::vector<int>> star(ns);
+  for (Eigen::Index t = 0; t < dual.F.rows(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const int a = dual.F(t, k), b = dual.F(t, (k + 1) % 3);
+      edges.push_back({static_cast<std::int64_t>(std::min(a, b)) * ns + std::max(a, b), static_cast<int>(t)});
+      star[a].push_back(static_cast<int>(t));
+    }
+  std::sort(edges.begin(), edges.end());
+  for (size_t i = 0; i < edges.size();) {
+    size_t j = i;
+    while (j < edges.size() && edges[j].first == edges[i].first) ++j;
+    const size_t count = j - i;
+    if (count > 2 || (closed && count == 1)) {
+      ++*spots;
+      flag[edges[i].first / ns] = flag[edges[i].first % ns] = 1;
+    }
+    i = j;
+  }
+  // vertex fans: the link edges (opposite edges) of a vertex must form one connected piece
+  std::vector<int> local, parent;
+  for (int v = 0; v < ns; ++v) {
+    if (star[v].empty()) continue;
+    local.clear();
+    for (int t : star[v])
+      for (int k = 0; k < 3; ++k)
+        if (dual.F(t, k) != v) local.push_back(dual.F(t, k));
+    std::sort(local.begin(), local.end());
+    local.erase(std::unique(local.begin(), local.end()), local.end());
+    parent.resize(local.size());
+    for (size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
+    auto find = [&](int x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    for (int t : star[v]) {
+      int ids[2], m = 0;
+      for (int k = 0; k < 3; ++k)
+        if (dual.F(t, k) != v) ids[m++] = static_cast<int>(std::lower_bound(local.begin(), local.end(), dual.F(t, k)) - local.begin());
+      if (m == 2) parent[find(ids[0])] = find(ids[1]);
+    }
+    int roots = 0;
+    for (size_t i = 0; i < parent.size(); ++i) roots += find(static_cast<int>(i)) == static_cast<int>(i);
+    if (roots > 1) {
+      ++*spots;
+      flag[v] = 1;
+    }
+  }
+  for (int s : dual.unused_sites)
+    if (s >= 0 && s < ns) {
+      ++*spots;
+      flag[s] = 1;
+    }
+  std::vector<int> out;
+  for (int s = 0; s < ns; ++s)
+    if (flag[s]) out.push_back(s);
+  return out;
+}
+
 }  // namespace
 
 double cell_area_variance(const VoronoiDiagram& diagram) { return variance(diagram.cell_area); }
@@ -518,6 +662,10 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
   if (face_metric_area.size() != 0 && face_metric_area.size() != F.rows())
     throw InvalidInputError("centroidal_voronoi: face_metric_area has " + std::to_string(face_metric_area.size()) +
                             " entries but the mesh has " + std::to_string(F.rows()) + " faces");
+  if (!(options.relaxation >= 1.0 && options.relaxation < 2.0))
+    throw InvalidInputError("centroidal_voronoi: relaxation must be in [1, 2), got " + std::to_string(options.relaxation));
+  if (options.graph_lloyd_iterations < 0 || options.quality_start < 0 || !(options.max_inserted_fraction >= 0))
+    throw InvalidInputError("centroidal_voronoi: graph_lloyd_iterations, quality_start and max_inserted_fraction must be >= 0");
   std::vector<SurfacePoint> sites = given_sites;
   if (sites.empty()) {
     if (options.sites < 1 || options.sites > n)
@@ -528,31 +676,85 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
   for (size_t s = 0; s < sites.size(); ++s)
     if (sites[s].face < 0 || sites[s].face >= F.rows() || !sites[s].bary.allFinite())
       throw InvalidInputError("centroidal_voronoi: initial site " + std::to_string(s) + " is not on a face of the mesh");
-  const int ns = static_cast<int>(sites.size());
+  int ns = static_cast<int>(sites.size());
+  const int initial_ns = ns;
   const int threads = resolve_threads(options.threads);
+
+  CvtResult result;
+  const Graph graph = edge_graph(V, F);
+  const std::vector<std::vector<int>> vfaces = vertex_faces(n, F);
+  const Eigen::VectorXd face_area = face_areas(V, F);
+
+  // Graph-Lloyd pre-relaxation of the initial sites, concurrently with the factorisation.
+  std::vector<int> sources(ns);
+  for (int s = 0; s < ns; ++s) sources[s] = nearest_corner(F, sites[s]);
+  std::exception_ptr graph_error;
+  auto graph_job = [&]() {
+    try {
+      const auto tg = Clock::now();
+      Eigen::VectorXd vertex_area = Eigen::VectorXd::Zero(n);
+      for (Eigen::Index f = 0; f < F.rows(); ++f)
+        for (int k = 0; k < 3; ++k) vertex_area[F(f, k)] += face_area[f] / 3.0;
+      sources = graph_lloyd(graph, V, vertex_area, sources, options.graph_lloyd_iterations,
+                            &result.graph_lloyd_iterations);
+      for (int s = 0; s < ns; ++s) sites[s] = vertex_point(F, vfaces, sources[s]);
+      result.graph_lloyd_seconds = since(tg);
+    } catch (...) {
+      graph_error = std::current_exception();
+    }
+  };
+  std::thread graph_thread;
+  if (options.graph_lloyd_iterations > 0) {
+    if (threads >= 2) graph_thread = std::thread(graph_job);
+    else graph_job();
+  }
 
   HeatSolverOptions so;
   so.time_coefficient = options.time_coefficient;
   so.threads = threads;
-  HeatSolver solver(laplacian, so);
+  std::unique_ptr<HeatSolver> solver_ptr;
+  try {
+    solver_ptr = std::make_unique<HeatSolver>(laplacian, so);
+  } catch (...) {
+    if (graph_thread.joinable()) graph_thread.join();
+    throw;
+  }
+  if (graph_thread.joinable()) graph_thread.join();
+  if (graph_error) std::rethrow_exception(graph_error);
+  const HeatSolver& solver = *solver_ptr;
   LocalizedSolveOptions lo;
   lo.drop_tolerance = options.drop_tolerance;
   LocalizedSolver local(solver, lo);
 
-  CvtResult result;
   result.factor_seconds = solver.factor_seconds();
   result.factor_bytes = solver.factor().memory_bytes();
 
-  const Graph graph = edge_graph(V, F);
-  const std::vector<std::vector<int>> vfaces = vertex_faces(n, F);
   const Eigen::MatrixX3d normals = vertex_normals(V, F);
   Eigen::VectorXd face_scale;  // metric area / Euclidean area per face
   if (face_metric_area.size()) {
-    const Eigen::VectorXd A = face_areas(V, F);
     face_scale.resize(F.rows());
-    for (Eigen::Index f = 0; f < F.rows(); ++f) face_scale[f] = A[f] > 0 ? face_metric_area[f] / A[f] : 0.0;
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      face_scale[f] = face_area[f] > 0 ? face_metric_area[f] / face_area[f] : 0.0;
   }
   const double spacing = std::sqrt(surface_area(V, F) / ns);
+  bool closed_input = false;
+  if (options.split_nonmanifold_cells) {
+    std::vector<std::int64_t> keys;
+    keys.reserve(3 * F.rows());
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        const std::int64_t a = F(f, k), b = F(f, (k + 1) % 3);
+        keys.push_back(std::min(a, b) * n + std::max(a, b));
+      }
+    std::sort(keys.begin(), keys.end());
+    closed_input = true;
+    for (size_t i = 0; i < keys.size() && closed_input;) {
+      size_t j = i;
+      while (j < keys.size() && keys[j] == keys[i]) ++j;
+      closed_input = j - i >= 2;
+      i = j;
+    }
+  }
 
   std::vector<ThreadScratch> scratch(threads);
   for (auto& t : scratch) {
@@ -566,7 +768,6 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
   // Initial neighbourhoods: graph Voronoi cells of the sites (multi-source Dijkstra).
   CellData cells;
   {
-    std::vector<int> sources(ns);
     for (int s = 0; s < ns; ++s) sources[s] = nearest_corner(F, sites[s]);
     cells = cells_from_labels(graph, graph_voronoi(graph, sources), ns);
   }
@@ -574,7 +775,6 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
 
   std::vector<std::vector<int>> indices(ns);
   std::vector<std::vector<double>> values(ns);
-  const Eigen::VectorXd face_area = face_areas(V, F);
   double index_total = 0;
   int rings = options.voronoi_rings;
   // Localized point-source diffusion per site over its cell and `rings` rings of cells (eq. 8),
@@ -596,19 +796,40 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
     return build_field(n, indices, values, options.keep_sites_per_vertex, threads);
   };
 
+  double omega = options.relaxation;
+  double previous_variance = std::numeric_limits<double>::infinity();
+  // The heat field of the current sites when a quality evaluation already computed it (it is the
+  // next iteration's Voronoi step), with the time it took.
+  HeatField cached_field;
+  bool have_cached = false;
+  double cached_seconds = 0, cached_index = 0;
+
   for (int it = 1; it <= options.iterations; ++it) {
     const auto t0 = Clock::now();
     CvtIterationStats st;
     st.iteration = it;
-    const HeatField field = heat_field();
-    st.voronoi_solve_seconds = since(t0);
-    st.mean_index_set = index_total / ns;
+    HeatField field;
+    double carried = 0;  // solve time spent during the previous evaluation, charged to this iteration
+    if (have_cached) {
+      field = std::move(cached_field);
+      have_cached = false;
+      carried = cached_seconds;
+      st.mean_index_set = cached_index;
+    } else {
+      field = heat_field();
+      st.mean_index_set = index_total / ns;
+    }
+    st.voronoi_solve_seconds = since(t0) + carried;
     const auto tt = Clock::now();
     IterationCells ic = iteration_cells(field, F, face_area, face_scale, ns, threads);
     st.tessellate_seconds = since(tt);
     st.area_variance = variance(ic.area);
     cells = std::move(ic.cells);
-    st.voronoi_seconds = since(t0);
+    st.voronoi_seconds = since(t0) + carried;
+    // Safeguard of the over-relaxation: the energy proxy grew → back towards plain Lloyd.
+    if (omega > 1.0 && st.area_variance > previous_variance) omega = 1.0 + 0.5 * (omega - 1.0) < 1.05 ? 1.0 : 1.0 + 0.5 * (omega - 1.0);
+    previous_variance = st.area_variance;
+    st.relaxation = omega;
 
     // Heat centroids: area source of each cell, localized to the cell and `centroid_rings` rings.
     const auto t1 = Clock::now();
@@ -628,15 +849,14 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
       for (int v : cells.vertices[c])  // sorted: ties go to the smallest index
         if (t.heat[v] > best) best = t.heat[v], hottest = v;
       if (hottest >= 0) {
-        if (options.quadratic_refinement) {
-          moved[c] = refine_hottest_vertex(V, F, vfaces, normals, t.heat, hottest);
-        } else {
-          SurfacePoint p;
-          p.face = vfaces[hottest].front();
-          int k = 0;
-          while (F(p.face, k) != hottest) ++k;
-          p.bary = Eigen::Vector3d::Unit(k);
-          moved[c] = p;
+        if (options.quadratic_refinement) moved[c] = refine_hottest_vertex(V, F, vfaces, normals, t.heat, hottest);
+        else moved[c] = vertex_point(F, vfaces, hottest);
+        if (omega > 1.0) {  // over-relaxation: c + (ω − 1)(c − s), at most half a spacing further
+          const Eigen::Vector3d cpos = position(V, F, moved[c]);
+          Eigen::Vector3d step = (omega - 1.0) * (cpos - position(V, F, sites[c]));
+          const double len = step.norm();
+          if (len > 0.5 * spacing) step *= 0.5 * spacing / len;
+          if (len > 0) moved[c] = project_local(V, F, vfaces, moved[c], cpos + step);
         }
       }
       for (int v : I) t.heat[v] = 0.0;
@@ -655,12 +875,7 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
         if (dist > best) best = dist, far = v;
       }
       if (far < 0) continue;
-      SurfacePoint p;
-      p.face = vfaces[far].front();
-      int k = 0;
-      while (F(p.face, k) != far) ++k;
-      p.bary = Eigen::Vector3d::Unit(k);
-      moved[c] = p;
+      moved[c] = vertex_point(F, vfaces, far);
       ic.area[big] = 0;  // do not put two revived sites into the same cell
       ++st.revived_sites;
     }
@@ -674,41 +889,86 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
     st.centroid_seconds = since(t1);
     st.max_move = max_move;
     st.mean_move = sum_move / ns;
-    st.seconds = since(t0);
+    st.seconds = since(t0) + carried;
+    if (max_move < 0.25 * spacing) rings = std::min(rings, options.voronoi_rings_settled);
     bool stop_for_quality = false;
-    if (options.quality_every > 0 && it % options.quality_every == 0) {
+    if (options.quality_every > 0 && it >= options.quality_start && it % options.quality_every == 0) {
+      // The diagram of the new sites: its heat field is the next iteration's Voronoi step (kept).
+      const auto tf = Clock::now();
+      cached_field = heat_field();
+      cached_seconds = since(tf);
+      cached_index = index_total / ns;
       const auto tq = Clock::now();
-      const int saved = rings;
-      rings = options.voronoi_rings;
       VoronoiOptions vo;
       vo.keep_sites_per_vertex = options.keep_sites_per_vertex;
       vo.threads = threads;
-      VoronoiDiagram d = tessellate(V, F, heat_field(), vo);
-      rings = saved;
+      VoronoiDiagram d = tessellate(V, F, cached_field, vo);
       Eigen::MatrixX3d P(ns, 3);
       for (int s = 0; s < ns; ++s) P.row(s) = position(V, F, sites[s]).transpose();
       DualMesh dual = dual_mesh(d, P);
       const TriangleQuality q = triangle_quality(dual.V, dual.F);
       st.phi_min_deg = q.min_angle_deg;
       st.phi_mean_deg = q.mean_min_angle_deg;
-      st.quality_seconds = since(tq);
-      if (options.target_phi_mean_deg > 0 && options.target_phi_min_deg > 0 &&
-          q.mean_min_angle_deg >= options.target_phi_mean_deg && q.min_angle_deg >= options.target_phi_min_deg) {
+      std::vector<int> bad;
+      if (options.split_nonmanifold_cells) {
+        int spots = 0;
+        bad = nonmanifold_cells(dual, ns, closed_input, &spots);
+        st.nonmanifold_spots = spots;
+      }
+      const bool targets_met = options.target_phi_mean_deg > 0 && options.target_phi_min_deg > 0 &&
+                               q.mean_min_angle_deg >= options.target_phi_mean_deg &&
+                               q.min_angle_deg >= options.target_phi_min_deg && bad.empty();
+      const int budget = static_cast<int>(options.max_inserted_fraction * initial_ns) - result.inserted_sites;
+      if (targets_met) {
         stop_for_quality = true;
         result.reached_quality = true;
         result.diagram = std::move(d);
         result.dual = std::move(dual);
+      } else if (!bad.empty() && budget > 0) {
+        // Split the flagged cells: a new site at the cell's vertex farthest from its site.
+        if (static_cast<int>(bad.size()) > budget) bad.resize(budget);
+        std::vector<int> slot(ns, -1);
+        for (size_t i = 0; i < bad.size(); ++i) slot[bad[i]] = static_cast<int>(i);
+        std::vector<double> far_d(bad.size(), -1);
+        std::vector<int> far_v(bad.size(), -1);
+        for (int v = 0; v < n; ++v) {
+          if (cached_field.offsets[v + 1] == cached_field.offsets[v]) continue;
+          const int c = cached_field.site[cached_field.offsets[v]];
+          if (slot[c] < 0) continue;
+          const double dist = (V.row(v) - P.row(c)).squaredNorm();
+          if (dist > far_d[slot[c]]) far_d[slot[c]] = dist, far_v[slot[c]] = v;
+        }
+        for (size_t i = 0; i < bad.size(); ++i) {
+          if (far_v[i] < 0 || far_d[i] < 1e-12 * spacing * spacing) continue;
+          sites.push_back(vertex_point(F, vfaces, far_v[i]));
+          ++st.inserted_sites;
+        }
+        if (st.inserted_sites > 0) {
+          ns = static_cast<int>(sites.size());
+          result.inserted_sites += st.inserted_sites;
+          for (auto& t : scratch) t.cmark.assign(ns, 0);
+          indices.resize(ns);
+          values.resize(ns);
+          cells.vertices.resize(ns);
+          cells.adjacency.resize(ns);
+          rings = options.voronoi_rings;
+          previous_variance = std::numeric_limits<double>::infinity();
+        } else {
+          have_cached = true;
+        }
+      } else {
+        have_cached = true;
       }
+      st.quality_seconds = since(tq);
     }
     result.iterations.push_back(st);
     if (stop_for_quality) {
       if (callback) callback(st);
       break;
     }
-    if (max_move < 0.25 * spacing) rings = std::min(rings, options.voronoi_rings_settled);
     bool go_on = true;
     if (callback) go_on = callback(st);
-    if (options.tolerance > 0 && max_move < options.tolerance * spacing) {
+    if (options.tolerance > 0 && max_move < options.tolerance * spacing && st.inserted_sites == 0) {
       result.converged = true;
       break;
     }
@@ -716,13 +976,19 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
   }
 
   // Final exact diagram of the final sites (voronoi.h's conforming tessellation) and its dual.
-  rings = options.voronoi_rings;
   if (!result.reached_quality) {
     VoronoiOptions vo;
     vo.exact = true;
     vo.keep_sites_per_vertex = options.keep_sites_per_vertex;
     vo.threads = threads;
-    result.diagram = tessellate(V, F, heat_field(), vo);
+    HeatField field;
+    if (have_cached && rings == options.voronoi_rings) {
+      field = std::move(cached_field);
+    } else {
+      rings = options.voronoi_rings;
+      field = heat_field();
+    }
+    result.diagram = tessellate(V, F, field, vo);
   }
   result.final_area_variance = variance(result.diagram.cell_area);
   result.sites = sites;
@@ -731,6 +997,20 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
   if (options.build_dual && !result.reached_quality) result.dual = dual_mesh(result.diagram, result.positions);
   result.total_seconds = since(start);
   return result;
+}
+
+CvtOptions fast_cvt_options(int sites) {
+  CvtOptions o;
+  o.sites = sites;
+  o.initialization = CvtInitialization::farthest_point;
+  o.graph_lloyd_iterations = 20;
+  o.relaxation = 1.5;
+  o.quality_every = 1;
+  o.quality_start = 1;
+  o.target_phi_mean_deg = 51.0;
+  o.target_phi_min_deg = 25.0;
+  o.split_nonmanifold_cells = true;
+  return o;
 }
 
 }  // namespace heatcvt
