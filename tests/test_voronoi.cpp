@@ -404,16 +404,19 @@ TEST(HeatVoronoi, PlaneBisectorConverges) {
 
 // Sphere (Fig. 3): generators (1,0,0), (−1,0,0), (0,1,0) on random triangulations; the RMS
 // bisector error decreases quadratically with the mean edge length for t = 1 and t = 2⁻⁷.
-// Uniform points: 4 resolutions, slope ≥ 1.8 (measured 1.95 / 1.98). Density-biased points (x
-// scaled by 4 before normalising, many obtuse triangles): 5 resolutions; measured slopes 1.78
-// (t = 1) and 1.69 (t = 2⁻⁷), so only ≥ 1.6 is asserted there.
+// Uniform points: 4 resolutions (500–32k points), slope ≥ 1.8 (measured 1.95 / 1.98).
+// Density-biased points (x scaled by 4 before normalising, many obtuse triangles): the points
+// crowd toward the ±x poles, so the triangles crossed by the bisectors (near x = 0 and x = ±y) are
+// coarser than the mean and the quadratic regime starts later: measured over 500–128k points the
+// slopes are only 1.78 / 1.69 (the coarse end is pre-asymptotic, local slopes rise 1.5 → 1.9), so
+// the biased fit uses the 4 resolutions 8k–256k points: measured 2.04 (t = 1) and 1.82 (t = 2⁻⁷).
 TEST(HeatVoronoi, SphereBisectorConvergesQuadratically) {
   const std::vector<Eigen::Vector3d> gen = {Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(-1, 0, 0),
                                             Eigen::Vector3d(0, 1, 0)};
   for (bool biased : {false, true}) {
     std::vector<TriangleMesh> meshes;
-    std::vector<int> sizes = {500, 2000, 8000, 32000};
-    if (biased) sizes.push_back(128000);
+    const std::vector<int> sizes =
+        biased ? std::vector<int>{8000, 32000, 128000, 256000} : std::vector<int>{500, 2000, 8000, 32000};
     for (int n : sizes) meshes.push_back(random_sphere_mesh(n, 17, biased));
     for (double t : {1.0, std::pow(2.0, -7)}) {
       std::vector<double> hs, rms;
@@ -434,7 +437,7 @@ TEST(HeatVoronoi, SphereBisectorConvergesQuadratically) {
       }
       const double slope = loglog_slope(hs, rms);
       std::printf("sphere %s t=%g slope %.2f\n", biased ? "biased" : "uniform", t, slope);
-      EXPECT_GE(slope, biased ? 1.6 : 1.8) << (biased ? "biased" : "uniform") << " t=" << t;
+      EXPECT_GE(slope, 1.8) << (biased ? "biased" : "uniform") << " t=" << t;
     }
   }
 }

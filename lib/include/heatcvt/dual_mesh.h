@@ -53,6 +53,8 @@ struct TriangleQuality {
   double below_30_fraction = 0;  ///< share of triangles whose smallest angle is < 30°
   int triangles = 0;
 };
+/// φmin, φm and the share below 30° of the triangles (V, F); V #V by 3, F #F by 3. An empty F
+/// gives all zeros.
 TriangleQuality triangle_quality(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F);
 
 }  // namespace heatcvt

@@ -56,6 +56,8 @@ struct MeshTopology {
   int components = 0;
   int euler_characteristic() const { return vertices - edges + faces; }
 };
+/// Counts of mesh_topology(): F #F by 3 indices into [0, num_vertices); unreferenced vertices are
+/// not counted, components are edge-connected sets of faces.
 MeshTopology mesh_topology(const Eigen::MatrixX3i& F, int num_vertices);
 
 /// Throws InvalidInputError when V has NaN/inf, F is empty or indexes out of range.
