@@ -306,6 +306,162 @@ int improve_by_flips(const Eigen::MatrixX3d& V, std::vector<std::array<int, 3>>&
   return flips;
 }
 
+// Smallest angle of the triangle (a, b, c) given as points (radians).
+double min_angle_pts(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  const Eigen::Vector3d p[3] = {a, b, c};
+  double best = M_PI;
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
+    const double n1 = e1.norm(), n2 = e2.norm();
+    if (n1 == 0 || n2 == 0) return 0;
+    best = std::min(best, std::acos(std::clamp(e1.dot(e2) / (n1 * n2), -1.0, 1.0)));
+  }
+  return best;
+}
+
+// Smallest angle of a 2D triangle, or -1 when it is inverted / degenerate (counter-clockwise = valid).
+double min_angle_2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+  const double cr = (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
+  if (!(cr > 0)) return -1;
+  const Eigen::Vector2d p[3] = {a, b, c};
+  double best = M_PI;
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector2d e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
+    best = std::min(best, std::atan2(std::abs(e1.x() * e2.y() - e1.y() * e2.x()), e1.dot(e2)));
+  }
+  return best;
+}
+
+// Quality of a one-ring: smallest angle over its triangles, and the sum of the triangles'
+// smallest angles (what φm averages). Lexicographic on (min(ring min, cap), sum).
+struct RingQuality {
+  double min = M_PI, sum = 0;
+  bool valid = true;
+};
+
+// Angle polish: Gauss–Seidel over the vertices (fixed order: deterministic), each moved within its
+// tangent plane to the position that maximises the smallest angle of its one-ring (pattern search
+// from the ring's area-weighted centroid and the current position), then projected back to the
+// fitted surface by `project`; a move is kept only if, measured in 3D after the projection, the
+// ring's smallest angle does not drop below min(old, cap) and (ring min, ring sum of smallest
+// angles) improves, and no ring triangle turns against the vertex normal. Returns the moves kept.
+int angle_polish(Eigen::MatrixX3d& S, Eigen::MatrixX3d& SN, const std::vector<std::array<int, 3>>& F, int rounds,
+                 const std::function<void(int, const Eigen::Vector3d&, Eigen::Vector3d&, Eigen::Vector3d&)>& project) {
+  const int ns = static_cast<int>(S.rows());
+  std::vector<std::vector<int>> vf(ns);
+  for (int id = 0; id < static_cast<int>(F.size()); ++id)
+    for (int v : F[id]) vf[v].push_back(id);
+  const double cap = 35.0 * M_PI / 180.0;
+  // Ring quality with vertex v at x (3D).
+  auto ring3 = [&](int v, const Eigen::Vector3d& x, const Eigen::Vector3d& nv) {
+    RingQuality q;
+    for (int id : vf[v]) {
+      Eigen::Vector3d p[3];
+      for (int k = 0; k < 3; ++k) p[k] = F[id][k] == v ? x : Eigen::Vector3d(S.row(F[id][k]));
+      const Eigen::Vector3d fn = (p[1] - p[0]).cross(p[2] - p[0]);
+      if (!(fn.dot(nv) > 0)) q.valid = false;
+      const double a = min_angle_pts(p[0], p[1], p[2]);
+      q.min = std::min(q.min, a);
+      q.sum += a;
+    }
+    return q;
+  };
+  auto better = [&](const RingQuality& n, const RingQuality& o) {
+    if (!n.valid) return false;
+    const double nm = std::min(n.min, cap), om = std::min(o.min, cap);
+    if (nm > om + 1e-9) return true;
+    if (nm < om - 1e-9) return false;
+    return n.sum > o.sum + 1e-9;
+  };
+  int moves = 0;
+  for (int round = 0; round < rounds; ++round) {
+    int round_moves = 0;
+    for (int v = 0; v < ns; ++v) {
+      if (vf[v].size() < 3) continue;
+      const Eigen::Vector3d x = S.row(v), nv = SN.row(v);
+      // Tangent frame.
+      Eigen::Vector3d u = nv.unitOrthogonal(), w = nv.cross(u);
+      // Ring triangles in 2D with v at the origin: (b, c) of each face (a = v), counter-clockwise.
+      std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> ring;
+      bool boundary_or_bad = false;
+      double mean_edge = 0;
+      Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+      double area_sum = 0;
+      for (int id : vf[v]) {
+        int k = 0;
+        while (F[id][k] != v) ++k;
+        const Eigen::Vector3d b = S.row(F[id][(k + 1) % 3]).transpose() - x, c = S.row(F[id][(k + 2) % 3]).transpose() - x;
+        const Eigen::Vector2d b2(b.dot(u), b.dot(w)), c2(c.dot(u), c.dot(w));
+        ring.push_back({b2, c2});
+        mean_edge += b2.norm();
+        const double ar = 0.5 * (b2.x() * c2.y() - b2.y() * c2.x());
+        if (!(ar > 0)) boundary_or_bad = true;
+        centroid += ar * (b2 + c2) / 3.0;
+        area_sum += ar;
+      }
+      if (boundary_or_bad || !(area_sum > 0)) continue;
+      // Only interior vertices: every ring edge (v, b) appears as (c, v) of another face.
+      {
+        std::vector<int> out_b, in_c;
+        for (int id : vf[v]) {
+          int k = 0;
+          while (F[id][k] != v) ++k;
+          out_b.push_back(F[id][(k + 1) % 3]);
+          in_c.push_back(F[id][(k + 2) % 3]);
+        }
+        std::sort(out_b.begin(), out_b.end());
+        std::sort(in_c.begin(), in_c.end());
+        if (out_b != in_c) continue;
+      }
+      mean_edge /= ring.size();
+      centroid /= area_sum;
+      auto q2 = [&](const Eigen::Vector2d& y) {
+        RingQuality q;
+        for (const auto& [b, c] : ring) {
+          const double a = min_angle_2d(y, b, c);
+          if (a < 0) {
+            q.valid = false;
+            return q;
+          }
+          q.min = std::min(q.min, a);
+          q.sum += a;
+        }
+        return q;
+      };
+      const RingQuality q_now = q2(Eigen::Vector2d::Zero());
+      Eigen::Vector2d best = Eigen::Vector2d::Zero();
+      RingQuality qb = q_now;
+      if (const RingQuality qc = q2(centroid); better(qc, qb)) best = centroid, qb = qc;
+      double step = 0.1 * mean_edge;
+      for (int iter = 0; iter < 24 && step > 0.005 * mean_edge; ++iter) {
+        bool improved = false;
+        for (int d = 0; d < 8; ++d) {
+          const double ang = d * M_PI / 4;
+          const Eigen::Vector2d y = best + step * Eigen::Vector2d(std::cos(ang), std::sin(ang));
+          const RingQuality qy = q2(y);
+          if (better(qy, qb)) best = y, qb = qy, improved = true;
+        }
+        if (!improved) step *= 0.5;
+      }
+      if (best.squaredNorm() == 0) continue;
+      const Eigen::Vector3d target = x + best.x() * u + best.y() * w;
+      Eigen::Vector3d pos, nrm;
+      project(v, target, pos, nrm);
+      if (!pos.allFinite() || !nrm.allFinite()) continue;
+      const RingQuality old3 = ring3(v, x, nv);
+      const RingQuality new3 = ring3(v, pos, nrm);
+      if (better(new3, old3)) {
+        S.row(v) = pos.transpose();
+        SN.row(v) = nrm.transpose();
+        ++round_moves;
+      }
+    }
+    moves += round_moves;
+    if (round_moves == 0) break;
+  }
+  return moves;
+}
+
 }  // namespace
 
 ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const ReconstructionOptions& options,
@@ -379,6 +535,13 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   lopt.threads = options.threads;
   PointLaplacian pl = point_laplacian(P, lopt);
   const Eigen::MatrixXi knn = k_nearest_neighbors(P, options.neighbors, options.threads);
+  // Neighbourhoods of the fitted surface: about one output edge length across (4 cells' worth of
+  // points), so that noise averages out instead of passing into the vertex positions; at least
+  // `neighbors`, at most 100 points.
+  const int fit_k = std::min(std::max(options.neighbors, static_cast<int>(std::lround(4.0 * n / options.sites))),
+                             std::min(100, n - 1));
+  const Eigen::MatrixXi knn_fit =
+      fit_k == options.neighbors ? knn : k_nearest_neighbors(P, fit_k, options.threads);
   Eigen::MatrixX3d N = pl.normals;
   orient_normals_mst(P, N, std::min(10, options.neighbors), options.threads);
   const Eigen::MatrixX3i& T = pl.triangles;
@@ -434,6 +597,19 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
       if (v < n && label[v] < 0) label[v] = D.face_cell[r];
     }
 
+  // Fit neighbourhood of cloud point c: c and its fit_k nearest points whose oriented normal
+  // agrees with c's (the other side of a thin part is left out), unless too few remain.
+  auto fit_neighbourhood = [&](int c) {
+    std::vector<int> nb = {c};
+    const Eigen::Vector3d nc = N.row(c);
+    for (Eigen::Index q = 0; q < knn_fit.cols(); ++q)
+      if (N.row(knn_fit(c, q)).dot(nc) > 0) nb.push_back(knn_fit(c, q));
+    if (static_cast<int>(nb.size()) < std::min(12, fit_k / 2)) {
+      nb.assign(1, c);
+      for (Eigen::Index q = 0; q < knn_fit.cols(); ++q) nb.push_back(knn_fit(c, q));
+    }
+    return nb;
+  };
   // 5. Site positions on the fitted surface, fitted normals.
   Eigen::MatrixX3d S(ns, 3), SN(ns, 3);
 #pragma omp parallel for num_threads(resolve_threads(options.threads)) schedule(static)
@@ -442,9 +618,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     int corner = 0;
     sp.bary.maxCoeff(&corner);
     const int c = T(sp.face, corner);
-    std::vector<int> nb(knn.cols() + 1);
-    nb[0] = c;
-    for (Eigen::Index q = 0; q < knn.cols(); ++q) nb[q + 1] = knn(c, q);
+    const std::vector<int> nb = fit_neighbourhood(c);
     Eigen::Vector3d orient = Eigen::Vector3d::Zero();
     for (int k = 0; k < 3; ++k) orient += sp.bary[k] * N.row(T(sp.face, k)).transpose();
     if (orient.norm() == 0) orient = N.row(c).transpose();
@@ -462,34 +636,47 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     std::sort(l.begin(), l.end());
     cand.push_back(l);
   }
-  // Voronoi vertices of the exact tessellation (three or more cells meeting inside / on a point
-  // triangle) witness their triples too; where > 3 cells meet every triple is a candidate and the
-  // greedy extraction picks a consistent subset.
+  // Voronoi vertices of the exact heat tessellation (three or more cells meeting inside / on a
+  // point triangle) witness their triples too; where > 3 cells meet every triple is a candidate
+  // and the greedy extraction picks a consistent subset.
+  std::vector<std::array<int, 3>> cand_vv;
   for (const VoronoiVertex& vv : D.voronoi_vertices) {
     const auto& c = vv.cells;
     if (c.size() > 6) continue;
     for (size_t x = 0; x < c.size(); ++x)
       for (size_t y = x + 1; y < c.size(); ++y)
-        for (size_t z = y + 1; z < c.size(); ++z) cand.push_back({c[x], c[y], c[z]});
+        for (size_t z = y + 1; z < c.size(); ++z) {
+          std::array<int, 3> t = {c[x], c[y], c[z]};
+          std::sort(t.begin(), t.end());
+          cand_vv.push_back(t);
+        }
   }
   std::sort(cand.begin(), cand.end());
+  std::sort(cand_vv.begin(), cand_vv.end());
   struct Candidate {
     std::array<int, 3> f;
-    int witnesses;
+    int witnesses;     // local triangles + Voronoi vertices
+    int vv_witnesses;  // of which Voronoi vertices of the heat tessellation
     double quality;
   };
   std::vector<Candidate> cands;
-  for (size_t i = 0; i < cand.size();) {
-    size_t j = i;
-    while (j < cand.size() && cand[j] == cand[i]) ++j;
-    std::array<int, 3> f = cand[i];
-    const Eigen::Vector3d a = S.row(f[0]), b = S.row(f[1]), c = S.row(f[2]);
-    const Eigen::Vector3d fn = (b - a).cross(c - a);
-    const Eigen::Vector3d vn = SN.row(f[0]) + SN.row(f[1]) + SN.row(f[2]);
-    if (fn.dot(vn) < 0) std::swap(f[1], f[2]);
-    const double q = tri_min_angle(S, f[0], f[1], f[2]);
-    if (q > 0) cands.push_back({f, static_cast<int>(j - i), q});
-    i = j;
+  {
+    // Merge the two sorted lists with their multiplicities.
+    size_t i = 0, k = 0;
+    while (i < cand.size() || k < cand_vv.size()) {
+      std::array<int, 3> f;
+      if (k >= cand_vv.size() || (i < cand.size() && cand[i] <= cand_vv[k])) f = cand[i];
+      else f = cand_vv[k];
+      int w = 0, wv = 0;
+      while (i < cand.size() && cand[i] == f) ++i, ++w;
+      while (k < cand_vv.size() && cand_vv[k] == f) ++k, ++wv;
+      const Eigen::Vector3d a = S.row(f[0]), b = S.row(f[1]), c = S.row(f[2]);
+      const Eigen::Vector3d fn = (b - a).cross(c - a);
+      const Eigen::Vector3d vn = SN.row(f[0]) + SN.row(f[1]) + SN.row(f[2]);
+      if (fn.dot(vn) < 0) std::swap(f[1], f[2]);
+      const double q = tri_min_angle(S, f[0], f[1], f[2]);
+      if (q > 0) cands.push_back({f, w + wv, wv, q});
+    }
   }
   res.candidate_triangles = static_cast<int>(cands.size());
   std::stable_sort(cands.begin(), cands.end(), [](const Candidate& x, const Candidate& y) {
@@ -716,29 +903,39 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   const Eigen::MatrixX3d S_unpolished = S, SN_unpolished = SN;
   const std::vector<std::array<int, 3>> F_unpolished = F;
   const int flips_unpolished = res.flipped_edges;
-  auto polish = [&](bool use_valence) {
-  if (options.relaxation_iterations > 0) {
-    // Anchor (nearest cloud point) of every site, followed by a greedy walk on the kNN graph.
-    std::vector<int> anchor(ns);
+  // Anchor (nearest cloud point) of every site, followed by a greedy walk on the kNN graph;
+  // project(v, x) = x projected onto the surface fitted around the anchor of x.
+  std::vector<int> anchor(ns);
+  auto reset_anchors = [&]() {
     for (int s = 0; s < ns; ++s) {
       int corner = 0;
       cvt.sites[s].bary.maxCoeff(&corner);
       anchor[s] = T(cvt.sites[s].face, corner);
     }
-    auto walk = [&](int start, const Eigen::Vector3d& x) {
-      int cur = start;
-      double best = (P.row(cur).transpose() - x).squaredNorm();
-      for (int step = 0; step < 1000; ++step) {
-        int nxt = cur;
-        for (Eigen::Index q = 0; q < knn.cols(); ++q) {
-          const double d = (P.row(knn(cur, q)).transpose() - x).squaredNorm();
-          if (d < best) best = d, nxt = knn(cur, q);
-        }
-        if (nxt == cur) break;
-        cur = nxt;
+  };
+  auto walk = [&](int start, const Eigen::Vector3d& x) {
+    int cur = start;
+    double best = (P.row(cur).transpose() - x).squaredNorm();
+    for (int step = 0; step < 1000; ++step) {
+      int nxt = cur;
+      for (Eigen::Index q = 0; q < knn.cols(); ++q) {
+        const double d = (P.row(knn(cur, q)).transpose() - x).squaredNorm();
+        if (d < best) best = d, nxt = knn(cur, q);
       }
-      return cur;
-    };
+      if (nxt == cur) break;
+      cur = nxt;
+    }
+    return cur;
+  };
+  auto project = [&](int v, const Eigen::Vector3d& target, Eigen::Vector3d& pos, Eigen::Vector3d& nrm) {
+    const int c = walk(anchor[v], target);
+    const std::vector<int> nb = fit_neighbourhood(c);
+    fit_and_project(P, nb, target, N.row(c).transpose(), pos, nrm);
+    anchor[v] = c;
+  };
+  auto polish = [&](bool use_valence) {
+  reset_anchors();
+  if (options.relaxation_iterations > 0) {
     for (int it = 0; it < options.relaxation_iterations; ++it) {
       Eigen::MatrixX3d C = Eigen::MatrixX3d::Zero(ns, 3);
       Eigen::VectorXd W = Eigen::VectorXd::Zero(ns);
@@ -759,15 +956,10 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
         Eigen::Vector3d d = C.row(v).transpose() / W[v] - x;
         d -= d.dot(nv) * nv;
         const Eigen::Vector3d target = x + d;
-        const int c = walk(anchor[v], target);
-        std::vector<int> nb(knn.cols() + 1);
-        nb[0] = c;
-        for (Eigen::Index q = 0; q < knn.cols(); ++q) nb[q + 1] = knn(c, q);
         Eigen::Vector3d pos, nrm;
-        fit_and_project(P, nb, target, N.row(c).transpose(), pos, nrm);
+        project(v, target, pos, nrm);
         S2.row(v) = pos.transpose();
         SN2.row(v) = nrm.transpose();
-        anchor[v] = c;
       }
       // Keep a move only if none of the vertex's triangles flips against its normal.
       std::vector<std::vector<int>> vf(ns);
@@ -823,6 +1015,25 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     res.flipped_edges = flips_unpolished;
     res.polish_fallback = true;
     polish(false);
+  }
+
+  // Angle polish (smallest-angle-improving tangential moves on the fitted surface) alternating
+  // with max-min-angle flips. Undone if it makes the mesh self-intersect.
+  if (options.relaxation_iterations > 0) {
+    const Eigen::MatrixX3d S_before = S, SN_before = SN;
+    const std::vector<std::array<int, 3>> F_before = F;
+    const int flips_before = res.flipped_edges;
+    for (int r = 0; r < 4; ++r) {
+      angle_polish(S, SN, F, 2, project);
+      res.flipped_edges += improve_by_flips(S, F, 5, false);
+    }
+    if (self_intersections() > 0) {
+      S = S_before;
+      SN = SN_before;
+      F = F_before;
+      res.flipped_edges = flips_before;
+      res.angle_polish_undone = true;
+    }
   }
 
   // 7. Compact: drop unused sites, restore the frame.

@@ -69,6 +69,7 @@ struct ReconstructionResult {
   int flipped_edges = 0;           ///< edge flips on the extracted mesh (max-min-angle and valence)
   bool polish_fallback = false;    ///< the valence-flip polish self-intersected; redone with Delaunay flips only
   int unused_sites = 0;            ///< sites that ended in no triangle (dropped from the mesh)
+  bool angle_polish_undone = false;  ///< the smallest-angle polish self-intersected and was undone
 };
 
 /// Reconstructs a surface from the points P (#P by 3; NaN-free, duplicates allowed).
