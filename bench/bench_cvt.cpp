@@ -190,13 +190,14 @@ int main(int argc, char** argv) {
       o.threads = threads;
       // development overrides of the default configuration (not used for the README table)
       if (const char* e = std::getenv("CVT_RELAXATION")) o.relaxation = std::atof(e);
+      if (const char* e = std::getenv("CVT_ANDERSON")) o.anderson_depth = std::atoi(e);
       if (const char* e = std::getenv("CVT_GRAPH_LLOYD")) o.graph_lloyd_iterations = std::atoi(e);
       if (const char* e = std::getenv("CVT_SPLIT")) o.split_nonmanifold_cells = std::atoi(e) != 0;
       if (const char* e = std::getenv("CVT_INIT_RANDOM")) o.initialization = CvtInitialization::random;
       CvtResult r = centroidal_voronoi(m.V, m.F, lap, o, {}, [&](const CvtIterationStats& s) {
-        std::fprintf(stderr, "  it %d: %.3f s, phi_min %.1f phi_m %.2f, spots %d, inserted %d, omega %.2f, move %.3g\n",
+        std::fprintf(stderr, "  it %d: %.3f s, phi_min %.1f phi_m %.2f, spots %d, inserted %d, omega %.2f, aa %d, res %.3g, move %.3g\n",
                      s.iteration, s.seconds, s.phi_min_deg, s.phi_mean_deg, s.nonmanifold_spots, s.inserted_sites,
-                     s.relaxation, s.max_move);
+                     s.relaxation, s.anderson_columns, s.residual, s.max_move);
         return true;
       });
       double per_iteration = 0;

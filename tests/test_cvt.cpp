@@ -201,6 +201,14 @@ TEST(CvtAcceleration, OverRelaxedLloydEqualisesAtLeastAsFastAsPlainLloyd) {
   EXPECT_EQ(plain.iterations.front().area_variance, fast.iterations.front().area_variance);  // same start
   EXPECT_LE(fast.final_area_variance, plain.final_area_variance);
   for (const auto& s : fast.iterations) EXPECT_GE(s.relaxation, 1.0);
+  o.relaxation = 1.0;
+  o.anderson_depth = 5;
+  CvtResult anderson = centroidal_voronoi(sphere.V, sphere.F, lap, o);
+  int mixed = 0;
+  for (const auto& s : anderson.iterations) mixed += s.anderson_columns > 0;
+  std::printf("[ info ] Anderson(5): variance %.3g, %d of 12 steps mixed\n", anderson.final_area_variance, mixed);
+  EXPECT_GT(mixed, 0);
+  EXPECT_LE(anderson.final_area_variance, plain.final_area_variance);
   // the relaxed sites are on the surface (unit-area sphere: radius 1/sqrt(4 pi), up to the chord error)
   const double radius = std::sqrt(1.0 / (4 * M_PI));
   for (int s = 0; s < fast.positions.rows(); ++s) EXPECT_NEAR(fast.positions.row(s).norm(), radius, 2e-3 * radius);

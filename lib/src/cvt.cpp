@@ -664,7 +664,7 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
                             " entries but the mesh has " + std::to_string(F.rows()) + " faces");
   if (!(options.relaxation >= 1.0 && options.relaxation < 2.0))
     throw InvalidInputError("centroidal_voronoi: relaxation must be in [1, 2), got " + std::to_string(options.relaxation));
-  if (options.graph_lloyd_iterations < 0 || options.quality_start < 0 || !(options.max_inserted_fraction >= 0))
+  if (options.graph_lloyd_iterations < 0 || options.anderson_depth < 0 || options.quality_start < 0 || !(options.max_inserted_fraction >= 0))
     throw InvalidInputError("centroidal_voronoi: graph_lloyd_iterations, quality_start and max_inserted_fraction must be >= 0");
   std::vector<SurfacePoint> sites = given_sites;
   if (sites.empty()) {
@@ -797,6 +797,11 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
   };
 
   double omega = options.relaxation;
+  struct Anderson {
+    std::vector<Eigen::VectorXd> dF, dG;
+    Eigen::VectorXd f_prev, g_prev;
+    double residual_prev = std::numeric_limits<double>::infinity();
+  } aa;
   double previous_variance = std::numeric_limits<double>::infinity();
   // The heat field of the current sites when a quality evaluation already computed it (it is the
   // next iteration's Voronoi step), with the time it took.
@@ -827,7 +832,7 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
     cells = std::move(ic.cells);
     st.voronoi_seconds = since(t0) + carried;
     // Safeguard of the over-relaxation: the energy proxy grew → back towards plain Lloyd.
-    if (omega > 1.0 && st.area_variance > previous_variance) omega = 1.0 + 0.5 * (omega - 1.0) < 1.05 ? 1.0 : 1.0 + 0.5 * (omega - 1.0);
+    if (omega > 1.0 && options.anderson_depth == 0 && st.area_variance > previous_variance) omega = 1.0 + 0.5 * (omega - 1.0) < 1.05 ? 1.0 : 1.0 + 0.5 * (omega - 1.0);
     previous_variance = st.area_variance;
     st.relaxation = omega;
 
@@ -851,13 +856,6 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
       if (hottest >= 0) {
         if (options.quadratic_refinement) moved[c] = refine_hottest_vertex(V, F, vfaces, normals, t.heat, hottest);
         else moved[c] = vertex_point(F, vfaces, hottest);
-        if (omega > 1.0) {  // over-relaxation: c + (ω − 1)(c − s), at most half a spacing further
-          const Eigen::Vector3d cpos = position(V, F, moved[c]);
-          Eigen::Vector3d step = (omega - 1.0) * (cpos - position(V, F, sites[c]));
-          const double len = step.norm();
-          if (len > 0.5 * spacing) step *= 0.5 * spacing / len;
-          if (len > 0) moved[c] = project_local(V, F, vfaces, moved[c], cpos + step);
-        }
       }
       for (int v : I) t.heat[v] = 0.0;
     }
@@ -878,6 +876,70 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
       moved[c] = vertex_point(F, vfaces, far);
       ic.area[big] = 0;  // do not put two revived sites into the same cell
       ++st.revived_sites;
+    }
+    // Accelerated step from the plain Lloyd map G(x) = heat centroids: Anderson mixing over the
+    // last `anderson_depth` iterations (safeguarded by the residual), or over-relaxation.
+    {
+      std::vector<Eigen::Vector3d> X(ns), C(ns);
+      double r2 = 0;
+      for (int s = 0; s < ns; ++s) {
+        X[s] = position(V, F, sites[s]);
+        C[s] = position(V, F, moved[s]);
+        r2 += ic.area[s] * (C[s] - X[s]).squaredNorm();
+      }
+      const double residual = std::sqrt(r2);
+      std::vector<Eigen::Vector3d> target;
+      const bool plain_only = st.revived_sites > 0;
+      if (options.anderson_depth > 0) {
+        Eigen::VectorXd f(3 * ns), g(3 * ns);
+        for (int s = 0; s < ns; ++s) {
+          const double w = std::sqrt(std::max(ic.area[s], 0.0));
+          f.segment<3>(3 * s) = w * (C[s] - X[s]);
+          g.segment<3>(3 * s) = C[s];
+        }
+        const bool comparable = aa.f_prev.size() == f.size() && !plain_only;
+        if (!comparable || residual > aa.residual_prev) {
+          aa.dF.clear();
+          aa.dG.clear();
+        } else {
+          aa.dF.push_back(f - aa.f_prev);
+          aa.dG.push_back(g - aa.g_prev);
+          if (static_cast<int>(aa.dF.size()) > options.anderson_depth) {
+            aa.dF.erase(aa.dF.begin());
+            aa.dG.erase(aa.dG.begin());
+          }
+        }
+        aa.f_prev = f;
+        aa.g_prev = g;
+        aa.residual_prev = comparable ? residual : std::numeric_limits<double>::infinity();
+        if (!plain_only && !aa.dF.empty()) {
+          const int m = static_cast<int>(aa.dF.size());
+          Eigen::MatrixXd DF(3 * ns, m), DG(3 * ns, m);
+          for (int k = 0; k < m; ++k) DF.col(k) = aa.dF[k], DG.col(k) = aa.dG[k];
+          const Eigen::VectorXd gamma = DF.colPivHouseholderQr().solve(f);
+          if (gamma.allFinite()) {
+            const Eigen::VectorXd x = g - DG * gamma;
+            target.resize(ns);
+            for (int s = 0; s < ns; ++s) target[s] = x.segment<3>(3 * s);
+          }
+          st.anderson_columns = m;
+        }
+      } else if (omega > 1.0 && !plain_only) {
+        target.resize(ns);
+        for (int s = 0; s < ns; ++s) target[s] = C[s] + (omega - 1.0) * (C[s] - X[s]);
+      }
+      st.residual = residual;
+      if (!target.empty()) {
+#pragma omp parallel for schedule(dynamic, 16) num_threads(threads)
+        for (int s = 0; s < ns; ++s) {
+          if (loads[s].empty()) continue;
+          Eigen::Vector3d step = target[s] - C[s];  // at most half a spacing beyond the centroid
+          const double len = step.norm();
+          if (!(len > 0)) continue;
+          if (len > 0.5 * spacing) step *= 0.5 * spacing / len;
+          moved[s] = project_local(V, F, vfaces, moved[s], C[s] + step);
+        }
+      }
     }
     double max_move = 0, sum_move = 0;
     for (int s = 0; s < ns; ++s) {

@@ -78,6 +78,13 @@ struct CvtOptions {
   /// Safeguard: whenever the cell-area variance (energy proxy) grows from one iteration to the
   /// next, ω − 1 is halved (and dropped below 0.05). 1 = plain Lloyd (paper). Default 1.
   double relaxation = 1.0;
+  /// Anderson acceleration of the Lloyd map x ↦ G(x) (heat centroids) with this many previous
+  /// iterations (type II, least squares on the area-weighted residuals w_s (G(x)_s − x_s),
+  /// w_s = sqrt(cell area)); the mixed positions are projected onto the surface (greedy walk from
+  /// the centroid), each at most half a spacing beyond its centroid. Safeguard: when the residual
+  /// grows, or a cell vanished or sites were added, the history is cleared and the plain Lloyd
+  /// step is taken. Replaces `relaxation` when > 0. 0 = off (paper). Default 0.
+  int anderson_depth = 0;
   /// Iterations of a cheap *graph* Lloyd on the initial sites (cells = multi-source Dijkstra on
   /// the edge graph, centroid = area-weighted mean position snapped to the closest vertex of the
   /// cell) before the heat iterations start. It runs concurrently with the Cholesky factorisation
@@ -121,6 +128,8 @@ struct CvtIterationStats {
   int inserted_sites = 0;      ///< sites added after this iteration's quality evaluation (split_nonmanifold_cells)
   int nonmanifold_spots = -1;  ///< non-manifold spots of the evaluated dual (−1 = not evaluated)
   double relaxation = 1.0;     ///< ω used by this iteration's step
+  int anderson_columns = 0;    ///< history columns of this iteration's Anderson step (0 = plain step)
+  double residual = 0;         ///< sqrt(Σ area_s |centroid_s − site_s|²) of this iteration
 };
 
 /// Result of centroidal_voronoi().
