@@ -1,0 +1,223 @@
+// nncoords: natural-neighbour coordinates by area stealing on heat Voronoi diagrams (paper §7.2):
+// interpolate values given at sites to every vertex, or export per-vertex skinning weights.
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include "cli_common.h"
+#include "heatcvt/atomic_file.h"
+#include "heatcvt/closest_point.h"
+#include "heatcvt/errors.h"
+#include "heatcvt/mesh_io.h"
+#include "heatcvt/natural_neighbour.h"
+
+using namespace heatcvt;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+// Rows of whitespace-separated numbers; '#' comments and blank lines skipped. All rows must have
+// `columns` entries (0 = as many as the first row, at least 1).
+std::vector<std::vector<double>> read_rows(const std::string& path, int columns, const std::string& what) {
+  std::ifstream in(path);
+  if (!in) throw IOError(path + ": cannot open the " + what + " file");
+  std::vector<std::vector<double>> rows;
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    const auto first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    std::istringstream ls(line);
+    std::vector<double> row;
+    std::string tok;
+    while (ls >> tok) {
+      try {
+        size_t used = 0;
+        const double x = std::stod(tok, &used);
+        if (used != tok.size()) throw std::invalid_argument(tok);
+        row.push_back(x);
+      } catch (const std::exception&) {
+        throw IOError(path + ": line " + std::to_string(line_no) + ": '" + tok + "' is not a number");
+      }
+    }
+    const int want = columns > 0 ? columns : (rows.empty() ? static_cast<int>(row.size()) : static_cast<int>(rows[0].size()));
+    if (static_cast<int>(row.size()) != want)
+      throw IOError(path + ": line " + std::to_string(line_no) + " has " + std::to_string(row.size()) +
+                    " values, expected " + std::to_string(want));
+    for (double x : row)
+      if (!std::isfinite(x)) throw InvalidInputError(path + ": line " + std::to_string(line_no) + " has a NaN or infinite value");
+    rows.push_back(std::move(row));
+  }
+  if (rows.empty()) throw InvalidInputError(path + ": no " + what + " in the file");
+  return rows;
+}
+
+// Mesh with per-vertex values as ASCII PLY: x y z value_0 .. value_{k-1} [red green blue].
+void write_values_ply(const std::string& path, const TriangleMesh& mesh, const Eigen::MatrixXd& X, bool colour) {
+  write_atomically(path, [&](std::ostream& out) {
+    out << "ply\nformat ascii 1.0\ncomment nncoords: natural-neighbour interpolation (heatcvt)\n";
+    out << "element vertex " << mesh.V.rows() << "\nproperty double x\nproperty double y\nproperty double z\n";
+    for (int c = 0; c < X.cols(); ++c) out << "property double value_" << c << "\n";
+    if (colour) out << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+    out << "element face " << mesh.F.rows() << "\nproperty list uchar int vertex_indices\nend_header\n";
+    for (int v = 0; v < mesh.V.rows(); ++v) {
+      out << format_double(mesh.V(v, 0)) << ' ' << format_double(mesh.V(v, 1)) << ' ' << format_double(mesh.V(v, 2));
+      for (int c = 0; c < X.cols(); ++c) out << ' ' << format_double(X(v, c));
+      if (colour)
+        for (int c = 0; c < 3; ++c) out << ' ' << static_cast<int>(std::lround(255.0 * std::clamp(X(v, c), 0.0, 1.0)));
+      out << '\n';
+    }
+    for (int f = 0; f < mesh.F.rows(); ++f) out << "3 " << mesh.F(f, 0) << ' ' << mesh.F(f, 1) << ' ' << mesh.F(f, 2) << '\n';
+  });
+}
+
+// Per vertex: "v count site weight site weight ...".
+void write_weights(const std::string& path, const VertexWeights& W) {
+  write_atomically(path, [&](std::ostream& out) {
+    out << "# nncoords: natural-neighbour coordinates (area stealing on heat Voronoi cells), "
+        << W.rows() << " vertices, " << W.cols() << " sites\n"
+        << "# per line: vertex count site weight [site weight ...] (0-based; weights >= 0, sum 1)\n";
+    for (int v = 0; v < W.rows(); ++v) {
+      out << v << ' ' << W.row(v).nonZeros();
+      for (VertexWeights::InnerIterator it(W, v); it; ++it) out << ' ' << it.col() << ' ' << format_double(it.value());
+      out << '\n';
+    }
+  });
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"nncoords: natural-neighbour coordinates by area stealing on heat Voronoi cells "
+               "(Herholz et al. 2017, §7.2): interpolate site values or export skinning weights"};
+  NaturalNeighbourOptions defaults;
+  std::string mesh_path, sites_path, values_path, out_path, weights_path;
+  double t_coef = defaults.time_coefficient, snap = 1e-3;
+  int threads = defaults.threads, samples = defaults.samples;
+  bool quiet = false, exact = false;
+  app.add_option("MESH", mesh_path, "input triangle mesh (.obj .off .ply .stl)")->required();
+  app.add_option("--sites", sites_path, "sites (handles), one 'x y z' per line, on the surface")->required();
+  auto* values_opt = app.add_option("--values", values_path, "values at the sites: one row per site (k columns)");
+  auto* out_opt = app.add_option("-o,--output", out_path, "output with --values: mesh with interpolated per-vertex values (.ply; colour when k = 3 in [0,1])");
+  auto* weights_opt = app.add_option("--weights", weights_path, "output: per vertex the non-zero (site, weight) pairs (.txt)");
+  values_opt->needs(out_opt);
+  out_opt->needs(values_opt);
+  weights_opt->excludes(values_opt);
+  values_opt->excludes(weights_opt);
+  app.add_option("--t-coef", t_coef, "time step t = C * (mean edge length)^2")->capture_default_str();
+  app.add_option("--samples", samples, "vertices computed exactly before propagation (0 = max(500, #V/20))")
+      ->capture_default_str();
+  app.add_flag("--exact", exact, "exact coordinates at every vertex (one diffusion per vertex; slow)");
+  app.add_option("--snap-tolerance", snap, "sites farther than this fraction of the bounding-box diagonal from the surface are an error")
+      ->capture_default_str();
+  app.add_option("--threads", threads, "worker threads (0 = all cores)")->capture_default_str();
+  app.add_flag("-q,--quiet", quiet, "no progress output on stderr");
+  try {
+    app.parse(argc, argv);
+    if (values_path.empty() && weights_path.empty())
+      throw CLI::RequiredError("one of --values VALUES -o OUT.ply or --weights WEIGHTS.txt");
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+
+  return cli::run_tool("nncoords", [&]() -> int {
+    if (!(t_coef > 0) || !std::isfinite(t_coef)) throw InvalidInputError("--t-coef must be a positive number");
+    if (threads < 0) throw InvalidInputError("--threads must be >= 0");
+    if (samples < 0) throw InvalidInputError("--samples must be >= 0");
+    if (!(snap > 0) || !std::isfinite(snap)) throw InvalidInputError("--snap-tolerance must be a positive number");
+    cli::check_output_path(out_path, {".ply"});
+    cli::check_output_path(weights_path, {".txt"});
+    auto log = [&](const std::string& s) {
+      if (!quiet) std::cerr << s << std::endl;
+    };
+    const auto t_start = Clock::now();
+    TriangleMesh mesh = read_mesh(mesh_path);
+    validate_mesh(mesh.V, mesh.F, mesh_path);
+    const int nv = static_cast<int>(mesh.V.rows());
+    log("read " + mesh_path + ": " + std::to_string(nv) + " vertices, " + std::to_string(mesh.F.rows()) + " faces");
+
+    // sites: snapped to the surface; off-surface and duplicate sites are errors
+    const auto site_rows = read_rows(sites_path, 3, "sites");
+    const int ns = static_cast<int>(site_rows.size());
+    if (ns < 2) throw InvalidInputError(sites_path + ": " + std::to_string(ns) + " site given, at least 2 are needed");
+    Eigen::MatrixX3d P(ns, 3);
+    for (int i = 0; i < ns; ++i) P.row(i) << site_rows[i][0], site_rows[i][1], site_rows[i][2];
+    const std::vector<SurfacePoint> sites = closest_surface_points(mesh.V, mesh.F, P);
+    const double diag = (mesh.V.colwise().maxCoeff() - mesh.V.colwise().minCoeff()).norm();
+    Eigen::MatrixX3d S(ns, 3);
+    for (int i = 0; i < ns; ++i) {
+      S.row(i) = position(mesh.V, mesh.F, sites[i]).transpose();
+      const double d = (S.row(i) - P.row(i)).norm();
+      if (d > snap * diag)
+        throw InvalidInputError(sites_path + ": site " + std::to_string(i + 1) + " is off the surface (distance " +
+                                format_double(d) + " > " + format_double(snap * diag) + " = --snap-tolerance x diagonal)");
+    }
+    for (int i = 0; i < ns; ++i)
+      for (int j = 0; j < i; ++j)
+        if ((S.row(i) - S.row(j)).norm() <= 1e-9 * diag)
+          throw InvalidInputError(sites_path + ": sites " + std::to_string(j + 1) + " and " + std::to_string(i + 1) +
+                                  " are duplicates (same point on the surface)");
+    Eigen::MatrixXd values;
+    if (!values_path.empty()) {
+      const auto rows = read_rows(values_path, 0, "values");
+      if (static_cast<int>(rows.size()) != ns)
+        throw InvalidInputError(values_path + ": " + std::to_string(rows.size()) + " rows of values for " +
+                                std::to_string(ns) + " sites");
+      values.resize(ns, static_cast<Eigen::Index>(rows[0].size()));
+      for (int i = 0; i < ns; ++i)
+        for (size_t c = 0; c < rows[i].size(); ++c) values(i, static_cast<Eigen::Index>(c)) = rows[i][c];
+    }
+
+    auto t0 = Clock::now();
+    NaturalNeighbourOptions opt;
+    opt.time_coefficient = t_coef;
+    opt.threads = threads;
+    opt.samples = samples;
+    NaturalNeighbourCoordinates nn(mesh.V, mesh.F, sites, opt);
+    const double setup_s = cli::seconds_since(t0);
+    log("factored M - tL (t = " + format_double(nn.solver().time_step()) + "), " + std::to_string(ns) +
+        " diffusions and the tessellation in " + std::to_string(setup_s) + " s");
+
+    t0 = Clock::now();
+    VertexWeights W;
+    std::vector<int> exact_vertices;
+    {
+      // progress in per mille of the work (the total is only known once the work has started)
+      cli::Progress bar(exact ? "exact coordinates" : "coordinates", 1000, quiet);
+      auto report = [&](long done, long total) { bar.update(total > 0 ? 1000 * done / total : 0); };
+      W = exact ? nn.vertex_weights_direct(report) : nn.vertex_weights(report, &exact_vertices);
+      bar.finish();
+    }
+    if (exact) exact_vertices.resize(nv);
+    const double coords_s = cli::seconds_since(t0);
+
+    std::string colour_note;
+    if (!values_path.empty()) {
+      const Eigen::MatrixXd X = interpolate_site_values(W, values);
+      const bool colour = values.cols() == 3 && values.minCoeff() >= 0 && values.maxCoeff() <= 1;
+      colour_note = colour ? " (as colour)" : "";
+      write_values_ply(out_path, mesh, X, colour);
+    } else {
+      write_weights(weights_path, W);
+    }
+    const double total_s = cli::seconds_since(t_start);
+    if (!quiet) {
+      long nonzeros = W.nonZeros();
+      std::printf("nncoords: %d sites on %d vertices / %ld faces: %.2f non-zero weights per vertex on average\n", ns, nv,
+                  static_cast<long>(mesh.F.rows()), static_cast<double>(nonzeros) / nv);
+      std::printf("  %s: %zu vertices computed exactly%s\n", exact ? "exact" : "propagated", exact_vertices.size(),
+                  exact ? "" : ", the others propagated biharmonically");
+      std::printf("  time: setup %.3f s, coordinates %.3f s (%.3f ms / vertex), total %.3f s\n", setup_s, coords_s,
+                  1e3 * coords_s / nv, total_s);
+      std::printf("  wrote %s%s\n", (values_path.empty() ? weights_path : out_path).c_str(), colour_note.c_str());
+    }
+    return 0;
+  });
+}
