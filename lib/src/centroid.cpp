@@ -43,6 +43,48 @@ double segment_param(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const E
   return std::clamp((x - a).dot(e) / l2, 0.0, 1.0);
 }
 
+// Area-weighted normal of the faces around v with their orientations made consistent across the
+// shared edges (v, w), like the first face. Returns false (and leaves n untouched) when the faces
+// were already consistently oriented: then the caller's vertex normal is right. On a
+// non-orientable surface (Klein bottle) the global orientation flips somewhere, and there the
+// area-weighted vertex normal of vertex_normals() mixes opposite face normals (it can even vanish
+// or lie in the tangent plane), so the tangent frame must come from the locally oriented fan.
+bool locally_oriented_normal(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const std::vector<int>& faces,
+                             int v, Eigen::Vector3d& n) {
+  const size_t m = faces.size();
+  std::vector<int> a(m), b(m), sign(m, 0);
+  for (size_t i = 0; i < m; ++i) {
+    int k = 0;
+    while (F(faces[i], k) != v) ++k;
+    a[i] = F(faces[i], (k + 1) % 3);
+    b[i] = F(faces[i], (k + 2) % 3);
+  }
+  bool flipped = false;
+  std::vector<size_t> stack = {0};
+  sign[0] = 1;
+  while (!stack.empty()) {
+    const size_t i = stack.back();
+    stack.pop_back();
+    for (size_t j = 0; j < m; ++j) {
+      if (sign[j] != 0) continue;
+      int s = 0;
+      if (a[i] == b[j] || b[i] == a[j]) s = sign[i];        // edge traversed in opposite directions
+      else if (a[i] == a[j] || b[i] == b[j]) s = -sign[i];  // same direction: one of them is flipped
+      if (s == 0) continue;
+      sign[j] = s;
+      flipped |= s < 0;
+      stack.push_back(j);
+    }
+  }
+  if (!flipped) return false;
+  n.setZero();
+  for (size_t i = 0; i < m; ++i) {
+    const Eigen::Vector3d p0 = V.row(F(faces[i], 0)), p1 = V.row(F(faces[i], 1)), p2 = V.row(F(faces[i], 2));
+    n += (sign[i] < 0 ? -1.0 : 1.0) * (p1 - p0).cross(p2 - p0);
+  }
+  return true;
+}
+
 void check_heat_inputs(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const HeatSolver& solver,
                        const char* what) {
   validate_mesh(V, F, std::string(what) + ": mesh");
@@ -67,8 +109,9 @@ SurfacePoint refine_hottest_vertex(const Eigen::MatrixX3d& V, const Eigen::Matri
   if (faces.empty()) throw InvalidInputError("refine_hottest_vertex: vertex " + std::to_string(v) + " has no faces");
   const SurfacePoint fallback = vertex_point(F, faces, v);
 
-  // tangent frame of the area-weighted normal
+  // tangent frame of the area-weighted normal (of the locally oriented fan on non-orientable surfaces)
   Eigen::Vector3d n = vertex_normals.row(v).transpose();
+  locally_oriented_normal(V, F, faces, v, n);
   if (!(n.norm() > 0) || !n.allFinite()) return fallback;
   n.normalize();
   Eigen::Vector3d e1 = std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();

@@ -78,36 +78,61 @@ DualMesh dual_mesh(const VoronoiDiagram& d, const Eigen::MatrixX3d& sites, const
       while (d.F(r, k) != v) ++k;
       fan.push_back({r, d.F(r, (k + 1) % 3), d.F(r, (k + 2) % 3)});
     }
-    // Fan start: a face whose "a" is no other face's "b" (boundary), else the first one.
+    // Walk the fan through shared link vertices without assuming a consistent orientation (so
+    // that non-orientable surfaces such as the Klein bottle work): the walk direction is the
+    // orientation of the start face, and faces traversed against it are remembered (`backward`).
+    // On a consistently oriented fan this is the counter-clockwise order: face (v, a, b) is
+    // followed by the face (v, b, c).
+    // Start: a face whose "a" is a free end of the link (boundary), else any face with a free end,
+    // else the first one.
     bool manifold = true, has_boundary = false;
-    int start = 0;
-    for (size_t i = 0; i < fan.size(); ++i) {
-      int preds = 0;
-      for (size_t j = 0; j < fan.size(); ++j)
-        if (j != i && fan[j][2] == fan[i][1]) ++preds;
-      if (preds > 1) manifold = false;
-      if (preds == 0) start = static_cast<int>(i), has_boundary = true;
+    int start = 0, start_entry = fan[0][1];
+    {
+      auto count = [&](int x) {
+        int c = 0;
+        for (const auto& e : fan) c += (e[1] == x) + (e[2] == x);
+        return c;
+      };
+      int free_b = -1;
+      for (size_t i = 0; i < fan.size(); ++i) {
+        const int ca = count(fan[i][1]), cb = count(fan[i][2]);
+        if (ca > 2 || cb > 2) manifold = false;
+        if (ca == 1 && !has_boundary) {
+          start = static_cast<int>(i), start_entry = fan[i][1], has_boundary = true;
+        }
+        if (cb == 1 && free_b < 0) free_b = static_cast<int>(i);
+      }
+      if (!has_boundary && free_b >= 0) {
+        start = free_b, start_entry = fan[free_b][2], has_boundary = true;
+      }
     }
     ring.clear();
-    std::vector<char> used(fan.size(), 0);
-    int cur = start;
+    std::vector<char> used(fan.size(), 0), backward_face;
+    int cur = start, entry = start_entry;
     while (cur >= 0 && !used[cur]) {
       used[cur] = 1;
       ring.push_back(fan[cur][0]);
+      const bool forward = fan[cur][1] == entry;
+      backward_face.push_back(forward ? 0 : 1);
+      const int exit = forward ? fan[cur][2] : fan[cur][1];
       int next = -1;
       for (size_t j = 0; j < fan.size(); ++j)
-        if (!used[j] && fan[j][1] == fan[cur][2]) {
+        if (!used[j] && (fan[j][1] == exit || fan[j][2] == exit)) {
           next = static_cast<int>(j);
           break;
         }
       cur = next;
+      entry = exit;
     }
     const bool closed_cycle = manifold && !has_boundary && ring.size() == fan.size();
     if (!closed_cycle) ++out.open_fans;
     if (ring.size() != fan.size()) {
       // non-manifold spot: append the faces the walk missed so every cell is considered
       for (size_t j = 0; j < fan.size(); ++j)
-        if (!used[j]) ring.push_back(fan[j][0]);
+        if (!used[j]) {
+          ring.push_back(fan[j][0]);
+          backward_face.push_back(0);
+        }
     }
     // cyclic sequence of cells, consecutive repeats collapsed, unreached faces skipped
     cyc.clear();
@@ -134,11 +159,13 @@ DualMesh dual_mesh(const VoronoiDiagram& d, const Eigen::MatrixX3d& sites, const
         if (worst > best) best = worst, apex = a;
       }
     }
-    // reference normal: the refined faces around v (oriented like the input)
+    // reference normal: the refined faces around v, oriented like the walk (= like the input on
+    // an oriented surface)
     Eigen::Vector3d normal = Eigen::Vector3d::Zero();
-    for (int r : ring) {
+    for (size_t i = 0; i < ring.size(); ++i) {
+      const int r = ring[i];
       const Eigen::Vector3d p0 = d.V.row(d.F(r, 0)), p1 = d.V.row(d.F(r, 1)), p2 = d.V.row(d.F(r, 2));
-      normal += (p1 - p0).cross(p2 - p0);
+      normal += (backward_face[i] ? -1.0 : 1.0) * (p1 - p0).cross(p2 - p0);
     }
     for (int i = 1; i + 1 < k; ++i) {
       std::array<int, 3> t = {cyc[apex], cyc[(apex + i) % k], cyc[(apex + i + 1) % k]};

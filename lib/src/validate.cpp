@@ -6,6 +6,7 @@
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/connected_components.h>
+#include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
@@ -14,6 +15,7 @@
 #include <algorithm>
 #include <array>
 #include <functional>
+#include <map>
 #include <numeric>
 #include <sstream>
 #include <string>
@@ -49,6 +51,8 @@ struct Topology {
   long n_nonmanifold_edges = 0, n_border = 0, n_inconsistent = 0, n_nonmanifold_vertices = 0, n_unused = 0;
   std::vector<int> component_of_vertex;  // −1 for unreferenced
   std::vector<int> chi, loops;           // per component
+  int orientable = -1;                   // 1 / 0 / −1 (non-manifold edges: not determined)
+  std::vector<char> non_orientable;      // per component
 };
 
 Topology analyse(const Eigen::MatrixX3i& F, int nv, int max_listed) {
@@ -160,6 +164,44 @@ Topology analyse(const Eigen::MatrixX3i& F, int nv, int max_listed) {
     i = j;
   }
   for (int f = 0; f < nf; ++f) t.chi[t.component_of_vertex[F(f, 0)]] += 1;
+
+  // Orientability: propagate face flips across the edges with exactly two faces (an edge stored
+  // twice in the same direction asks its faces for opposite flips); a contradiction means no
+  // consistent orientation exists.
+  t.non_orientable.assign(t.components, 0);
+  if (t.n_nonmanifold_edges == 0) {
+    std::vector<std::vector<std::pair<int, int>>> adj(nf);  // (neighbour face, 1 if same direction)
+    for (size_t i = 0; i + 1 < half.size(); ++i)
+      if (half[i][0] == half[i + 1][0] && half[i][1] == half[i + 1][1] && half[i][2] != half[i + 1][2]) {
+        const int same = half[i][3] == half[i + 1][3] ? 1 : 0;
+        adj[half[i][2]].push_back({half[i + 1][2], same});
+        adj[half[i + 1][2]].push_back({half[i][2], same});
+      }
+    std::vector<int> flip(nf, -1), stack;
+    for (int f0 = 0; f0 < nf; ++f0) {
+      if (flip[f0] >= 0) continue;
+      flip[f0] = 0;
+      stack.assign(1, f0);
+      bool ok = true;
+      while (!stack.empty()) {
+        const int f = stack.back();
+        stack.pop_back();
+        for (const auto& [g, same] : adj[f]) {
+          const int want = flip[f] ^ same;
+          if (flip[g] < 0) {
+            flip[g] = want;
+            stack.push_back(g);
+          } else if (flip[g] != want) {
+            ok = false;
+          }
+        }
+      }
+      if (!ok) t.non_orientable[t.component_of_vertex[F(f0, 0)]] = 1;
+    }
+    t.orientable = 1;
+    for (char c : t.non_orientable)
+      if (c) t.orientable = 0;
+  }
   return t;
 }
 
@@ -201,7 +243,9 @@ std::string ValidationReport::summary() const {
   std::ostringstream s;
   for (const auto& c : checks) s << (c.ran ? (c.passed ? "PASS " : "FAIL ") : "SKIP ") << c.name << ": " << c.detail << '\n';
   s << "V=" << vertices << " E=" << edges << " F=" << faces << " components=" << components
-    << " boundary_loops=" << boundary_loops << " euler=" << euler_characteristic << " genus=" << genus << '\n';
+    << " boundary_loops=" << boundary_loops << " euler=" << euler_characteristic << " genus=" << genus;
+  if (orientable == 0) s << " non-orientable (cross-caps=" << crosscaps << ")";
+  s << '\n';
   return s.str();
 }
 
@@ -234,6 +278,13 @@ ValidationReport validate_triangle_mesh(const Eigen::MatrixX3d& V, const Eigen::
   rep.boundary_loops = t.boundary_loops;
   rep.euler_characteristic = t.vertices - t.edges + t.faces;
   const bool manifold = t.n_nonmanifold_edges == 0 && t.n_nonmanifold_vertices == 0 && t.n_inconsistent == 0;
+  rep.orientable = t.orientable;
+  if (t.n_nonmanifold_edges == 0 && t.n_nonmanifold_vertices == 0) {
+    rep.crosscaps = 0;
+    for (int c = 0; c < t.components; ++c)
+      if (t.non_orientable[c]) rep.crosscaps += 2 - t.chi[c] - t.loops[c];
+  }
+  const bool accepted_non_orientable = options.allow_non_orientable && t.orientable == 0;
   if (manifold) {
     rep.genus = 0;
     for (int c = 0; c < t.components; ++c) {
@@ -249,8 +300,19 @@ ValidationReport validate_triangle_mesh(const Eigen::MatrixX3d& V, const Eigen::
                                   t.nonmanifold_edges));
   rep.checks.push_back(make_check("manifold_vertices", t.n_nonmanifold_vertices,
                                   "vertices whose faces do not form one fan", t.nonmanifold_vertices));
-  rep.checks.push_back(make_check("consistent_orientation", t.n_inconsistent,
-                                  "edges traversed twice in the same direction", t.inconsistent_edges));
+  if (accepted_non_orientable) {
+    MeshCheck c;
+    c.name = "consistent_orientation";
+    c.passed = true;
+    c.detail = "non-orientable surface (" + std::to_string(rep.crosscaps) +
+               " cross-caps): no consistent orientation exists; " + std::to_string(t.n_inconsistent) +
+               " edges are traversed twice in the same direction (accepted: allow_non_orientable)";
+    c.where = t.inconsistent_edges;
+    rep.checks.push_back(c);
+  } else {
+    rep.checks.push_back(make_check("consistent_orientation", t.n_inconsistent,
+                                    "edges traversed twice in the same direction", t.inconsistent_edges));
+  }
   if (options.require_closed) rep.checks.push_back(make_check("closed", t.n_border, "border edges", t.border_edges));
   rep.checks.push_back(make_check("all_vertices_used", t.n_unused, "vertices in no triangle", t.unused_vertices));
   if (options.expected_components >= 0) {
@@ -291,6 +353,17 @@ ValidationReport validate_triangle_mesh(const Eigen::MatrixX3d& V, const Eigen::
   for (int f = 0; f < F.rows(); ++f)
     polygons[f] = {static_cast<std::size_t>(remap[F(f, 0)]), static_cast<std::size_t>(remap[F(f, 1)]),
                    static_cast<std::size_t>(remap[F(f, 2)])};
+  // A non-orientable surface is cut open along an orientation seam (vertices duplicated) so that
+  // CGAL can build a polygon mesh; `original` maps every point back to its vertex of (V, F).
+  std::vector<int> original(back);
+  if (accepted_non_orientable) {
+    PMP::orient_polygon_soup(points, polygons);
+    std::map<std::array<double, 3>, int> by_position;
+    for (size_t i = 0; i < back.size(); ++i)
+      by_position.emplace(std::array<double, 3>{points[i].x(), points[i].y(), points[i].z()}, back[i]);
+    for (size_t i = back.size(); i < points.size(); ++i)
+      original.push_back(by_position.at({points[i].x(), points[i].y(), points[i].z()}));
+  }
   MeshCheck structure;
   structure.name = "cgal_polygon_mesh";
   structure.passed = PMP::is_polygon_soup_a_polygon_mesh(polygons);
@@ -308,7 +381,7 @@ ValidationReport validate_triangle_mesh(const Eigen::MatrixX3d& V, const Eigen::
     PMP::polygon_soup_to_polygon_mesh(points, polygons, mesh);
     // Faces of the Surface_mesh are created in polygon order: face index i = row i of F.
     const bool cgal_closed = CGAL::is_closed(mesh);
-    if (options.require_closed && cgal_closed != (t.n_border == 0)) {
+    if (options.require_closed && !accepted_non_orientable && cgal_closed != (t.n_border == 0)) {
       MeshCheck c;
       c.name = "cgal_closed";
       c.passed = false;
@@ -318,7 +391,7 @@ ValidationReport validate_triangle_mesh(const Eigen::MatrixX3d& V, const Eigen::
     std::vector<std::size_t> comp_of_face(num_faces(mesh));
     auto fmap = boost::make_iterator_property_map(comp_of_face.begin(), get(boost::face_index, mesh));
     const std::size_t ncc = PMP::connected_components(mesh, fmap);
-    if (static_cast<int>(ncc) != t.components) {
+    if (static_cast<int>(ncc) != t.components && !accepted_non_orientable) {
       MeshCheck c;
       c.name = "cgal_components";
       c.passed = false;
@@ -327,20 +400,32 @@ ValidationReport validate_triangle_mesh(const Eigen::MatrixX3d& V, const Eigen::
     }
     if (!options.check_self_intersections) {
       si.name.clear();  // disabled by the caller: not reported
-    } else if (!PMP::does_self_intersect<CGAL::Sequential_tag>(mesh)) {
+    } else if (!PMP::does_self_intersect<CGAL::Sequential_tag>(mesh) && !accepted_non_orientable) {
       si.passed = true;
       si.detail = "ok";
       rep.self_intersecting_pairs = 0;
     } else {
       std::vector<std::pair<CgalMesh::Face_index, CgalMesh::Face_index>> pairs;
       PMP::self_intersections<CGAL::Sequential_tag>(mesh, std::back_inserter(pairs));
+      if (accepted_non_orientable) {
+        // faces that share a vertex of the uncut surface touch there: not an intersection
+        auto shares_vertex = [&](std::size_t a, std::size_t b) {
+          for (std::size_t x : polygons[a])
+            for (std::size_t y : polygons[b])
+              if (original[x] == original[y]) return true;
+          return false;
+        };
+        pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
+                                   [&](const auto& p) { return shares_vertex(p.first.idx(), p.second.idx()); }),
+                    pairs.end());
+      }
       rep.self_intersecting_pairs = static_cast<long>(pairs.size());
-      si.passed = false;
+      si.passed = pairs.empty();
       for (const auto& [a, b] : pairs) {
         if (static_cast<int>(si.where.size()) >= listed) break;
         si.where.push_back({static_cast<int>(a.idx()), static_cast<int>(b.idx())});
       }
-      si.detail = std::to_string(pairs.size()) + " intersecting face pairs: " + join_items(si.where);
+      si.detail = pairs.empty() ? "ok" : std::to_string(pairs.size()) + " intersecting face pairs: " + join_items(si.where);
     }
   }
   if (!si.name.empty()) rep.checks.push_back(si);

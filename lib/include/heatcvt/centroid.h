@@ -26,7 +26,9 @@ struct CentroidOptions {
 /// is read), refines the hottest vertex to a surface point: project the one-ring (incident
 /// faces) to the tangent plane of the area-weighted normal, fit a bivariate quadratic to the
 /// heat, take its maximiser, locate it in the incident faces (closest point if outside).
-/// Falls back to the vertex itself when the fit has no interior maximum.
+/// Falls back to the vertex itself when the fit has no interior maximum. Where the incident faces
+/// are not consistently oriented (the orientation seam of a non-orientable surface such as the
+/// Klein bottle), the normal of the locally re-oriented fan replaces `vertex_normals.row(v)`.
 SurfacePoint refine_hottest_vertex(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
                                    const std::vector<std::vector<int>>& vertex_faces,
                                    const Eigen::MatrixX3d& vertex_normals, const Eigen::VectorXd& heat,

@@ -36,7 +36,11 @@ struct DualMesh {
 ///   site_positions  #sites by 3 (usually the generators' 3D positions; any embedding works)
 /// The cyclic order of the cells around a Voronoi vertex is read from the refined mesh's
 /// connectivity (faces counter-clockwise around the vertex), so the triangles inherit the
-/// orientation of the input surface; faces with cell −1 (unreached) are ignored. Triangles with
+/// orientation of the input surface; faces with cell −1 (unreached) are ignored. The walk around
+/// a Voronoi vertex follows shared edges, not their directions, so it also works where the input
+/// is not consistently oriented (non-orientable surfaces such as the Klein bottle: there each
+/// triangle takes the orientation of one refined face at its Voronoi vertex, and the dual is
+/// non-orientable too; validate_triangle_mesh() reports it with `orientable == 0`). Triangles with
 /// three identical sites (kept once) are counted in `duplicate_triangles`.
 /// \throw InvalidInputError if site_positions has fewer rows than the diagram has cells.
 DualMesh dual_mesh(const VoronoiDiagram& diagram, const Eigen::MatrixX3d& site_positions,

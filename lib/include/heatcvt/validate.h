@@ -25,6 +25,13 @@ struct ValidationOptions {
   bool check_self_intersections = true;
   /// At most this many offending elements (edges, vertices, face pairs) are listed per check. Default 10.
   int max_listed = 10;
+  /// Accept non-orientable surfaces (Klein bottle, Möbius strip, their duals): when the edge
+  /// manifold admits no consistent orientation (ValidationReport::orientable == 0), the
+  /// "consistent_orientation" check passes with a detail saying so, and the CGAL checks run on
+  /// the surface cut open along an orientation seam (PMP::orient_polygon_soup; face pairs that
+  /// share a vertex of the uncut surface are not reported as intersecting). An orientable surface
+  /// with flipped faces still fails. Default false (orientation inconsistencies are failures).
+  bool allow_non_orientable = false;
 };
 
 /// One check: its name, the verdict, a one-line explanation and the offending elements.
@@ -46,7 +53,14 @@ struct ValidationReport {
   int components = 0;
   int boundary_loops = 0;
   int euler_characteristic = 0;
-  int genus = -1;          ///< Σ over components of (2 − χ_c − b_c)/2; −1 when not a manifold
+  int genus = -1;          ///< Σ over components of (2 − χ_c − b_c)/2; −1 when not an oriented manifold
+  /// Orientability of the surface as a property (not a check): 1 when the faces can be flipped
+  /// so that every interior edge is traversed once in each direction, 0 when no such choice
+  /// exists (non-orientable, e.g. a Klein bottle), −1 when not determined (non-manifold edges).
+  int orientable = -1;
+  /// Non-orientable genus (number of cross-caps, Σ over non-orientable components of 2 − χ_c − b_c;
+  /// a Klein bottle has 2, a Möbius strip 1); 0 for orientable surfaces, −1 when not determined.
+  int crosscaps = -1;
   long self_intersecting_pairs = -1;  ///< number of intersecting face pairs (−1 = not computed)
   /// True when every check that ran passed and none was skipped.
   bool ok() const;
