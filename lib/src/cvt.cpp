@@ -737,7 +737,8 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
       face_scale[f] = face_area[f] > 0 ? face_metric_area[f] / face_area[f] : 0.0;
   }
   const double spacing = std::sqrt(surface_area(V, F) / ns);
-  bool closed_input = false;
+  bool closed_input = false, split_enabled = false, check_spots = false;
+  int fewest_spots = std::numeric_limits<int>::max();
   if (options.split_nonmanifold_cells) {
     std::vector<std::int64_t> keys;
     keys.reserve(3 * F.rows());
@@ -748,12 +749,16 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
       }
     std::sort(keys.begin(), keys.end());
     closed_input = true;
-    for (size_t i = 0; i < keys.size() && closed_input;) {
+    bool manifold_edges = true;
+    for (size_t i = 0; i < keys.size();) {
       size_t j = i;
       while (j < keys.size() && keys[j] == keys[i]) ++j;
-      closed_input = j - i >= 2;
+      closed_input &= j - i >= 2;
+      manifold_edges &= j - i <= 2;
       i = j;
     }
+    // On an input with non-manifold edges the dual cannot be a manifold: nothing to split for.
+    split_enabled = check_spots = manifold_edges;
   }
 
   std::vector<ThreadScratch> scratch(threads);
@@ -972,10 +977,14 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
       st.phi_min_deg = q.min_angle_deg;
       st.phi_mean_deg = q.mean_min_angle_deg;
       std::vector<int> bad;
-      if (options.split_nonmanifold_cells) {
+      if (check_spots) {
         int spots = 0;
         bad = nonmanifold_cells(dual, ns, closed_input, &spots);
         st.nonmanifold_spots = spots;
+        // Safeguard: splitting that makes things clearly worse is stopped (the quality target
+        // still requires a dual without such spots).
+        fewest_spots = std::min(fewest_spots, spots);
+        if (spots > 2 * fewest_spots + 10) split_enabled = false;
       }
       const bool targets_met = options.target_phi_mean_deg > 0 && options.target_phi_min_deg > 0 &&
                                q.mean_min_angle_deg >= options.target_phi_mean_deg &&
@@ -986,7 +995,7 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
         result.reached_quality = true;
         result.diagram = std::move(d);
         result.dual = std::move(dual);
-      } else if (!bad.empty() && budget > 0) {
+      } else if (split_enabled && !bad.empty() && budget > 0 && it < options.iterations) {
         // Split the flagged cells: a new site at the cell's vertex farthest from its site.
         if (static_cast<int>(bad.size()) > budget) bad.resize(budget);
         std::vector<int> slot(ns, -1);
@@ -1067,8 +1076,8 @@ CvtOptions fast_cvt_options(int sites) {
   o.initialization = CvtInitialization::farthest_point;
   o.graph_lloyd_iterations = 20;
   o.relaxation = 1.5;
-  o.quality_every = 1;
-  o.quality_start = 1;
+  o.quality_every = 2;  // an evaluation (exact tessellation + dual) costs about half an iteration
+  o.quality_start = 2;
   o.target_phi_mean_deg = 51.0;
   o.target_phi_min_deg = 25.0;
   o.split_nonmanifold_cells = true;

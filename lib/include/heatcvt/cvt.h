@@ -96,7 +96,9 @@ struct CvtOptions {
   /// Voronoi vertex) gets a new site at its vertex farthest from its site (at most
   /// max_inserted_fraction · initial sites in total). The quality target is then only accepted
   /// for a dual without such spots. The result's dual is always the dual of the heat Voronoi
-  /// diagram of the final sites. Default false (fixed site count, as in the paper).
+  /// diagram of the final sites. Not done on inputs with non-manifold edges (no manifold dual
+  /// exists), and stopped for good when the spots grow beyond 2 × the fewest seen + 10.
+  /// Default false (fixed site count, as in the paper).
   bool split_nonmanifold_cells = false;
   double max_inserted_fraction = 0.25;
   /// With quality_every: the first evaluation happens only after this many iterations. Default 0.
@@ -104,8 +106,8 @@ struct CvtOptions {
 };
 
 /// The best measured configuration for remeshing (meshcvt's defaults): farthest-point sampling,
-/// graph-Lloyd pre-relaxation during the factorisation, over-relaxed Lloyd, quality evaluated
-/// every iteration with the targets φm ≥ 51°, φmin ≥ 25°, cells split where they are too big
+/// graph-Lloyd pre-relaxation during the factorisation, over-relaxed Lloyd (ω = 1.5), quality
+/// evaluated every 2nd iteration with the targets φm ≥ 51°, φmin ≥ 25°, cells split where too big
 /// for thin parts. `CvtOptions{}` remains the paper's configuration.
 CvtOptions fast_cvt_options(int sites);
 
