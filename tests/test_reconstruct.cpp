@@ -27,10 +27,13 @@ struct Acceptance {
   int genus;
   int points;
   int sites;
-  double noise;  // fraction of the bbox diagonal
+  double noise;          // fraction of the bbox diagonal
+  double max_mean_dist;  // bound on the two-sided mean distance / bbox diagonal (see below)
 };
 
-// Reconstructs a cloud sampled from a closed mesh and checks the acceptance criteria.
+// Reconstructs a cloud sampled (without normals) from a closed mesh and checks issue 4's
+// acceptance: closed, oriented 2-manifold with the source's genus, no self-intersections,
+// φm >= 52°, φmin >= 25°, and a mean two-sided distance within the bound.
 void check_closed_reconstruction(const Acceptance& a) {
   const TriangleMesh src = read_mesh(test::data_path("meshes/" + a.file));
   const double diag = bbox_diagonal(src.V);
@@ -46,18 +49,12 @@ void check_closed_reconstruction(const Acceptance& a) {
   const SurfaceDistance d = surface_distance(src.V, src.F, r.mesh.V, r.mesh.F, 20000);
   std::printf("[ %s, %d points, noise %.2f%%, %d sites ] V %ld F %ld genus %d loops %d phi_min %.2f phi_m %.2f "
               "dist/diag mean %.5f hausdorff %.5f; laplacian %.2fs factor %.2fs cvt %.2fs (%d it) total %.2fs; "
-              "holes filled %d, rejected %d, removed %d, unused sites %d\n",
+              "holes filled %d, rejected %d, removed %d, unused sites %d, polish fallback %d, angle polish undone %d\n",
               a.file.c_str(), a.points, 100 * a.noise, a.sites, static_cast<long>(r.mesh.V.rows()),
               static_cast<long>(r.mesh.F.rows()), rep.genus, rep.boundary_loops, r.min_angle_deg,
               r.mean_min_angle_deg, d.mean / diag, d.hausdorff / diag, r.laplacian_seconds, r.factor_seconds,
               r.cvt_seconds, r.iterations, r.total_seconds, r.holes_filled, r.rejected_triangles,
-              r.removed_triangles, r.unused_sites);
-  {
-    const Eigen::VectorXd ang = smallest_angles(r.mesh.V, r.mesh.F);
-    int zero = 0;
-    for (Eigen::Index i = 0; i < ang.size(); ++i) zero += !(ang[i] > 1e-6);
-    std::printf("  degenerate triangles: %d of %ld\n", zero, static_cast<long>(ang.size()));
-  }
+              r.removed_triangles, r.unused_sites, r.polish_fallback ? 1 : 0, r.angle_polish_undone ? 1 : 0);
   EXPECT_TRUE(rep.ok()) << rep.summary();
   if (const MeshCheck* c = rep.find("closed"); c && !c->passed)
     for (const auto& e : c->where)
@@ -65,7 +62,14 @@ void check_closed_reconstruction(const Acceptance& a) {
                   r.mesh.V(e[0], 2));
   EXPECT_EQ(rep.boundary_loops, 0);
   EXPECT_EQ(rep.genus, a.genus);
+  EXPECT_EQ(rep.components, 1);
   EXPECT_EQ(rep.self_intersecting_pairs, 0);
+  for (const char* c : {"manifold_edges", "manifold_vertices", "consistent_orientation", "closed",
+                        "no_self_intersections"})
+    EXPECT_TRUE(rep.find(c) && rep.find(c)->ran && rep.find(c)->passed) << c << "\n" << rep.summary();
+  // The library's own report agrees with the independent validation.
+  EXPECT_EQ(r.validation.genus, rep.genus);
+  EXPECT_EQ(r.validation.boundary_loops, 0);
   // Oriented outward, like the source: positive enclosed volume close to the source's.
   auto volume = [](const TriangleMesh& m) {
     double v = 0;
@@ -74,21 +78,39 @@ void check_closed_reconstruction(const Acceptance& a) {
     return v;
   };
   EXPECT_NEAR(volume(r.mesh) / volume(src), 1.0, 0.03);
-  // Targets of the issue: phi_m >= 52, phi_min >= 25. Measured (30 Lloyd iterations + polish):
-  // bunny clean 50.1 / 24.4, kitten noisy 50.5 / 30.9; the assertions guard against regressions.
-  EXPECT_GE(r.mean_min_angle_deg, 49.5);
-  EXPECT_GE(r.min_angle_deg, 20.0);
-  // Most sites become vertices; the two-sided mean distance is a small fraction of the size.
+  // Issue 4's angle targets, measured on the output mesh.
+  const TriangleQuality q = triangle_quality(r.mesh.V, r.mesh.F);
+  EXPECT_GE(q.mean_min_angle_deg, 52.0);
+  EXPECT_GE(q.min_angle_deg, 25.0);
+  // Most sites become vertices.
   EXPECT_GE(r.mesh.V.rows(), 0.97 * a.sites);
-  EXPECT_LT(d.mean / diag, 0.003);
+  EXPECT_LT(d.mean / diag, a.max_mean_dist);
   EXPECT_LT(d.hausdorff / diag, 0.03);
 }
 
+// Distance bounds. The issue asks for a mean two-sided distance within 1.2x (clean) / 1.5x
+// (noisy) of the best of PCL Poisson and CGAL Poisson, each followed by CGAL isotropic remeshing
+// to 3000 vertices. Those peers cost 5-37 s per cloud on two shared cores, so the ratio itself is
+// measured by bench_reconstruct (50k points, seed 11: heatcvt / best two-step = 1.14-1.15 clean,
+// 1.05-1.19 noisy, best two-step 0.00036-0.00090 clean and 0.00060-0.00104 noisy). The test
+// asserts absolute bounds at the level of those pipelines instead: heatcvt measures
+// 0.00042-0.00072 (clean) and 0.00063-0.00081 (noisy) on the cases below, deterministically.
+constexpr double kBoundClean = 0.0008;
+constexpr double kBoundNoisy = 0.0009;
+
 }  // namespace
 
-TEST(Reconstruct, BunnyCleanClosedGenus0) { check_closed_reconstruction({"bunny_pmp.off", 0, 30000, 3000, 0.0}); }
-
-TEST(Reconstruct, KittenNoisyClosedGenus1) { check_closed_reconstruction({"kitten.obj", 1, 30000, 3000, 0.0025}); }
+// Issue 4's acceptance clouds: 50k points (no normals) from the closed meshes, clean and with
+// Gaussian noise of 0.25 % of the diagonal, -n 3000. The cases that meet every target in
+// bench_reconstruct are asserted here (about 4 minutes on two cores); bunny noisy, armadillo
+// clean / noisy and elephant noisy do not yet (wrong genus, an unfilled loop or a
+// self-intersection) and are tracked by the benchmark, not hidden behind weaker bounds.
+TEST(Reconstruct, BunnyClean50k) { check_closed_reconstruction({"bunny_pmp.off", 0, 50000, 3000, 0.0, kBoundClean}); }
+TEST(Reconstruct, KittenClean50kGenus1) { check_closed_reconstruction({"kitten.obj", 1, 50000, 3000, 0.0, kBoundClean}); }
+TEST(Reconstruct, KittenNoisy50kGenus1) { check_closed_reconstruction({"kitten.obj", 1, 50000, 3000, 0.0025, kBoundNoisy}); }
+TEST(Reconstruct, FertilityClean50kGenus4) { check_closed_reconstruction({"fertility.off", 4, 50000, 3000, 0.0, kBoundClean}); }
+TEST(Reconstruct, FertilityNoisy50kGenus4) { check_closed_reconstruction({"fertility.off", 4, 50000, 3000, 0.0025, kBoundNoisy}); }
+TEST(Reconstruct, ElephantClean50kGenus3) { check_closed_reconstruction({"elephant.off", 3, 50000, 3000, 0.0, kBoundClean}); }
 
 // An open scan (a sampled open hemisphere) must give a surface with its boundary, not a closed blob.
 TEST(Reconstruct, OpenPatchKeepsItsBoundary) {

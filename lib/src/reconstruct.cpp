@@ -818,7 +818,8 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
 
   // Small holes: boundary loops of <= max_hole_edges edges. A loop of up to 4x that length is
   // filled too when it is a hole of the extraction, not a scan boundary: the centre of the loop
-  // is away from every triangle (> h/4, h = mean loop edge) but has cloud points near it (< h/2).
+  // is away from every triangle (> h/4, h = mean loop edge) but has cloud points near it (< h/2);
+  // and a loop of up to 8x that length when the cloud continues beyond its edges (below).
   auto is_sampled_hole = [&](const std::vector<int>& loop) {
     Eigen::Vector3d g = Eigen::Vector3d::Zero();
     double h = 0;
@@ -838,6 +839,32 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     }
     return true;
   };
+  // Second test for longer or curved loops (whose centre may be off the surface): beyond every
+  // boundary edge, one edge length outward in the plane of its triangle, there is sampled surface
+  // (a cloud point within half an edge length) for at least 80 % of the edges. Across the
+  // border of an open scan there is none.
+  auto is_surrounded_hole = [&](const std::vector<int>& loop) {
+    int sampled = 0;
+    const int L = static_cast<int>(loop.size());
+    for (int i = 0; i < L; ++i) {
+      const int a = loop[i], b = loop[(i + 1) % L];
+      auto it = directed.find(EdgeKey::make(a, b));
+      if (it == directed.end()) continue;
+      const auto& f = F[it->second];
+      const Eigen::Vector3d p0 = S.row(f[0]), p1 = S.row(f[1]), p2 = S.row(f[2]);
+      const Eigen::Vector3d fn = (p1 - p0).cross(p2 - p0);
+      const Eigen::Vector3d e = S.row(b) - S.row(a);
+      if (!(fn.norm() > 0) || !(e.norm() > 0)) continue;
+      const Eigen::Vector3d out = e.cross(fn).normalized();
+      const double len = e.norm();
+      const Eigen::Vector3d probe = 0.5 * (S.row(a) + S.row(b)).transpose() + len * out;
+      double dp = std::numeric_limits<double>::infinity();
+      for (int q = 0; q < n; ++q) dp = std::min(dp, (P.row(q).transpose() - probe).squaredNorm());
+      if (std::sqrt(dp) < 0.5 * len) ++sampled;
+    }
+    return sampled >= 0.8 * L;
+  };
+  const int max_loop = 8 * options.max_hole_edges;
   for (int pass = 0; pass < 3; ++pass) {
     std::unordered_map<int, std::vector<int>> next;  // boundary half-edge a->b (face side) by start vertex
     std::vector<std::pair<int, int>> bedges;
@@ -860,7 +887,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
       int cur = b0;
       bool simple = true;
       used[EdgeKey::make(a0, b0)] = 1;
-      while (cur != a0 && static_cast<int>(loop.size()) <= 4 * options.max_hole_edges + 1) {
+      while (cur != a0 && static_cast<int>(loop.size()) <= max_loop + 1) {
         auto it = next.find(cur);
         if (it == next.end() || it->second.size() != 1) {
           simple = false;
@@ -870,9 +897,11 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
         used[EdgeKey::make(cur, it->second[0])] = 1;
         cur = it->second[0];
       }
-      if (!simple || cur != a0 || static_cast<int>(loop.size()) > 4 * options.max_hole_edges || loop.size() < 3)
+      if (!simple || cur != a0 || static_cast<int>(loop.size()) > max_loop || loop.size() < 3) continue;
+      if (static_cast<int>(loop.size()) > options.max_hole_edges &&
+          !((static_cast<int>(loop.size()) <= 4 * options.max_hole_edges && is_sampled_hole(loop)) ||
+            is_surrounded_hole(loop)))
         continue;
-      if (static_cast<int>(loop.size()) > options.max_hole_edges && !is_sampled_hole(loop)) continue;
       std::vector<int> sorted = loop;
       std::sort(sorted.begin(), sorted.end());
       if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) continue;

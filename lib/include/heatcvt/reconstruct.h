@@ -30,7 +30,10 @@ struct ReconstructionOptions {
   /// Boundary loops of the extracted mesh with at most this many edges are treated as holes of
   /// the extraction (not scan boundaries) and filled. Loops of up to 4× this many edges are
   /// filled only if their centre is > h/4 away from every triangle yet < h/2 from a cloud point
-  /// (h = mean loop edge length): a hole in sampled surface, not the border of a scan. Default 8.
+  /// (h = mean loop edge length): a hole in sampled surface, not the border of a scan. Loops of
+  /// up to 8× this many edges are filled when, for >= 80 % of their edges, a cloud point lies
+  /// within half an edge length of the point one edge length outward (in the plane of the edge's
+  /// triangle): the cloud continues beyond the loop. Default 8.
   int max_hole_edges = 8;
   /// Final polish: iterations of tangential relaxation (each vertex towards the area-weighted
   /// centroid of its one-ring, re-projected to the fitted surface) alternating with edge flips
