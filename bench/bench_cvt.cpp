@@ -215,8 +215,8 @@ int main(int argc, char** argv) {
             fmt(q.min_angle_deg, "%.1f°") + " | " + fmt(q.mean_min_angle_deg, "%.1f°") + " | " +
             fmt(per_iteration, "%.3f s") + " | " + (valid ? "yes" : "NO") + " | " +
             (r.reached_quality ? fmt(ttq, "%.1f s") + " (" + std::to_string(r.iterations.size()) + " it)"
-                               : "not reached in " + std::to_string(r.iterations.size()) + " it (" +
-                                     fmt(ttq, "%.1f s") + ")") +
+                               : std::string("not reached: ") + (r.stalled ? "φm stalled after " : "stopped after ") +
+                                     std::to_string(r.iterations.size()) + " it (" + fmt(ttq, "%.1f s") + ")") +
             " | " + cgal_cols;
       std::printf("%s\n", row.c_str());
       std::fflush(stdout);

@@ -310,3 +310,26 @@ TEST(CvtAcceleration, SplittingCellsTooBigForThinPartsGivesAValidDualOfTheInputG
   const DualMesh again = dual_mesh(split.diagram, split.positions);
   EXPECT_EQ(again.F, split.dual.F);
 }
+
+TEST(CvtAcceleration, QualityPatienceStopsWhenTheMeanAngleStalls) {
+  // 300 sites on a 2.9k-vertex cow: too few vertices per cell for φm to reach 51°; the run stops
+  // once φm has not improved for `quality_patience` evaluations, well before the iteration cap.
+  TriangleMesh m = read_mesh(std::string(HEATCVT_SOURCE_DIR) + "/examples/data/spot.obj");
+  CvtOptions o = fast_cvt_options(300);
+  o.iterations = 100;
+  CvtResult r = centroidal_voronoi(m.V, m.F, cotan_laplacian(m.V, m.F), o);
+  std::printf("[ info ] spot, 300 sites: stopped after %zu iterations (stalled %d, reached %d)\n", r.iterations.size(),
+              r.stalled, r.reached_quality);
+  EXPECT_TRUE(r.stalled || r.reached_quality);
+  EXPECT_LT(r.iterations.size(), 100u);
+  if (r.stalled) {
+    double best = 0, last10 = 0;
+    int evaluations = 0;
+    for (const auto& s : r.iterations)
+      if (s.phi_mean_deg >= 0) ++evaluations, best = std::max(best, s.phi_mean_deg);
+    for (auto it = r.iterations.rbegin(); it != r.iterations.rend() && it - r.iterations.rbegin() < 2 * o.quality_patience; ++it)
+      if (it->phi_mean_deg >= 0) last10 = std::max(last10, it->phi_mean_deg);
+    EXPECT_GE(evaluations, o.quality_patience);
+    EXPECT_LE(last10, best + 1e-12);
+  }
+}

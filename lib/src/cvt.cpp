@@ -664,7 +664,7 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
                             " entries but the mesh has " + std::to_string(F.rows()) + " faces");
   if (!(options.relaxation >= 1.0 && options.relaxation < 2.0))
     throw InvalidInputError("centroidal_voronoi: relaxation must be in [1, 2), got " + std::to_string(options.relaxation));
-  if (options.graph_lloyd_iterations < 0 || options.anderson_depth < 0 || options.quality_start < 0 || !(options.max_inserted_fraction >= 0))
+  if (options.graph_lloyd_iterations < 0 || options.anderson_depth < 0 || options.quality_patience < 0 || options.quality_start < 0 || !(options.max_inserted_fraction >= 0))
     throw InvalidInputError("centroidal_voronoi: graph_lloyd_iterations, quality_start and max_inserted_fraction must be >= 0");
   std::vector<SurfacePoint> sites = given_sites;
   if (sites.empty()) {
@@ -739,6 +739,8 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
   const double spacing = std::sqrt(surface_area(V, F) / ns);
   bool closed_input = false, split_enabled = false, check_spots = false;
   int fewest_spots = std::numeric_limits<int>::max();
+  double best_phi_mean = -1;  // quality_patience bookkeeping
+  int evaluations_since_best = 0;
   if (options.split_nonmanifold_cells) {
     std::vector<std::int64_t> keys;
     keys.reserve(3 * F.rows());
@@ -986,6 +988,12 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
         fewest_spots = std::min(fewest_spots, spots);
         if (spots > 2 * fewest_spots + 10) split_enabled = false;
       }
+      if (q.mean_min_angle_deg > best_phi_mean + 0.02) {
+        best_phi_mean = q.mean_min_angle_deg;
+        evaluations_since_best = 0;
+      } else {
+        ++evaluations_since_best;
+      }
       const bool targets_met = options.target_phi_mean_deg > 0 && options.target_phi_min_deg > 0 &&
                                q.mean_min_angle_deg >= options.target_phi_mean_deg &&
                                q.min_angle_deg >= options.target_phi_min_deg && bad.empty();
@@ -1039,6 +1047,10 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
     }
     bool go_on = true;
     if (callback) go_on = callback(st);
+    if (options.quality_patience > 0 && evaluations_since_best >= options.quality_patience && st.inserted_sites == 0) {
+      result.stalled = true;
+      break;
+    }
     if (options.tolerance > 0 && max_move < options.tolerance * spacing && st.inserted_sites == 0) {
       result.converged = true;
       break;
@@ -1081,6 +1093,7 @@ CvtOptions fast_cvt_options(int sites) {
   o.target_phi_mean_deg = 51.0;
   o.target_phi_min_deg = 25.0;
   o.split_nonmanifold_cells = true;
+  o.quality_patience = 10;
   return o;
 }
 

@@ -101,14 +101,17 @@ struct CvtOptions {
   /// Default false (fixed site count, as in the paper).
   bool split_nonmanifold_cells = false;
   double max_inserted_fraction = 0.25;
+  /// Convergence test on the quality (needs quality_every > 0): stop when φm has not improved by
+  /// more than 0.02° over this many consecutive evaluations (result.stalled). 0 = off. Default 0.
+  int quality_patience = 0;
   /// With quality_every: the first evaluation happens only after this many iterations. Default 0.
   int quality_start = 0;
 };
 
 /// The best measured configuration for remeshing (meshcvt's defaults): farthest-point sampling,
 /// graph-Lloyd pre-relaxation during the factorisation, over-relaxed Lloyd (ω = 1.5), quality
-/// evaluated every 2nd iteration with the targets φm ≥ 51°, φmin ≥ 25°, cells split where too big
-/// for thin parts. `CvtOptions{}` remains the paper's configuration.
+/// evaluated every 2nd iteration with the targets φm ≥ 51°, φmin ≥ 25° and a stop when φm stalls
+/// for 10 evaluations, cells split where too big for thin parts. `CvtOptions{}` remains the paper's configuration.
 CvtOptions fast_cvt_options(int sites);
 
 /// Statistics of one Lloyd iteration.
@@ -143,6 +146,7 @@ struct CvtResult {
   std::vector<CvtIterationStats> iterations;
   bool converged = false;            ///< stopped by the tolerance
   bool reached_quality = false;      ///< stopped by the quality targets
+  bool stalled = false;              ///< stopped by quality_patience (φm no longer improving)
   double factor_seconds = 0;         ///< Cholesky factorisation of M − tL
   std::size_t factor_bytes = 0;      ///< memory of the factor
   double setup_seconds = 0;          ///< factorisation + adjacency + initial sites
