@@ -675,7 +675,14 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
       const Eigen::Vector3d vn = SN.row(f[0]) + SN.row(f[1]) + SN.row(f[2]);
       if (fn.dot(vn) < 0) std::swap(f[1], f[2]);
       const double q = tri_min_angle(S, f[0], f[1], f[2]);
-      if (q > 0) cands.push_back({f, w + wv, wv, q});
+      // A dual triangle spans one sheet of the surface: its normal agrees with the fitted normal
+      // of each of its three sites. One whose sites' normals disagree with it bridges a thin
+      // gap (two sides of a thin part, or noise-ragged cells reaching across): not a candidate.
+      const Eigen::Vector3d fo = (S.row(f[1]) - S.row(f[0])).cross(S.row(f[2]) - S.row(f[0])).transpose();
+      bool coherent = true;
+      for (int k = 0; k < 3; ++k)
+        if (!(fo.dot(SN.row(f[k]).transpose()) > 0)) coherent = false;
+      if (q > 0 && coherent) cands.push_back({f, w + wv, wv, q});
     }
   }
   res.candidate_triangles = static_cast<int>(cands.size());
@@ -865,6 +872,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     return sampled >= 0.8 * L;
   };
   const int max_loop = 8 * options.max_hole_edges;
+  auto fill_holes = [&]() {
   for (int pass = 0; pass < 3; ++pass) {
     std::unordered_map<int, std::vector<int>> next;  // boundary half-edge a->b (face side) by start vertex
     std::vector<std::pair<int, int>> bedges;
@@ -923,6 +931,119 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     res.holes_filled += filled;
     make_vertices_manifold();
   }
+  };
+  fill_holes();
+
+  // Faces of F involved in a self-intersection (CGAL, face i = F[i]).
+  auto intersecting_faces = [&]() {
+    std::vector<int> out;
+    std::vector<int> map(ns, -1);
+    int m = 0;
+    for (const auto& f : F)
+      for (int v : f)
+        if (map[v] < 0) map[v] = m++;
+    if (m == 0) return out;
+    Eigen::MatrixX3d VV(m, 3);
+    for (int v = 0; v < ns; ++v)
+      if (map[v] >= 0) VV.row(map[v]) = S.row(v);
+    Eigen::MatrixX3i FF(F.size(), 3);
+    for (size_t i = 0; i < F.size(); ++i)
+      for (int k = 0; k < 3; ++k) FF(i, k) = map[F[i][k]];
+    ValidationOptions vo;
+    vo.require_closed = false;
+    vo.max_listed = std::numeric_limits<int>::max();
+    const ValidationReport rep = validate_triangle_mesh(VV, FF, vo);
+    for (const auto& c : rep.checks)
+      if (c.name == "no_self_intersections")
+        for (const auto& w : c.where)
+          for (int f : w) out.push_back(f);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+  };
+  // Untangling: the faces of every intersecting pair are removed (with their vertex neighbours
+  // from the second round on), the mesh is made manifold again and the holes are refilled by the
+  // same rules as above (sampled surface beyond them), until no intersection is left.
+  auto untangle = [&]() {
+    for (int round = 0; round < 4; ++round) {
+      const std::vector<int> bad = intersecting_faces();
+      if (bad.empty()) break;
+      std::vector<char> drop(F.size(), 0);
+      std::vector<char> vbad(ns, 0);
+      for (int f : bad) {
+        drop[f] = 1;
+        for (int v : F[f]) vbad[v] = 1;
+      }
+      if (round > 0)
+        for (size_t i = 0; i < F.size(); ++i)
+          if (vbad[F[i][0]] || vbad[F[i][1]] || vbad[F[i][2]]) drop[i] = 1;
+      std::vector<std::array<int, 3>> G;
+      for (size_t i = 0; i < F.size(); ++i)
+        if (!drop[i]) G.push_back(F[i]);
+        else ++res.removed_triangles;
+      F.swap(G);
+      make_vertices_manifold();
+      fill_holes();
+    }
+  };
+  untangle();
+
+  // Interior vertices of valence 3 (a tiny cell squeezed between three others; their triangles
+  // cannot have a smallest angle above 30 degrees, and no flip can remove them): the vertex and
+  // its three triangles are replaced by the triangle of its ring, when the ring vertices keep
+  // valence >= 3, that triangle is new and it faces the same way as the three it replaces.
+  auto remove_valence3 = [&]() {
+    int removed = 0;
+    for (int pass = 0; pass < 3; ++pass) {
+      std::vector<std::vector<int>> vf(ns);
+      for (int id = 0; id < static_cast<int>(F.size()); ++id)
+        for (int v : F[id]) vf[v].push_back(id);
+      std::set<std::array<int, 3>> present;
+      for (auto f : F) {
+        std::sort(f.begin(), f.end());
+        present.insert(f);
+      }
+      std::vector<char> drop(F.size(), 0), touched(ns, 0);
+      std::vector<std::array<int, 3>> added;
+      for (int v = 0; v < ns; ++v) {
+        if (vf[v].size() != 3 || touched[v]) continue;
+        // Ring order: for each face (v, x, y) in rotation, x -> y.
+        std::map<int, int> next;
+        for (int id : vf[v]) {
+          int k = 0;
+          while (F[id][k] != v) ++k;
+          next[F[id][(k + 1) % 3]] = F[id][(k + 2) % 3];
+        }
+        if (next.size() != 3) continue;
+        const int a = next.begin()->first, b = next[a], c = next.count(b) ? next[b] : -1;
+        if (c < 0 || !next.count(c) || next[c] != a || a == b || b == c || a == c) continue;
+        if (touched[a] || touched[b] || touched[c]) continue;
+        if (vf[a].size() < 4 || vf[b].size() < 4 || vf[c].size() < 4) continue;
+        std::array<int, 3> key = {a, b, c};
+        std::sort(key.begin(), key.end());
+        if (present.count(key)) continue;
+        const Eigen::Vector3d fn = (S.row(b) - S.row(a)).cross(S.row(c) - S.row(a)).transpose();
+        Eigen::Vector3d old_n = Eigen::Vector3d::Zero();
+        for (int id : vf[v])
+          old_n += (S.row(F[id][1]) - S.row(F[id][0])).cross(S.row(F[id][2]) - S.row(F[id][0])).transpose();
+        if (!(fn.dot(old_n) > 0)) continue;
+        for (int id : vf[v]) drop[id] = 1;
+        touched[v] = touched[a] = touched[b] = touched[c] = 1;
+        added.push_back({a, b, c});
+        present.insert(key);
+      }
+      if (added.empty()) break;
+      std::vector<std::array<int, 3>> G;
+      for (size_t i = 0; i < F.size(); ++i)
+        if (!drop[i]) G.push_back(F[i]);
+      for (const auto& t : added) G.push_back(t);
+      removed += static_cast<int>(added.size());
+      F.swap(G);
+    }
+    rebuild_edges();
+    return removed;
+  };
+  remove_valence3();
 
   // Max-min-angle flips of wrongly chosen diagonals.
   res.flipped_edges = improve_by_flips(S, F, 20);
@@ -1037,6 +1158,11 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     return std::max(0L, rep.self_intersecting_pairs);
   };
   polish(true);
+  // Where the valence polish folded a thin part through itself, untangle locally first.
+  if (options.relaxation_iterations > 0 && self_intersections() > 0) {
+    untangle();
+    res.flipped_edges += improve_by_flips(S, F, 5, false);
+  }
   if (options.relaxation_iterations > 0 && self_intersections() > 0) {
     S = S_unpolished;
     SN = SN_unpolished;
@@ -1044,6 +1170,10 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     res.flipped_edges = flips_unpolished;
     res.polish_fallback = true;
     polish(false);
+    if (self_intersections() > 0) {
+      untangle();
+      res.flipped_edges += improve_by_flips(S, F, 5, false);
+    }
   }
 
   // Angle polish (smallest-angle-improving tangential moves on the fitted surface) alternating
@@ -1052,6 +1182,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     const Eigen::MatrixX3d S_before = S, SN_before = SN;
     const std::vector<std::array<int, 3>> F_before = F;
     const int flips_before = res.flipped_edges;
+    if (remove_valence3() > 0) res.flipped_edges += improve_by_flips(S, F, 5, false);
     for (int r = 0; r < 4; ++r) {
       angle_polish(S, SN, F, 2, project);
       res.flipped_edges += improve_by_flips(S, F, 5, false);
