@@ -98,17 +98,20 @@ void check_closed_reconstruction(const Acceptance& a) {
 constexpr double kBoundClean = 0.0008;
 constexpr double kBoundNoisy = 0.0009;
 // Elephant noisy: its best two-step pipeline measures 0.00077 (PCL Poisson + remesh), heatcvt
-// 0.00095 (ratio 1.23); the bound is the issue's own, 1.5x that best two-step distance.
+// 0.00093 (ratio 1.21); the bound is the issue's own, 1.5x that best two-step distance.
 constexpr double kBoundElephantNoisy = 1.5 * 0.00077;
+// Bunny noisy: best two-step 0.00083 (PCL Poisson + remesh), heatcvt 0.00097 (ratio 1.17).
+constexpr double kBoundBunnyNoisy = 1.5 * 0.00083;
 
 }  // namespace
 
 // Issue 4's acceptance clouds: 50k points (no normals) from the closed meshes, clean and with
 // Gaussian noise of 0.25 % of the diagonal, -n 3000. The cases that meet every target in
-// bench_reconstruct are asserted here (about 5 minutes on two cores); bunny noisy (phi_min) and
-// armadillo clean / noisy do not yet and are tracked by the benchmark, not hidden behind weaker
-// bounds.
+// bench_reconstruct are asserted here (about 6 minutes on two cores); armadillo clean / noisy do
+// not yet (open loops, several components) and are tracked by the benchmark, not hidden behind
+// weaker bounds.
 TEST(Reconstruct, BunnyClean50k) { check_closed_reconstruction({"bunny_pmp.off", 0, 50000, 3000, 0.0, kBoundClean}); }
+TEST(Reconstruct, BunnyNoisy50k) { check_closed_reconstruction({"bunny_pmp.off", 0, 50000, 3000, 0.0025, kBoundBunnyNoisy}); }
 TEST(Reconstruct, KittenClean50kGenus1) { check_closed_reconstruction({"kitten.obj", 1, 50000, 3000, 0.0, kBoundClean}); }
 TEST(Reconstruct, KittenNoisy50kGenus1) { check_closed_reconstruction({"kitten.obj", 1, 50000, 3000, 0.0025, kBoundNoisy}); }
 TEST(Reconstruct, FertilityClean50kGenus4) { check_closed_reconstruction({"fertility.off", 4, 50000, 3000, 0.0, kBoundClean}); }

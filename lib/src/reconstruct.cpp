@@ -675,13 +675,14 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
       const Eigen::Vector3d vn = SN.row(f[0]) + SN.row(f[1]) + SN.row(f[2]);
       if (fn.dot(vn) < 0) std::swap(f[1], f[2]);
       const double q = tri_min_angle(S, f[0], f[1], f[2]);
-      // A dual triangle spans one sheet of the surface: its normal agrees with the fitted normal
-      // of each of its three sites. One whose sites' normals disagree with it bridges a thin
-      // gap (two sides of a thin part, or noise-ragged cells reaching across): not a candidate.
+      // A dual triangle spans one sheet of the surface: its normal is within 75 degrees of the
+      // fitted normal of each of its three sites. One whose sites' normals disagree with it
+      // bridges a thin gap (two sides of a thin part, or noise-ragged cells reaching across) or
+      // folds the surface: not a candidate.
       const Eigen::Vector3d fo = (S.row(f[1]) - S.row(f[0])).cross(S.row(f[2]) - S.row(f[0])).transpose();
-      bool coherent = true;
-      for (int k = 0; k < 3; ++k)
-        if (!(fo.dot(SN.row(f[k]).transpose()) > 0)) coherent = false;
+      bool coherent = fo.norm() > 0;
+      for (int k = 0; k < 3 && coherent; ++k)
+        if (!(fo.normalized().dot(SN.row(f[k]).transpose()) > 0.25)) coherent = false;
       if (q > 0 && coherent) cands.push_back({f, w + wv, wv, q});
     }
   }
