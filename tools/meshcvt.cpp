@@ -135,9 +135,23 @@ int main(int argc, char** argv) {
                               " vertices of " + mesh_path);
     const MeshTopology topo = mesh_topology(mesh.F, nv);
     const int input_genus = mesh_genus(mesh.F, nv);
-    log("read " + mesh_path + ": " + std::to_string(nv) + " vertices, " + std::to_string(mesh.F.rows()) +
-        " faces, genus " + (input_genus >= 0 ? std::to_string(input_genus) : std::string("undefined (not a manifold)")) +
-        (topo.boundary_edges ? ", open" : ", closed"));
+    // A non-orientable input (Klein bottle, Möbius strip) is valid for the intrinsic method; its
+    // dual is then checked as a non-orientable surface (validate.h) instead of failing the
+    // orientation check. Only inputs with inconsistently oriented edges need the full test.
+    bool input_non_orientable = false;
+    if (topo.inconsistent_edges > 0 && topo.nonmanifold_edges == 0) {
+      ValidationOptions iopt;
+      iopt.check_self_intersections = false;
+      iopt.allow_non_orientable = true;
+      input_non_orientable = validate_triangle_mesh(mesh.V, mesh.F, iopt).orientable == 0;
+    }
+    const std::string genus_text =
+        input_genus >= 0 ? "genus " + std::to_string(input_genus)
+                         : input_non_orientable ? "non-orientable, Euler characteristic " +
+                                                      std::to_string(topo.euler_characteristic())
+                                                : std::string("genus undefined (not a manifold)");
+    log("read " + mesh_path + ": " + std::to_string(nv) + " vertices, " + std::to_string(mesh.F.rows()) + " faces, " +
+        genus_text + (topo.boundary_edges ? ", open" : ", closed"));
 
     auto t0 = Clock::now();
     Eigen::VectorXd metric;
@@ -177,6 +191,7 @@ int main(int argc, char** argv) {
     ValidationOptions vopt;
     vopt.require_closed = topo.boundary_edges == 0;
     vopt.expected_genus = input_genus;
+    vopt.allow_non_orientable = input_non_orientable;
     const ValidationReport checks = validate_triangle_mesh(r.dual.V, r.dual.F, vopt);
     const TriangleQuality q = triangle_quality(r.dual.V, r.dual.F);
 
@@ -222,7 +237,8 @@ int main(int argc, char** argv) {
       cli::JsonObject topo_json;
       topo_json.add("vertices", checks.vertices).add("edges", checks.edges).add("faces", checks.faces)
           .add("components", checks.components).add("boundary_loops", checks.boundary_loops)
-          .add("euler_characteristic", checks.euler_characteristic).add("genus", checks.genus);
+          .add("euler_characteristic", checks.euler_characteristic).add("genus", checks.genus)
+          .add("orientable", checks.orientable).add("crosscaps", checks.crosscaps);
       rep.add_array("checks", items).add_object("dual_topology", topo_json).add("all_checks_passed", checks.ok());
       cli::write_json(report_path, rep);
     }
