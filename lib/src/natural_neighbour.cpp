@@ -681,13 +681,7 @@ VertexWeights NaturalNeighbourCoordinates::vertex_weights(const NaturalNeighbour
     std::sort(exact_vertices->begin(), exact_vertices->end());
   }
   if (progress) progress(total, total);
-  std::vector<Eigen::Triplet<double>> trip;
-  for (int v = 0; v < nv; ++v)
-    for (const auto& [s, w] : rows[v]) trip.emplace_back(v, s, w);
-  VertexWeights W(nv, ns);
-  W.setFromTriplets(trip.begin(), trip.end());
-  W.makeCompressed();
-  return W;
+  return rows_to_matrix(nv, ns, rows);
 }
 
 Eigen::MatrixXd interpolate_site_values(const VertexWeights& W, const Eigen::MatrixXd& values) {

@@ -141,8 +141,9 @@ struct EdgeKey {
   static long long make(int a, int b) { return (static_cast<long long>(a) << 32) | static_cast<unsigned>(b); }
 };
 
-double tri_min_angle(const Eigen::MatrixX3d& V, int a, int b, int c) {
-  const Eigen::Vector3d p[3] = {V.row(a), V.row(b), V.row(c)};
+// Smallest angle of the triangle (a, b, c) given as points (radians).
+double min_angle_pts(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  const Eigen::Vector3d p[3] = {a, b, c};
   double best = M_PI;
   for (int k = 0; k < 3; ++k) {
     const Eigen::Vector3d e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
@@ -151,6 +152,10 @@ double tri_min_angle(const Eigen::MatrixX3d& V, int a, int b, int c) {
     best = std::min(best, std::acos(std::clamp(e1.dot(e2) / (n1 * n2), -1.0, 1.0)));
   }
   return best;
+}
+
+double tri_min_angle(const Eigen::MatrixX3d& V, int a, int b, int c) {
+  return min_angle_pts(V.row(a).transpose(), V.row(b).transpose(), V.row(c).transpose());
 }
 
 // Groups the faces around vertex v into fans (connected through edges incident to v).
@@ -304,19 +309,6 @@ int improve_by_flips(const Eigen::MatrixX3d& V, std::vector<std::array<int, 3>>&
     if (pass_flips == 0) break;
   }
   return flips;
-}
-
-// Smallest angle of the triangle (a, b, c) given as points (radians).
-double min_angle_pts(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
-  const Eigen::Vector3d p[3] = {a, b, c};
-  double best = M_PI;
-  for (int k = 0; k < 3; ++k) {
-    const Eigen::Vector3d e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
-    const double n1 = e1.norm(), n2 = e2.norm();
-    if (n1 == 0 || n2 == 0) return 0;
-    best = std::min(best, std::acos(std::clamp(e1.dot(e2) / (n1 * n2), -1.0, 1.0)));
-  }
-  return best;
 }
 
 // Smallest angle of a 2D triangle, or -1 when it is inverted / degenerate (counter-clockwise = valid).
