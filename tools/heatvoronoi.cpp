@@ -28,25 +28,9 @@ using Clock = std::chrono::steady_clock;
 namespace {
 
 Eigen::MatrixX3d read_sites_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw IOError(path + ": cannot open the sites file");
-  std::vector<Eigen::Vector3d> pts;
-  std::string line;
-  int line_no = 0;
-  while (std::getline(in, line)) {
-    ++line_no;
-    const auto first = line.find_first_not_of(" \t\r");
-    if (first == std::string::npos || line[first] == '#') continue;
-    std::istringstream ls(line);
-    Eigen::Vector3d p;
-    if (!(ls >> p[0] >> p[1] >> p[2]))
-      throw IOError(path + ": line " + std::to_string(line_no) + " is not 'x y z'");
-    if (!p.allFinite()) throw InvalidInputError(path + ": line " + std::to_string(line_no) + " has a NaN or infinite coordinate");
-    pts.push_back(p);
-  }
-  if (pts.empty()) throw InvalidInputError(path + ": no sites in the file");
-  Eigen::MatrixX3d P(pts.size(), 3);
-  for (size_t i = 0; i < pts.size(); ++i) P.row(i) = pts[i];
+  const auto rows = cli::read_number_rows(path, 3, "sites");
+  Eigen::MatrixX3d P(rows.size(), 3);
+  for (size_t i = 0; i < rows.size(); ++i) P.row(i) << rows[i][0], rows[i][1], rows[i][2];
   return P;
 }
 

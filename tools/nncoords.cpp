@@ -22,43 +22,6 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-// Rows of whitespace-separated numbers; '#' comments and blank lines skipped. All rows must have
-// `columns` entries (0 = as many as the first row, at least 1).
-std::vector<std::vector<double>> read_rows(const std::string& path, int columns, const std::string& what) {
-  std::ifstream in(path);
-  if (!in) throw IOError(path + ": cannot open the " + what + " file");
-  std::vector<std::vector<double>> rows;
-  std::string line;
-  int line_no = 0;
-  while (std::getline(in, line)) {
-    ++line_no;
-    const auto first = line.find_first_not_of(" \t\r");
-    if (first == std::string::npos || line[first] == '#') continue;
-    std::istringstream ls(line);
-    std::vector<double> row;
-    std::string tok;
-    while (ls >> tok) {
-      try {
-        size_t used = 0;
-        const double x = std::stod(tok, &used);
-        if (used != tok.size()) throw std::invalid_argument(tok);
-        row.push_back(x);
-      } catch (const std::exception&) {
-        throw IOError(path + ": line " + std::to_string(line_no) + ": '" + tok + "' is not a number");
-      }
-    }
-    const int want = columns > 0 ? columns : (rows.empty() ? static_cast<int>(row.size()) : static_cast<int>(rows[0].size()));
-    if (static_cast<int>(row.size()) != want)
-      throw IOError(path + ": line " + std::to_string(line_no) + " has " + std::to_string(row.size()) +
-                    " values, expected " + std::to_string(want));
-    for (double x : row)
-      if (!std::isfinite(x)) throw InvalidInputError(path + ": line " + std::to_string(line_no) + " has a NaN or infinite value");
-    rows.push_back(std::move(row));
-  }
-  if (rows.empty()) throw InvalidInputError(path + ": no " + what + " in the file");
-  return rows;
-}
-
 // Mesh with per-vertex values as ASCII PLY: x y z value_0 .. value_{k-1} [red green blue].
 void write_values_ply(const std::string& path, const TriangleMesh& mesh, const Eigen::MatrixXd& X, bool colour) {
   write_atomically(path, [&](std::ostream& out) {
@@ -144,7 +107,7 @@ int main(int argc, char** argv) {
     log("read " + mesh_path + ": " + std::to_string(nv) + " vertices, " + std::to_string(mesh.F.rows()) + " faces");
 
     // sites: snapped to the surface; off-surface and duplicate sites are errors
-    const auto site_rows = read_rows(sites_path, 3, "sites");
+    const auto site_rows = cli::read_number_rows(sites_path, 3, "sites");
     const int ns = static_cast<int>(site_rows.size());
     if (ns < 2) throw InvalidInputError(sites_path + ": " + std::to_string(ns) + " site given, at least 2 are needed");
     Eigen::MatrixX3d P(ns, 3);
@@ -166,7 +129,7 @@ int main(int argc, char** argv) {
                                   " are duplicates (same point on the surface)");
     Eigen::MatrixXd values;
     if (!values_path.empty()) {
-      const auto rows = read_rows(values_path, 0, "values");
+      const auto rows = cli::read_number_rows(values_path, 0, "values");
       if (static_cast<int>(rows.size()) != ns)
         throw InvalidInputError(values_path + ": " + std::to_string(rows.size()) + " rows of values for " +
                                 std::to_string(ns) + " sites");

@@ -5,7 +5,10 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
+#include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include "heatcvt/errors.h"
 #include <exception>
@@ -79,6 +82,41 @@ void check_output_path(const std::string& path, const std::vector<std::string>& 
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::vector<std::vector<double>> read_number_rows(const std::string& path, int columns, const std::string& what) {
+  std::ifstream in(path);
+  if (!in) throw IOError(path + ": cannot open the " + what + " file");
+  std::vector<std::vector<double>> rows;
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    const auto first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    std::istringstream ls(line);
+    std::vector<double> row;
+    std::string tok;
+    while (ls >> tok) {
+      try {
+        size_t used = 0;
+        const double x = std::stod(tok, &used);
+        if (used != tok.size()) throw std::invalid_argument(tok);
+        row.push_back(x);
+      } catch (const std::exception&) {
+        throw IOError(path + ": line " + std::to_string(line_no) + ": '" + tok + "' is not a number");
+      }
+    }
+    const int want = columns > 0 ? columns : (rows.empty() ? static_cast<int>(row.size()) : static_cast<int>(rows[0].size()));
+    if (static_cast<int>(row.size()) != want)
+      throw IOError(path + ": line " + std::to_string(line_no) + " has " + std::to_string(row.size()) +
+                    " values, expected " + std::to_string(want));
+    for (double x : row)
+      if (!std::isfinite(x)) throw InvalidInputError(path + ": line " + std::to_string(line_no) + " has a NaN or infinite value");
+    rows.push_back(std::move(row));
+  }
+  if (rows.empty()) throw InvalidInputError(path + ": no " + what + " in the file");
+  return rows;
 }
 
 }  // namespace heatcvt::cli

@@ -32,6 +32,12 @@ int run_tool(const std::string& tool, const std::function<int()>& body);
 /// not one of them. Throws heatcvt::InvalidInputError "<path>: <problem>". Empty paths pass.
 void check_output_path(const std::string& path, const std::vector<std::string>& extensions = {});
 
+/// Rows of whitespace-separated numbers from a text file ('#' comments and blank lines skipped),
+/// every row with `columns` values (0 = as many as the first row). Throws heatcvt::IOError or
+/// InvalidInputError "<path>: line N ..." for an unreadable file, a token that is not a number, a
+/// short or long row, a NaN/inf value, or a file without rows ("no <what> in the file").
+std::vector<std::vector<double>> read_number_rows(const std::string& path, int columns, const std::string& what);
+
 /// Seconds elapsed since `start`.
 double seconds_since(std::chrono::steady_clock::time_point start);
 
