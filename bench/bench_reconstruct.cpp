@@ -8,6 +8,7 @@
 // Usage: bench_reconstruct [points=50000] [sites=3000]
 //            [shapes=bunny_pmp.off,armadillo.obj,kitten.obj,fertility.off,elephant.off]
 //            [--only-heatcvt] [--clean-only | --noisy-only] [--threads T] [--anisotropy L]
+//            [--iterations N] [--relaxation W] [--tolerance X] [--random-start]   (heatcvt options)
 #define CGAL_EIGEN3_ENABLED 1  // CGAL Poisson's sparse solver (Eigen is linked through heatcvt)
 #include <CGAL/Advancing_front_surface_reconstruction.h>
 #include <CGAL/compute_average_spacing.h>
@@ -179,6 +180,9 @@ int main(int argc, char** argv) {
   bool only_heat = false, clean = true, noisy = true;
   int threads = 0;
   double anisotropy = -1;  // < 0: the library default
+  int iterations = -1;     // < 0: the library default (as the next two)
+  double relaxation = -1, tolerance = -1;
+  bool random_start = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--only-heatcvt") only_heat = true;
@@ -186,6 +190,10 @@ int main(int argc, char** argv) {
     else if (a == "--noisy-only") clean = false;
     else if (a == "--threads" && i + 1 < argc) threads = std::atoi(argv[++i]);
     else if (a == "--anisotropy" && i + 1 < argc) anisotropy = std::atof(argv[++i]);
+    else if (a == "--iterations" && i + 1 < argc) iterations = std::atoi(argv[++i]);
+    else if (a == "--relaxation" && i + 1 < argc) relaxation = std::atof(argv[++i]);
+    else if (a == "--tolerance" && i + 1 < argc) tolerance = std::atof(argv[++i]);
+    else if (a == "--random-start") random_start = true;
     else if (!a.empty() && a[0] == '-') {
       std::fprintf(stderr, "bench_reconstruct: unknown option %s\n", a.c_str());
       return 2;
@@ -241,6 +249,10 @@ int main(int argc, char** argv) {
         o.sites = sites;
         o.threads = threads;
         if (anisotropy >= 0) o.anisotropy = anisotropy;
+        if (iterations >= 0) o.iterations = iterations;
+        if (relaxation >= 0) o.lloyd_relaxation = relaxation;
+        if (tolerance >= 0) o.lloyd_tolerance = tolerance;
+        if (random_start) o.farthest_point_start = false;
         heat = reconstruct_surface(P, o);
         return heat.mesh;
       });
@@ -345,9 +357,12 @@ int main(int argc, char** argv) {
       Row& h = cell.front();
       h.accepted = h.closed && h.manifold && !h.self_intersecting && h.genus == genus && h.phi_m >= 52.0 &&
                    h.phi_min >= 25.0 && (h.ratio < 0 || h.ratio <= (h.noisy ? 1.5 : 1.2));
-      std::fprintf(stderr, "   heatcvt: laplacian %.2fs factor %.2fs cvt %.2fs (%d it) total %.2fs; holes %d rejected %d "
-                   "removed %d unused %d fallback %d angle-undone %d; ratio %.3f %s\n",
-                   heat.laplacian_seconds, heat.factor_seconds, heat.cvt_seconds, heat.iterations, heat.total_seconds,
+      double iteration_sum = 0;
+      for (double s : heat.iteration_seconds) iteration_sum += s;
+      std::fprintf(stderr, "   heatcvt: laplacian %.2fs factor %.2fs cvt %.2fs (%d it, %.2fs in them) total %.2fs; holes %d "
+                   "rejected %d removed %d unused %d fallback %d angle-undone %d; ratio %.3f %s\n",
+                   heat.laplacian_seconds, heat.factor_seconds, heat.cvt_seconds, heat.iterations, iteration_sum,
+                   heat.total_seconds,
                    heat.holes_filled, heat.rejected_triangles, heat.removed_triangles, heat.unused_sites,
                    heat.polish_fallback ? 1 : 0, heat.angle_polish_undone ? 1 : 0, h.ratio, h.accepted ? "ACCEPTED" : "NOT accepted");
       for (Row& r : cell) rows.push_back(r);

@@ -59,8 +59,8 @@ void write_sphere_cloud(const std::string& path, int n) {
 TEST(Cloud2MeshTool, HelpListsDefaults) {
   auto r = test::run_tool("cloud2mesh", "--help");
   EXPECT_EQ(r.exit_code, 0);
-  for (const char* needle : {"-n", "3000", "--iterations", "30", "--neighbours", "--anisotropy", "--denoise", "--seed",
-                             "--threads", "--report", "--quiet"})
+  for (const char* needle : {"-n", "3000", "--iterations", "10", "--neighbours", "--anisotropy", "--denoise", "--seed",
+                             "--relaxation", "1.5", "--random-start", "--threads", "--report", "--quiet"})
     EXPECT_NE(r.out.find(needle), std::string::npos) << needle;
 }
 
@@ -178,6 +178,7 @@ TEST(Cloud2MeshTool, NonsenseOptions) {
   expect_clean_failure(test::run_tool("cloud2mesh", base + "-k 2"), {"-k"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--anisotropy -1"), {"--anisotropy"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--threads -1"), {"--threads"}, dir, 1);
+  expect_clean_failure(test::run_tool("cloud2mesh", base + "--relaxation 2"), {"--relaxation"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--bogus"), {"bogus"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", dir.path("s.xyz") + " -o " + dir.path("o.xyz")), {"o.xyz"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", dir.path("s.xyz") + " -o " + dir.path("missing/o.ply")),

@@ -238,6 +238,12 @@ TEST(Reconstruct, BadInputsThrowWithAMessage) {
   ReconstructionOptions th = o;
   th.threads = -2;
   expect_throw(P, th, "threads");
+  ReconstructionOptions om = o;
+  om.lloyd_relaxation = 2.0;
+  expect_throw(P, om, "lloyd_relaxation");
+  ReconstructionOptions tol = o;
+  tol.lloyd_tolerance = std::nan("");
+  expect_throw(P, tol, "lloyd_tolerance");
   expect_throw(P.topRows(20), o, "usable points");
   // Degenerate clouds: all points identical after merging duplicates -> too few points.
   expect_throw(Eigen::MatrixX3d::Ones(100, 3), o, "usable points");

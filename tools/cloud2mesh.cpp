@@ -37,6 +37,11 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--t-coef", opt.time_coefficient, "time step t = C * (mean edge length)^2")->capture_default_str();
   app.add_option("--seed", opt.seed, "seed of the initial sites")->capture_default_str();
+  app.add_option("--relaxation", opt.lloyd_relaxation, "Lloyd over-relaxation factor in [1, 2); 1 = plain Lloyd")
+      ->capture_default_str();
+  bool random_start = false;
+  app.add_flag("--random-start", random_start,
+               "seeded random initial sites (the paper's) instead of farthest-point sites relaxed on the point graph");
   app.add_option("--threads", opt.threads, "worker threads (0 = all cores)")->capture_default_str();
   app.add_option("--report", report_path, "write a JSON report");
   app.add_flag("-q,--quiet", quiet, "no progress and no summary");
@@ -60,6 +65,8 @@ int main(int argc, char** argv) {
     if (!(opt.time_coefficient > 0) || !std::isfinite(opt.time_coefficient))
       throw InvalidInputError("--t-coef must be a positive number");
     if (opt.threads < 0) throw InvalidInputError("--threads must be >= 0");
+    if (!(opt.lloyd_relaxation >= 1 && opt.lloyd_relaxation < 2)) throw InvalidInputError("--relaxation must be in [1, 2)");
+    opt.farthest_point_start = !random_start;
     cli::check_output_path(out_path, {".ply", ".obj", ".off", ".stl"});
     cli::check_output_path(report_path, {".json"});
 

@@ -52,6 +52,8 @@ void check_options(const ReconstructionOptions& o) {
   if (o.threads < 0) bad("threads must be >= 0");
   if (o.max_hole_edges < 0) bad("max_hole_edges must be >= 0");
   if (o.relaxation_iterations < 0) bad("relaxation_iterations must be >= 0");
+  if (!(o.lloyd_relaxation >= 1 && o.lloyd_relaxation < 2)) bad("lloyd_relaxation must be in [1, 2)");
+  if (!(o.lloyd_tolerance >= 0) || !std::isfinite(o.lloyd_tolerance)) bad("lloyd_tolerance must be a finite number >= 0");
   if (o.denoise && o.denoise_neighbors < 2) bad("denoise_neighbors must be >= 2");
   if (o.denoise && (!(o.denoise_stddev > 0) || !std::isfinite(o.denoise_stddev))) bad("denoise_stddev must be > 0");
 }
@@ -564,6 +566,12 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   copt.threads = options.threads;
   copt.time_coefficient = options.time_coefficient;
   copt.build_dual = false;
+  if (options.farthest_point_start) {
+    copt.initialization = CvtInitialization::farthest_point;
+    copt.graph_lloyd_iterations = 20;
+  }
+  copt.relaxation = options.lloyd_relaxation;
+  copt.tolerance = options.lloyd_tolerance;
   t0 = Clock::now();
   report("cvt", 0);
   const CvtResult cvt = centroidal_voronoi(
