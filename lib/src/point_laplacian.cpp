@@ -426,6 +426,7 @@ PointLaplacian point_laplacian(const Eigen::MatrixX3d& P, const PointLaplacianOp
       M[i] = floor_mass;
     }
   lap.M = std::move(M);
+  out.neighbors = nb;
   out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

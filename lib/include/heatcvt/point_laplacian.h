@@ -91,6 +91,9 @@ struct PointLaplacian {
   /// Unoriented unit PCA normals (#P by 3) of the point and its k neighbours; orient them with
   /// orient_normals_mst() (normals.h) if needed.
   Eigen::MatrixX3d normals;
+  /// The k nearest neighbours of each point (#P by k, nearest first, as k_nearest_neighbors()
+  /// returns them), kept so that callers needing the same neighbourhoods do not search again.
+  Eigen::MatrixXi neighbors;
   /// Number of edges whose summed weight was negative and was clamped to 0 (in the default
   /// intrinsic mode only rounding-level negatives from cocircular configurations, see
   /// `most_negative_weight`).

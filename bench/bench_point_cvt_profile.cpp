@@ -1,0 +1,52 @@
+// Per-phase profile of the CVT on a point cloud (development aid for cloud2mesh's speed):
+//   bench_point_cvt_profile [mesh=kitten.obj] [points=50000] [sites=3000] [iterations=10] [threads=2]
+// Samples `points` points (seed 11, no noise) from ../shared/data/meshes/<mesh>, builds the point
+// Laplacian, and runs the heat CVT with cloud2mesh's options (farthest-point start, ω = 1.5),
+// printing the time of each Lloyd phase. The reconstruction steps after the CVT are not run.
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include "bench_util.h"
+#include "heatcvt/cvt.h"
+#include "heatcvt/mesh_io.h"
+#include "heatcvt/normals.h"
+#include "heatcvt/point_laplacian.h"
+#include "heatcvt/reconstruct.h"
+
+using namespace heatcvt;
+
+int main(int argc, char** argv) {
+  const std::string mesh = argc > 1 ? argv[1] : "kitten.obj";
+  const int points = argc > 2 ? std::atoi(argv[2]) : 50000;
+  const ReconstructionOptions defaults;
+  CvtOptions o;
+  o.sites = argc > 3 ? std::atoi(argv[3]) : defaults.sites;
+  o.iterations = argc > 4 ? std::atoi(argv[4]) : defaults.iterations;
+  o.threads = argc > 5 ? std::atoi(argv[5]) : 2;
+  o.initialization = defaults.farthest_point_start ? CvtInitialization::farthest_point : CvtInitialization::random;
+  o.graph_lloyd_iterations = defaults.farthest_point_start ? 20 : 0;
+  o.relaxation = defaults.lloyd_relaxation;
+  o.build_dual = false;
+  const TriangleMesh src = read_mesh(std::string(HEATCVT_DATA_DIR) + "/meshes/" + mesh);
+  const Eigen::MatrixX3d P = sample_surface(src.V, src.F, points, 11);
+  double t0 = bench::now_seconds();
+  (void)k_nearest_neighbors(P, defaults.neighbors, o.threads);
+  const double knn_seconds = bench::now_seconds() - t0;
+  t0 = bench::now_seconds();
+  PointLaplacianOptions lo;
+  lo.k = defaults.neighbors;
+  lo.threads = o.threads;
+  const PointLaplacian pl = point_laplacian(P, lo);
+  std::printf("%s: %d points, %ld point triangles, L nnz %ld, point laplacian %.3f s (of which kNN %.3f s)\n", mesh.c_str(), points,
+              static_cast<long>(pl.triangles.rows()), static_cast<long>(pl.laplacian.L.nonZeros()),
+              bench::now_seconds() - t0, knn_seconds);
+  const CvtResult r = centroidal_voronoi(P, pl.triangles, pl.laplacian, o, {}, [](const CvtIterationStats& s) {
+    std::printf("it %3d  %.3f s (voronoi %.3f [solve %.3f tess %.3f], centroid %.3f)  |I| %.0f  max move %.3g\n",
+                s.iteration, s.seconds, s.voronoi_seconds, s.voronoi_solve_seconds, s.tessellate_seconds,
+                s.centroid_seconds, s.mean_index_set, s.max_move);
+    return true;
+  });
+  std::printf("factor %.3f s %.1f MB, graph Lloyd %.3f s, setup %.3f s, total %.3f s\n", r.factor_seconds,
+              r.factor_bytes / 1e6, r.graph_lloyd_seconds, r.setup_seconds, r.total_seconds);
+}
