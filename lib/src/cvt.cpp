@@ -784,13 +784,18 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
   std::vector<std::vector<double>> values(ns);
   double index_total = 0;
   int rings = options.voronoi_rings;
+  // Per-site version of the settled rule below: a site whose own move and whose neighbours'
+  // moves were all below a quarter spacing keeps its cell within one ring of cells (each
+  // bisector moved less than that), so its Voronoi diffusion needs only voronoi_rings_settled
+  // rings even while other sites still travel (over-relaxed Lloyd keeps a few sites moving).
+  std::vector<char> settled(ns, 0);
   // Localized point-source diffusion per site over its cell and `rings` rings of cells (eq. 8),
   // then the per-vertex hottest sites.
   auto heat_field = [&]() {
 #pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
     for (int s = 0; s < ns; ++s) {
       ThreadScratch& t = scratch[omp_get_thread_num()];
-      ring_cells(cells, s, rings, t);
+      ring_cells(cells, s, settled[s] ? std::min(rings, options.voronoi_rings_settled) : rings, t);
       union_vertices(cells, t, indices[s]);
       if (cells.vertices[s].empty()) dijkstra_ball(graph, F, sites[s].face, 3.0 * spacing, t, indices[s]);
       t.rhs.clear();
@@ -949,8 +954,10 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
       }
     }
     double max_move = 0, sum_move = 0;
+    std::vector<double> move_length(ns);
     for (int s = 0; s < ns; ++s) {
       const double d = (position(V, F, moved[s]) - position(V, F, sites[s])).norm();
+      move_length[s] = d;
       max_move = std::max(max_move, d);
       sum_move += d;
     }
@@ -960,6 +967,15 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
     st.mean_move = sum_move / ns;
     st.seconds = since(t0) + carried;
     if (max_move < 0.25 * spacing) rings = std::min(rings, options.voronoi_rings_settled);
+    {
+      std::vector<char> small(ns, 0);
+      for (int s = 0; s < ns; ++s) small[s] = move_length[s] < 0.25 * spacing;
+      for (int s = 0; s < ns; ++s) {
+        bool all = small[s];
+        for (int c : cells.adjacency[s]) all = all && small[c];
+        settled[s] = all;
+      }
+    }
     bool stop_for_quality = false;
     if (options.quality_every > 0 && it >= options.quality_start && it % options.quality_every == 0) {
       // The diagram of the new sites: its heat field is the next iteration's Voronoi step (kept).
@@ -1031,6 +1047,7 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
           cells.vertices.resize(ns);
           cells.adjacency.resize(ns);
           rings = options.voronoi_rings;
+          settled.assign(ns, 0);
           previous_variance = std::numeric_limits<double>::infinity();
         } else {
           have_cached = true;
@@ -1065,10 +1082,12 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
     vo.keep_sites_per_vertex = options.keep_sites_per_vertex;
     vo.threads = threads;
     HeatField field;
-    if (have_cached && rings == options.voronoi_rings) {
+    const bool any_settled = std::find(settled.begin(), settled.end(), 1) != settled.end();
+    if (have_cached && rings == options.voronoi_rings && !any_settled) {
       field = std::move(cached_field);
     } else {
       rings = options.voronoi_rings;
+      settled.assign(ns, 0);
       field = heat_field();
     }
     result.diagram = tessellate(V, F, field, vo);

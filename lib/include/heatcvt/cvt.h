@@ -50,9 +50,11 @@ struct CvtOptions {
   int voronoi_rings = 2;
   /// Index set of a cell's centroid diffusion: the cell plus this many rings of cells. Default 1.
   int centroid_rings = 1;
-  /// Index set of the Voronoi diffusions once the sites have settled (max move below a quarter of
-  /// the spacing): the cell plus this many rings. Default 1 (measured: same cells as 2 rings,
-  /// about half the cost). Set it to voronoi_rings to keep the paper's 2 rings throughout.
+  /// Index set of the Voronoi diffusions once the sites have settled: the cell plus this many
+  /// rings, for every site once all moved less than a quarter of the spacing, and before that
+  /// for each site that moved that little together with all its neighbouring sites. Default 1
+  /// (measured: same cells as 2 rings, about half the cost). Set it to voronoi_rings to keep the
+  /// paper's 2 rings throughout.
   int voronoi_rings_settled = 1;
   /// Quadratic sub-vertex refinement of the centroid (§7.1 "Centroids on faces"). Default true.
   bool quadratic_refinement = true;
