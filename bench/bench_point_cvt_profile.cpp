@@ -41,6 +41,21 @@ int main(int argc, char** argv) {
   std::printf("%s: %d points, %ld point triangles, L nnz %ld, point laplacian %.3f s (of which kNN %.3f s)\n", mesh.c_str(), points,
               static_cast<long>(pl.triangles.rows()), static_cast<long>(pl.laplacian.L.nonZeros()),
               bench::now_seconds() - t0, knn_seconds);
+  {
+    double t1 = bench::now_seconds();
+    PointLaplacianOptions extrinsic = lo;
+    extrinsic.intrinsic_delaunay = false;
+    (void)point_laplacian(P, extrinsic);
+    const double extrinsic_seconds = bench::now_seconds() - t1;
+    t1 = bench::now_seconds();
+    (void)k_nearest_neighbors(P, 4 * points / o.sites, o.threads);
+    const double fit_knn_seconds = bench::now_seconds() - t1;
+    t1 = bench::now_seconds();
+    Eigen::MatrixX3d N = pl.normals;
+    orient_normals_mst(P, N, 10, o.threads);
+    std::printf("without intrinsic Delaunay %.3f s; reconstruction's fit kNN (k = %d) %.3f s, MST orientation %.3f s\n",
+                extrinsic_seconds, 4 * points / o.sites, fit_knn_seconds, bench::now_seconds() - t1);
+  }
   const CvtResult r = centroidal_voronoi(P, pl.triangles, pl.laplacian, o, {}, [](const CvtIterationStats& s) {
     std::printf("it %3d  %.3f s (voronoi %.3f [solve %.3f tess %.3f], centroid %.3f)  |I| %.0f  max move %.3g\n",
                 s.iteration, s.seconds, s.voronoi_seconds, s.voronoi_solve_seconds, s.tessellate_seconds,
