@@ -194,6 +194,11 @@ int main(int argc, char** argv) {
       if (const char* e = std::getenv("CVT_GRAPH_LLOYD")) o.graph_lloyd_iterations = std::atoi(e);
       if (const char* e = std::getenv("CVT_SPLIT")) o.split_nonmanifold_cells = std::atoi(e) != 0;
       if (const char* e = std::getenv("CVT_INIT_RANDOM")) o.initialization = CvtInitialization::random;
+      if (const char* e = std::getenv("CVT_SURFACE_LLOYD")) o.surface_lloyd_iterations = std::atoi(e);
+      if (const char* e = std::getenv("CVT_SURFACE_OMEGA")) o.surface_lloyd_relaxation = std::atof(e);
+      if (const char* e = std::getenv("CVT_SURFACE_TOL")) o.surface_lloyd_tolerance = std::atof(e);
+      if (const char* e = std::getenv("CVT_QUALITY_AT_START")) o.quality_at_start = std::atoi(e) != 0;
+      if (const char* e = std::getenv("CVT_QUALITY_EVERY")) o.quality_every = std::atoi(e);
       CvtResult r = centroidal_voronoi(m.V, m.F, lap, o, {}, [&](const CvtIterationStats& s) {
         std::fprintf(stderr, "  it %d: %.3f s, phi_min %.1f phi_m %.2f, spots %d, inserted %d, omega %.2f, aa %d, res %.3g, move %.3g\n",
                      s.iteration, s.seconds, s.phi_min_deg, s.phi_mean_deg, s.nonmanifold_spots, s.inserted_sites,
@@ -206,14 +211,19 @@ int main(int argc, char** argv) {
       const TriangleQuality q = triangle_quality(r.dual.V, r.dual.F);
       const bool valid = validate_triangle_mesh(r.dual.V, r.dual.F, vo).ok();
       const double ttq = laplacian_s + r.total_seconds;
-      std::fprintf(stderr, "  default: factor %.3f s, graph Lloyd %d it %.3f s, setup %.3f s, total %.3f s\n",
-                   r.factor_seconds, r.graph_lloyd_iterations, r.graph_lloyd_seconds, r.setup_seconds, r.total_seconds);
+      std::fprintf(stderr,
+                   "  default: laplacian %.3f s, factor %.3f s, graph Lloyd %d it %.3f s, surface Lloyd %d it %.3f s, "
+                   "setup %.3f s, start quality phi_min %.1f phi_m %.2f (%.3f s), total %.3f s\n",
+                   laplacian_s, r.factor_seconds, r.graph_lloyd_iterations, r.graph_lloyd_seconds,
+                   r.surface_lloyd_iterations, r.surface_lloyd_seconds, r.setup_seconds, r.start_phi_min_deg,
+                   r.start_phi_mean_deg, r.start_quality_seconds, r.total_seconds);
       row = std::string("| ") + c.name + " | " + std::to_string(nv) + " | " +
             (r.inserted_sites ? std::to_string(c.sites) + " + " + std::to_string(r.inserted_sites)
                               : std::to_string(c.sites)) +
             " | " + fmt(r.factor_seconds, "%.3f s") + " | " + fmt(r.factor_bytes / 1e6, "%.0f MB") + " | " +
             fmt(q.min_angle_deg, "%.1f°") + " | " + fmt(q.mean_min_angle_deg, "%.1f°") + " | " +
-            fmt(per_iteration, "%.3f s") + " | " + (valid ? "yes" : "NO") + " | " +
+            (r.iterations.empty() ? std::string("– (0 it)") : fmt(per_iteration, "%.3f s")) + " | " +
+            (valid ? "yes" : "NO") + " | " +
             (r.reached_quality ? fmt(ttq, "%.1f s") + " (" + std::to_string(r.iterations.size()) + " it)"
                                : std::string("not reached: ") + (r.stalled ? "φm stalled after " : "stopped after ") +
                                      std::to_string(r.iterations.size()) + " it (" + fmt(ttq, "%.1f s") + ")") +

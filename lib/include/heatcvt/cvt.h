@@ -90,6 +90,27 @@ struct CvtOptions {
   /// cell) before the heat iterations start. It runs concurrently with the Cholesky factorisation
   /// when threads ≥ 2 (results do not depend on it). 0 = off. Stops early when no site moves.
   int graph_lloyd_iterations = 0;
+  /// Iterations of a cheap *surface* Lloyd on the start sites, after the graph Lloyd and, like
+  /// it, concurrently with the Cholesky factorisation when threads ≥ 2 (results do not depend on
+  /// it). Cells: restricted Voronoi cells grown over the edge graph by Euclidean distance to the
+  /// continuous site (a local stand-in for the geodesic cells of §7.1, connected so thin parts are
+  /// not bridged); centroid: the cell's area-weighted (lumped) mean position projected onto the
+  /// surface (not snapped to a vertex, unlike the graph Lloyd); over-relaxed by
+  /// surface_lloyd_relaxation (safeguarded by the lumped CVT energy). It costs one Dijkstra sweep
+  /// per iteration (~#V log #V), far below a heat iteration, so the heat Lloyd iterations of
+  /// §7.1 only have to correct the metric. Stops early when no site moved more than
+  /// surface_lloyd_tolerance · spacing. Skipped with face_metric_area (anisotropic metric).
+  /// The result is still the heat Voronoi diagram (and its dual) of the final sites.
+  /// 0 = off (paper). Default 0.
+  int surface_lloyd_iterations = 0;
+  /// Early stop of the surface Lloyd: max site move < this · spacing. Default 0.01.
+  double surface_lloyd_tolerance = 0.01;
+  /// Over-relaxation ω ∈ [1, 2) of the surface Lloyd (step capped at half a spacing). Default 1.
+  double surface_lloyd_relaxation = 1.0;
+  /// With quality_every > 0: evaluate the quality of the start sites (after graph/surface Lloyd)
+  /// before the first heat iteration, so a start that already meets the targets costs one heat
+  /// diagram and no Lloyd iteration. Default false.
+  bool quality_at_start = false;
   /// Split cells too big for thin parts: at each quality evaluation, every cell incident to a
   /// non-manifold spot of the dual (an edge with more than two triangles or a boundary edge on a
   /// closed input, a vertex whose triangles do not form one fan, a cell appearing twice around a
@@ -109,7 +130,8 @@ struct CvtOptions {
 };
 
 /// The best measured configuration for remeshing (meshcvt's defaults): farthest-point sampling,
-/// graph-Lloyd pre-relaxation during the factorisation, over-relaxed Lloyd (ω = 1.5), quality
+/// surface-Lloyd pre-relaxation (60 iterations, ω = 1.5) during the factorisation, a quality check of
+/// the start sites before the first heat iteration, over-relaxed Lloyd (ω = 1.5), quality
 /// evaluated every 2nd iteration with the targets φm ≥ 51°, φmin ≥ 25° and a stop when φm stalls
 /// for 10 evaluations, cells split where too big for thin parts. `CvtOptions{}` remains the paper's configuration.
 CvtOptions fast_cvt_options(int sites);
@@ -154,6 +176,11 @@ struct CvtResult {
   double final_area_variance = 0;    ///< variance of the final cell areas
   int graph_lloyd_iterations = 0;    ///< graph-Lloyd iterations done on the initial sites
   double graph_lloyd_seconds = 0;    ///< their time (overlapped with the factorisation when threads ≥ 2)
+  int surface_lloyd_iterations = 0;  ///< surface-Lloyd iterations done on the start sites
+  double surface_lloyd_seconds = 0;  ///< their time (overlapped with the factorisation when threads ≥ 2)
+  double start_phi_min_deg = -1;     ///< quality of the start sites' dual (quality_at_start; −1 = not evaluated)
+  double start_phi_mean_deg = -1;
+  double start_quality_seconds = 0;  ///< time of that evaluation (heat field + diagram + dual)
   int inserted_sites = 0;            ///< sites added by split_nonmanifold_cells
 };
 
