@@ -199,6 +199,9 @@ int main(int argc, char** argv) {
       if (const char* e = std::getenv("CVT_SURFACE_TOL")) o.surface_lloyd_tolerance = std::atof(e);
       if (const char* e = std::getenv("CVT_QUALITY_AT_START")) o.quality_at_start = std::atoi(e) != 0;
       if (const char* e = std::getenv("CVT_QUALITY_EVERY")) o.quality_every = std::atoi(e);
+      if (const char* e = std::getenv("CVT_RINGS_SETTLED")) o.voronoi_rings_settled = std::atoi(e);
+      if (const char* e = std::getenv("CVT_SPLIT_ROUNDS")) o.surface_lloyd_split_rounds = std::atoi(e);
+      if (const char* e = std::getenv("CVT_SPLIT_IT")) o.surface_lloyd_split_iterations = std::atoi(e);
       CvtResult r = centroidal_voronoi(m.V, m.F, lap, o, {}, [&](const CvtIterationStats& s) {
         std::fprintf(stderr, "  it %d: %.3f s, phi_min %.1f phi_m %.2f, spots %d, inserted %d, omega %.2f, aa %d, res %.3g, move %.3g\n",
                      s.iteration, s.seconds, s.phi_min_deg, s.phi_mean_deg, s.nonmanifold_spots, s.inserted_sites,
@@ -213,10 +216,10 @@ int main(int argc, char** argv) {
       const double ttq = laplacian_s + r.total_seconds;
       std::fprintf(stderr,
                    "  default: laplacian %.3f s, factor %.3f s, graph Lloyd %d it %.3f s, surface Lloyd %d it %.3f s, "
-                   "setup %.3f s, start quality phi_min %.1f phi_m %.2f (%.3f s), total %.3f s\n",
+                   "setup %.3f s, start quality phi_min %.1f phi_m %.2f spots %d after %d split rounds (%.3f s), total %.3f s\n",
                    laplacian_s, r.factor_seconds, r.graph_lloyd_iterations, r.graph_lloyd_seconds,
                    r.surface_lloyd_iterations, r.surface_lloyd_seconds, r.setup_seconds, r.start_phi_min_deg,
-                   r.start_phi_mean_deg, r.start_quality_seconds, r.total_seconds);
+                   r.start_phi_mean_deg, r.start_spots, r.start_rounds, r.start_quality_seconds, r.total_seconds);
       row = std::string("| ") + c.name + " | " + std::to_string(nv) + " | " +
             (r.inserted_sites ? std::to_string(c.sites) + " + " + std::to_string(r.inserted_sites)
                               : std::to_string(c.sites)) +

@@ -402,3 +402,29 @@ TEST(CvtAcceleration, QualityAtStartReturnsTheHeatVoronoiDualOfTheStartSites) {
   EXPECT_LT(worst, 5e-3);
   EXPECT_EQ(full_dual.F.rows(), r.dual.F.rows());
 }
+
+TEST(CvtAcceleration, SplitRoundsAtTheStartKeepTheDualOfTheFinalSites) {
+  // Casting (genus 9, thin walls), fast options with the split rounds at the start: sites added
+  // where cells are too big for thin parts are relaxed by the surface Lloyd and evaluated again;
+  // the result is the dual of the heat Voronoi diagram of all final sites, a valid genus-9 surface.
+  TriangleMesh m = read_mesh(test::data_path("meshes/casting.obj"));
+  m = loop_subdivide(m);
+  CvtOptions o = fast_cvt_options(500);
+  o.iterations = 10;
+  CvtResult r = centroidal_voronoi(m.V, m.F, cotan_laplacian(m.V, m.F), o);
+  std::printf("[ info ] casting-L1, 500 sites: start rounds %d, +%d sites, start spots %d, phi_min %.1f phi_m %.2f, "
+              "reached %d after %zu iterations\n",
+              r.start_rounds, r.inserted_sites, r.start_spots, r.start_phi_min_deg, r.start_phi_mean_deg,
+              r.reached_quality, r.iterations.size());
+  EXPECT_LE(r.start_rounds, o.surface_lloyd_split_rounds);
+  EXPECT_EQ(r.sites.size(), 500u + r.inserted_sites);
+  EXPECT_EQ(r.diagram.num_cells(), static_cast<int>(r.sites.size()));
+  EXPECT_EQ(dual_mesh(r.diagram, r.positions).F, r.dual.F);
+  if (r.reached_quality) {
+    ValidationOptions vo;
+    vo.expected_genus = 9;
+    vo.expected_components = 1;
+    const ValidationReport rep = validate_triangle_mesh(r.dual.V, r.dual.F, vo);
+    EXPECT_TRUE(rep.ok()) << rep.summary();
+  }
+}

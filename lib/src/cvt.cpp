@@ -530,6 +530,56 @@ void restricted_labels(const Graph& g, const std::vector<Eigen::Vector3d>& X, co
   }
 }
 
+// Update of restricted_labels() after the sites moved a little: each site claims the corners of
+// its face when it is the closest there, then Jacobi sweeps give every vertex the closest site among
+// its own and its neighbours' labels, on the vertices next to a change only, until nothing changes.
+// Each change strictly lowers the vertex's key (or keeps it and lowers the site index), so the sweeps
+// end; labels still only spread along edges. Deterministic.
+void update_restricted_labels(const Graph& g, const std::vector<Eigen::Vector3d>& X, const Eigen::MatrixX3i& F,
+                              const std::vector<SurfacePoint>& sites, const std::vector<Eigen::Vector3d>& P,
+                              std::vector<int>& label, std::vector<double>& key) {
+  const int n = static_cast<int>(X.size());
+  for (int v = 0; v < n; ++v)
+    if (label[v] >= 0) key[v] = (X[v] - P[label[v]]).squaredNorm();
+  for (size_t s = 0; s < sites.size(); ++s)
+    for (int k = 0; k < 3; ++k) {
+      const int v = F(sites[s].face, k);
+      const double d = (X[v] - P[s]).squaredNorm();
+      if (label[v] < 0 || d < key[v] || (d == key[v] && static_cast<int>(s) < label[v])) label[v] = static_cast<int>(s), key[v] = d;
+    }
+  std::vector<int> active(n);
+  for (int v = 0; v < n; ++v) active[v] = v;
+  std::vector<unsigned char> mark(n, 0);
+  struct Change {
+    int v, s;
+    double d;
+  };
+  std::vector<Change> changes;
+  while (!active.empty()) {
+    changes.clear();
+    for (int v : active) {
+      int best = label[v];
+      double bk = best >= 0 ? key[v] : std::numeric_limits<double>::infinity();
+      for (int e = g.off[v]; e < g.off[v + 1]; ++e) {
+        const int s = label[g.nbr[e]];
+        if (s < 0 || s == best) continue;
+        const double d = (X[v] - P[s]).squaredNorm();
+        if (d < bk || (d == bk && s < best)) best = s, bk = d;
+      }
+      if (best != label[v]) changes.push_back({v, best, bk});
+    }
+    active.clear();
+    for (const Change& c : changes) {
+      label[c.v] = c.s;
+      key[c.v] = c.d;
+      for (int e = g.off[c.v]; e < g.off[c.v + 1]; ++e)
+        if (!mark[g.nbr[e]]) mark[g.nbr[e]] = 1, active.push_back(g.nbr[e]);
+    }
+    for (int v : active) mark[v] = 0;
+    std::sort(active.begin(), active.end());
+  }
+}
+
 // Area and first moment of the restricted Voronoi cells inside one face: faces whose corners
 // share a label belong to it; the others are clipped exactly by the Euclidean bisector planes of
 // their corner labels (|x − p_j|² − |x − p_i|² is linear on the face, as the heat differences of
@@ -551,31 +601,34 @@ void restricted_face_moments(const std::vector<Eigen::Vector3d>& X, const Eigen:
   double d[3][3];  // d[i][k] = |x_k − p_cand[i]|²
   for (int i = 0; i < m; ++i)
     for (int k = 0; k < 3; ++k) d[i][k] = (X[c[k]] - P[cand[i]]).squaredNorm();
-  std::vector<Eigen::Vector3d> poly, next;
+  // a triangle clipped by at most two half-planes has at most 5 corners
+  Eigen::Vector3d poly[8], next[8];
+  double g[8];
   for (int i = 0; i < m; ++i) {
-    poly = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()};
-    for (int j = 0; j < m && poly.size() >= 3; ++j) {
+    int np = 3;
+    poly[0] = Eigen::Vector3d::UnitX(), poly[1] = Eigen::Vector3d::UnitY(), poly[2] = Eigen::Vector3d::UnitZ();
+    for (int j = 0; j < m && np >= 3; ++j) {
       if (j == i) continue;
       const double h[3] = {d[j][0] - d[i][0], d[j][1] - d[i][1], d[j][2] - d[i][2]};  // ≥ 0: closer to i
-      std::vector<double> g(poly.size());
       bool all_in = true;
-      for (size_t p = 0; p < poly.size(); ++p) {
+      for (int p = 0; p < np; ++p) {
         g[p] = poly[p][0] * h[0] + poly[p][1] * h[1] + poly[p][2] * h[2];
         all_in &= g[p] >= 0;
       }
       if (all_in) continue;
-      next.clear();
-      for (size_t p = 0; p < poly.size(); ++p) {
-        const size_t q = (p + 1) % poly.size();
-        if (g[p] >= 0) next.push_back(poly[p]);
-        if ((g[p] >= 0) != (g[q] >= 0)) next.push_back(poly[p] + g[p] / (g[p] - g[q]) * (poly[q] - poly[p]));
+      int nn = 0;
+      for (int p = 0; p < np; ++p) {
+        const int q = (p + 1) % np;
+        if (g[p] >= 0) next[nn++] = poly[p];
+        if ((g[p] >= 0) != (g[q] >= 0)) next[nn++] = poly[p] + g[p] / (g[p] - g[q]) * (poly[q] - poly[p]);
       }
-      poly.swap(next);
+      for (int p = 0; p < nn; ++p) poly[p] = next[p];
+      np = nn;
     }
-    if (poly.size() < 3) continue;
+    if (np < 3) continue;
     double frac = 0;
     Eigen::Vector3d w = Eigen::Vector3d::Zero();
-    for (size_t p = 1; p + 1 < poly.size(); ++p) {
+    for (int p = 1; p + 1 < np; ++p) {
       const Eigen::Vector3d &a = poly[0], &b = poly[p], &e = poly[p + 1];
       const double t = std::abs((b[1] - a[1]) * (e[2] - a[2]) - (b[2] - a[2]) * (e[1] - a[1]));
       frac += t;
@@ -610,8 +663,11 @@ std::vector<SurfacePoint> surface_lloyd(const Graph& g, const Eigen::MatrixX3d& 
   std::vector<int> nearest(ns);
   double previous_energy = std::numeric_limits<double>::infinity();
   for (int s = 0; s < ns; ++s) P[s] = position(V, F, sites[s]);
+  bool full_flood = true;  // first iteration and after relocated sites: labels from scratch
   for (int it = 0; it < iterations; ++it) {
-    restricted_labels(g, X, F, sites, P, label, key);
+    if (full_flood) restricted_labels(g, X, F, sites, P, label, key);
+    else update_restricted_labels(g, X, F, sites, P, label, key);
+    full_flood = false;
     std::fill(sum.begin(), sum.end(), Eigen::Vector3d::Zero());
     std::fill(mass.begin(), mass.end(), 0.0);
     double energy = 0;
@@ -660,6 +716,7 @@ std::vector<SurfacePoint> surface_lloyd(const Graph& g, const Eigen::MatrixX3d& 
       if (far >= 0) next[s] = vertex_point(F, vfaces, far);
       cell_mass[big] = 0;
       max_move = std::numeric_limits<double>::infinity();
+      full_flood = true;
     }
     for (int s = 0; s < ns; ++s) {
       const Eigen::Vector3d q = position(V, F, next[s]);
@@ -671,7 +728,8 @@ std::vector<SurfacePoint> surface_lloyd(const Graph& g, const Eigen::MatrixX3d& 
     if (max_move < tolerance * spacing) break;
   }
   if (final_labels) {
-    restricted_labels(g, X, F, sites, P, label, key);
+    if (full_flood || label.empty()) restricted_labels(g, X, F, sites, P, label, key);
+    else update_restricted_labels(g, X, F, sites, P, label, key);
     *final_labels = std::move(label);
   }
   return sites;
@@ -859,8 +917,8 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
     throw InvalidInputError("centroidal_voronoi: relaxation must be in [1, 2), got " + std::to_string(options.relaxation));
   if (options.graph_lloyd_iterations < 0 || options.anderson_depth < 0 || options.quality_patience < 0 || options.quality_start < 0 || !(options.max_inserted_fraction >= 0))
     throw InvalidInputError("centroidal_voronoi: graph_lloyd_iterations, quality_start and max_inserted_fraction must be >= 0");
-  if (options.surface_lloyd_iterations < 0 || !(options.surface_lloyd_tolerance >= 0))
-    throw InvalidInputError("centroidal_voronoi: surface_lloyd_iterations and surface_lloyd_tolerance must be >= 0");
+  if (options.surface_lloyd_iterations < 0 || options.surface_lloyd_split_rounds < 0 || !(options.surface_lloyd_tolerance >= 0))
+    throw InvalidInputError("centroidal_voronoi: surface_lloyd_iterations, surface_lloyd_split_rounds and surface_lloyd_tolerance must be >= 0");
   if (!(options.surface_lloyd_relaxation >= 1.0 && options.surface_lloyd_relaxation < 2.0))
     throw InvalidInputError("centroidal_voronoi: surface_lloyd_relaxation must be in [1, 2), got " +
                             std::to_string(options.surface_lloyd_relaxation));
@@ -1122,11 +1180,32 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
 
   bool stop_at_start = false;
   if (options.quality_every > 0 && options.quality_at_start) {
-    CvtIterationStats st0;
-    stop_at_start = evaluate(st0, 0);
-    result.start_phi_min_deg = st0.phi_min_deg;
-    result.start_phi_mean_deg = st0.phi_mean_deg;
-    result.start_quality_seconds = st0.quality_seconds + cached_seconds;
+    for (int round = 0;; ++round) {
+      CvtIterationStats st0;
+      const auto tr = Clock::now();
+      stop_at_start = evaluate(st0, 0);
+      result.start_phi_min_deg = st0.phi_min_deg;
+      result.start_phi_mean_deg = st0.phi_mean_deg;
+      result.start_quality_seconds += since(tr);
+      result.start_spots = st0.nonmanifold_spots;
+      if (stop_at_start || st0.inserted_sites == 0 || !surface_on || round >= options.surface_lloyd_split_rounds) break;
+      // Sites were added to cells too big for thin parts: relax them with the cheap surface Lloyd
+      // (instead of heat iterations) and evaluate again.
+      Eigen::VectorXd vertex_area = Eigen::VectorXd::Zero(n);
+      for (Eigen::Index f = 0; f < F.rows(); ++f)
+        for (int k = 0; k < 3; ++k) vertex_area[F(f, k)] += face_area[f] / 3.0;
+      int done = 0;
+      std::vector<int> labels;
+      const auto ts = Clock::now();
+      sites = surface_lloyd(graph, V, F, vfaces, face_area, vertex_area, sites,
+                            std::max(1, options.surface_lloyd_split_iterations), options.surface_lloyd_tolerance,
+                            options.surface_lloyd_relaxation, spacing, &done, &labels);
+      result.surface_lloyd_iterations += done;
+      result.surface_lloyd_seconds += since(ts);
+      cells = cells_from_labels(graph, labels, ns);
+      rings = std::min(options.voronoi_rings, options.voronoi_rings_settled);
+      ++result.start_rounds;
+    }
   }
 
   for (int it = 1; it <= options.iterations && !stop_at_start; ++it) {
@@ -1326,6 +1405,8 @@ CvtOptions fast_cvt_options(int sites) {
   o.surface_lloyd_iterations = 60;
   o.surface_lloyd_relaxation = 1.5;
   o.quality_at_start = true;
+  o.surface_lloyd_split_rounds = 6;
+  o.surface_lloyd_split_iterations = 3;
   o.relaxation = 1.5;
   o.quality_every = 2;  // an evaluation (exact tessellation + dual) costs about half an iteration
   o.quality_start = 2;

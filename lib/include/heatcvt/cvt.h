@@ -111,6 +111,14 @@ struct CvtOptions {
   /// before the first heat iteration, so a start that already meets the targets costs one heat
   /// diagram and no Lloyd iteration. Default false.
   bool quality_at_start = false;
+  /// With quality_at_start and the surface Lloyd: when the start evaluation split cells too big
+  /// for thin parts (split_nonmanifold_cells), run surface_lloyd_split_iterations more
+  /// surface-Lloyd iterations on all sites and evaluate the start again, at most this many times,
+  /// before the heat iterations. 0 = off. Default 0.
+  int surface_lloyd_split_rounds = 0;
+  /// Surface-Lloyd iterations after each such split (few: the added sites must stay in the thin
+  /// part while their neighbours make room). Default 3.
+  int surface_lloyd_split_iterations = 3;
   /// Split cells too big for thin parts: at each quality evaluation, every cell incident to a
   /// non-manifold spot of the dual (an edge with more than two triangles or a boundary edge on a
   /// closed input, a vertex whose triangles do not form one fan, a cell appearing twice around a
@@ -131,7 +139,8 @@ struct CvtOptions {
 
 /// The best measured configuration for remeshing (meshcvt's defaults): farthest-point sampling,
 /// surface-Lloyd pre-relaxation (60 iterations, ω = 1.5) during the factorisation, a quality check of
-/// the start sites before the first heat iteration, over-relaxed Lloyd (ω = 1.5), quality
+/// the start sites before the first heat iteration (with up to 6 split + 3-iteration surface-Lloyd
+/// rounds where cells are too big for thin parts), over-relaxed Lloyd (ω = 1.5), quality
 /// evaluated every 2nd iteration with the targets φm ≥ 51°, φmin ≥ 25° and a stop when φm stalls
 /// for 10 evaluations, cells split where too big for thin parts. `CvtOptions{}` remains the paper's configuration.
 CvtOptions fast_cvt_options(int sites);
@@ -180,7 +189,9 @@ struct CvtResult {
   double surface_lloyd_seconds = 0;  ///< their time (overlapped with the factorisation when threads ≥ 2)
   double start_phi_min_deg = -1;     ///< quality of the start sites' dual (quality_at_start; −1 = not evaluated)
   double start_phi_mean_deg = -1;
-  double start_quality_seconds = 0;  ///< time of that evaluation (heat field + diagram + dual)
+  double start_quality_seconds = 0;  ///< time of the start evaluations (heat field + diagram + dual) and split rounds
+  int start_rounds = 0;              ///< surface-Lloyd rounds after splits at the start (surface_lloyd_split_rounds)
+  int start_spots = -1;              ///< non-manifold spots of the last start evaluation (−1 = not evaluated)
   int inserted_sites = 0;            ///< sites added by split_nonmanifold_cells
 };
 
