@@ -216,10 +216,10 @@ int main(int argc, char** argv) {
       const double ttq = laplacian_s + r.total_seconds;
       std::fprintf(stderr,
                    "  default: laplacian %.3f s, factor %.3f s, graph Lloyd %d it %.3f s, surface Lloyd %d it %.3f s, "
-                   "setup %.3f s, start quality phi_min %.1f phi_m %.2f spots %d after %d split rounds (%.3f s), total %.3f s\n",
+                   "setup %.3f s, start quality phi_min %.1f phi_m %.2f spots %d after %d split rounds (%d refined sites) (%.3f s), total %.3f s\n",
                    laplacian_s, r.factor_seconds, r.graph_lloyd_iterations, r.graph_lloyd_seconds,
                    r.surface_lloyd_iterations, r.surface_lloyd_seconds, r.setup_seconds, r.start_phi_min_deg,
-                   r.start_phi_mean_deg, r.start_spots, r.start_rounds, r.start_quality_seconds, r.total_seconds);
+                   r.start_phi_mean_deg, r.start_spots, r.start_rounds, r.refined_sites, r.start_quality_seconds, r.total_seconds);
       row = std::string("| ") + c.name + " | " + std::to_string(nv) + " | " +
             (r.inserted_sites ? std::to_string(c.sites) + " + " + std::to_string(r.inserted_sites)
                               : std::to_string(c.sites)) +

@@ -428,3 +428,33 @@ TEST(CvtAcceleration, SplitRoundsAtTheStartKeepTheDualOfTheFinalSites) {
     EXPECT_TRUE(rep.ok()) << rep.summary();
   }
 }
+
+TEST(CvtAcceleration, SmallAngleRefinementAddsSitesAtBadVoronoiVertices) {
+  // A φmin target above what the start gives on a sphere: the start rounds insert sites where the
+  // cells of the small-angle triangles meet, relax, evaluate again; the result is still the dual of
+  // the heat Voronoi diagram of all final sites, a valid sphere.
+  auto sphere = test::icosphere(5);
+  const Laplacian lap = cotan_laplacian(sphere.V, sphere.F);
+  CvtOptions o = fast_cvt_options(200);
+  o.iterations = 2;
+  o.target_phi_mean_deg = 40.0;
+  o.target_phi_min_deg = 50.0;  // out of reach: refinement runs through its rounds
+  o.refine_small_angles = true;
+  CvtResult r = centroidal_voronoi(sphere.V, sphere.F, lap, o);
+  CvtOptions plain = o;
+  plain.refine_small_angles = false;
+  CvtResult p = centroidal_voronoi(sphere.V, sphere.F, lap, plain);
+  std::printf("[ info ] sphere, 200 sites, phi_min target 50: refined +%d sites in %d rounds; start phi_min %.1f "
+              "(without refinement %.1f)\n",
+              r.refined_sites, r.start_rounds, r.start_phi_min_deg, p.start_phi_min_deg);
+  EXPECT_GT(r.refined_sites, 0);
+  EXPECT_LE(r.refined_sites, 6 * 2);  // at most 1 % of the sites (2) per round, 6 rounds
+  EXPECT_EQ(p.refined_sites, 0);
+  EXPECT_LE(r.inserted_sites, static_cast<int>(o.max_inserted_fraction * 200));
+  EXPECT_EQ(r.sites.size(), 200u + r.inserted_sites);
+  EXPECT_EQ(r.diagram.num_cells(), static_cast<int>(r.sites.size()));
+  EXPECT_EQ(dual_mesh(r.diagram, r.positions).F, r.dual.F);
+  ValidationOptions vo;
+  vo.expected_genus = 0;
+  EXPECT_TRUE(validate_triangle_mesh(r.dual.V, r.dual.F, vo).ok());
+}

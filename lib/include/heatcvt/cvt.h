@@ -119,6 +119,14 @@ struct CvtOptions {
   /// Surface-Lloyd iterations after each such split (few: the added sites must stay in the thin
   /// part while their neighbours make room). Default 3.
   int surface_lloyd_split_iterations = 3;
+  /// In those start rounds, when only φmin misses its target (no non-manifold spot, φm met): a new
+  /// site at the Voronoi vertex dual to every triangle whose smallest angle is below
+  /// target_phi_min_deg (circumcentre insertion of Delaunay refinement, placed where the three
+  /// heat cells meet, snapped to the nearest input vertex; worst first, at most 1 % of the sites per
+  /// round, within max_inserted_fraction), then the
+  /// same surface-Lloyd iterations and a new evaluation. The result stays the dual of the heat
+  /// Voronoi diagram of all final sites. Default false.
+  bool refine_small_angles = false;
   /// Split cells too big for thin parts: at each quality evaluation, every cell incident to a
   /// non-manifold spot of the dual (an edge with more than two triangles or a boundary edge on a
   /// closed input, a vertex whose triangles do not form one fan, a cell appearing twice around a
@@ -191,6 +199,7 @@ struct CvtResult {
   double start_phi_mean_deg = -1;
   double start_quality_seconds = 0;  ///< time of the start evaluations (heat field + diagram + dual) and split rounds
   int start_rounds = 0;              ///< surface-Lloyd rounds after splits at the start (surface_lloyd_split_rounds)
+  int refined_sites = 0;             ///< of inserted_sites, added by refine_small_angles
   int start_spots = -1;              ///< non-manifold spots of the last start evaluation (−1 = not evaluated)
   int inserted_sites = 0;            ///< sites added by split_nonmanifold_cells
 };
