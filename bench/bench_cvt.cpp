@@ -202,6 +202,7 @@ int main(int argc, char** argv) {
       if (const char* e = std::getenv("CVT_RINGS_SETTLED")) o.voronoi_rings_settled = std::atoi(e);
       if (const char* e = std::getenv("CVT_SPLIT_ROUNDS")) o.surface_lloyd_split_rounds = std::atoi(e);
       if (const char* e = std::getenv("CVT_SPLIT_IT")) o.surface_lloyd_split_iterations = std::atoi(e);
+      if (const char* e = std::getenv("CVT_REFINE")) o.refine_small_angles = std::atoi(e) != 0;
       CvtResult r = centroidal_voronoi(m.V, m.F, lap, o, {}, [&](const CvtIterationStats& s) {
         std::fprintf(stderr, "  it %d: %.3f s, phi_min %.1f phi_m %.2f, spots %d, inserted %d, omega %.2f, aa %d, res %.3g, move %.3g\n",
                      s.iteration, s.seconds, s.phi_min_deg, s.phi_mean_deg, s.nonmanifold_spots, s.inserted_sites,

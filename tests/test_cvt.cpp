@@ -448,7 +448,7 @@ TEST(CvtAcceleration, SmallAngleRefinementAddsSitesAtBadVoronoiVertices) {
               "(without refinement %.1f)\n",
               r.refined_sites, r.start_rounds, r.start_phi_min_deg, p.start_phi_min_deg);
   EXPECT_GT(r.refined_sites, 0);
-  EXPECT_LE(r.refined_sites, 6 * 2);  // at most 1 % of the sites (2) per round, 6 rounds
+  EXPECT_LE(r.refined_sites, 2 * r.start_rounds);  // at most 1 % of the sites (2) per round
   EXPECT_EQ(p.refined_sites, 0);
   EXPECT_LE(r.inserted_sites, static_cast<int>(o.max_inserted_fraction * 200));
   EXPECT_EQ(r.sites.size(), 200u + r.inserted_sites);
