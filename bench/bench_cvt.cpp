@@ -6,9 +6,15 @@
 //             [--config default|paper|both]
 //
 // Two CVT configurations per model: `default` = fast_cvt_options() (meshcvt's defaults:
-// farthest-point + graph-Lloyd start during the factorisation, over-relaxed Lloyd, quality checked
-// every iteration, cells split where too big for thin parts; stops at quality, at most N
-// iterations) and `paper` = CvtOptions{} (random start, plain Lloyd, N iterations, quality every K).
+// farthest-point + surface-Lloyd start during the factorisation, quality of the start checked
+// before any heat iteration with split / small-angle rounds, then over-relaxed heat Lloyd, quality
+// checked every 2nd iteration, cells split where too big for thin parts; stops at quality, at most
+// N iterations; "– (0 it)" in the time/iteration column: the start met the targets) and `paper` =
+// CvtOptions{} (random start, plain Lloyd, N iterations, quality every K).
+// Development overrides of the default configuration (environment): CVT_RELAXATION, CVT_ANDERSON,
+// CVT_GRAPH_LLOYD, CVT_SPLIT, CVT_INIT_RANDOM, CVT_SURFACE_LLOYD, CVT_SURFACE_OMEGA, CVT_SURFACE_TOL,
+// CVT_QUALITY_AT_START, CVT_QUALITY_EVERY, CVT_RINGS_SETTLED, CVT_SPLIT_ROUNDS, CVT_SPLIT_IT,
+// CVT_REFINE (e.g. the previous defaults: CVT_SURFACE_LLOYD=0 CVT_QUALITY_AT_START=0 CVT_GRAPH_LLOYD=20).
 // For `default` the time to quality is Laplacian + the whole centroidal_voronoi() call (set-up,
 // factorisation, iterations, evaluations, final diagram and dual) when it stopped at quality.
 //
@@ -194,6 +200,15 @@ int main(int argc, char** argv) {
       if (const char* e = std::getenv("CVT_GRAPH_LLOYD")) o.graph_lloyd_iterations = std::atoi(e);
       if (const char* e = std::getenv("CVT_SPLIT")) o.split_nonmanifold_cells = std::atoi(e) != 0;
       if (const char* e = std::getenv("CVT_INIT_RANDOM")) o.initialization = CvtInitialization::random;
+      if (const char* e = std::getenv("CVT_SURFACE_LLOYD")) o.surface_lloyd_iterations = std::atoi(e);
+      if (const char* e = std::getenv("CVT_SURFACE_OMEGA")) o.surface_lloyd_relaxation = std::atof(e);
+      if (const char* e = std::getenv("CVT_SURFACE_TOL")) o.surface_lloyd_tolerance = std::atof(e);
+      if (const char* e = std::getenv("CVT_QUALITY_AT_START")) o.quality_at_start = std::atoi(e) != 0;
+      if (const char* e = std::getenv("CVT_QUALITY_EVERY")) o.quality_every = std::atoi(e);
+      if (const char* e = std::getenv("CVT_RINGS_SETTLED")) o.voronoi_rings_settled = std::atoi(e);
+      if (const char* e = std::getenv("CVT_SPLIT_ROUNDS")) o.surface_lloyd_split_rounds = std::atoi(e);
+      if (const char* e = std::getenv("CVT_SPLIT_IT")) o.surface_lloyd_split_iterations = std::atoi(e);
+      if (const char* e = std::getenv("CVT_REFINE")) o.refine_small_angles = std::atoi(e) != 0;
       CvtResult r = centroidal_voronoi(m.V, m.F, lap, o, {}, [&](const CvtIterationStats& s) {
         std::fprintf(stderr, "  it %d: %.3f s, phi_min %.1f phi_m %.2f, spots %d, inserted %d, omega %.2f, aa %d, res %.3g, move %.3g\n",
                      s.iteration, s.seconds, s.phi_min_deg, s.phi_mean_deg, s.nonmanifold_spots, s.inserted_sites,
@@ -206,14 +221,19 @@ int main(int argc, char** argv) {
       const TriangleQuality q = triangle_quality(r.dual.V, r.dual.F);
       const bool valid = validate_triangle_mesh(r.dual.V, r.dual.F, vo).ok();
       const double ttq = laplacian_s + r.total_seconds;
-      std::fprintf(stderr, "  default: factor %.3f s, graph Lloyd %d it %.3f s, setup %.3f s, total %.3f s\n",
-                   r.factor_seconds, r.graph_lloyd_iterations, r.graph_lloyd_seconds, r.setup_seconds, r.total_seconds);
+      std::fprintf(stderr,
+                   "  default: laplacian %.3f s, factor %.3f s, graph Lloyd %d it %.3f s, surface Lloyd %d it %.3f s, "
+                   "setup %.3f s, start quality phi_min %.1f phi_m %.2f spots %d after %d split rounds (%d refined sites) (%.3f s), total %.3f s\n",
+                   laplacian_s, r.factor_seconds, r.graph_lloyd_iterations, r.graph_lloyd_seconds,
+                   r.surface_lloyd_iterations, r.surface_lloyd_seconds, r.setup_seconds, r.start_phi_min_deg,
+                   r.start_phi_mean_deg, r.start_spots, r.start_rounds, r.refined_sites, r.start_quality_seconds, r.total_seconds);
       row = std::string("| ") + c.name + " | " + std::to_string(nv) + " | " +
             (r.inserted_sites ? std::to_string(c.sites) + " + " + std::to_string(r.inserted_sites)
                               : std::to_string(c.sites)) +
             " | " + fmt(r.factor_seconds, "%.3f s") + " | " + fmt(r.factor_bytes / 1e6, "%.0f MB") + " | " +
             fmt(q.min_angle_deg, "%.1f°") + " | " + fmt(q.mean_min_angle_deg, "%.1f°") + " | " +
-            fmt(per_iteration, "%.3f s") + " | " + (valid ? "yes" : "NO") + " | " +
+            (r.iterations.empty() ? std::string("– (0 it)") : fmt(per_iteration, "%.3f s")) + " | " +
+            (valid ? "yes" : "NO") + " | " +
             (r.reached_quality ? fmt(ttq, "%.1f s") + " (" + std::to_string(r.iterations.size()) + " it)"
                                : std::string("not reached: ") + (r.stalled ? "φm stalled after " : "stopped after ") +
                                      std::to_string(r.iterations.size()) + " it (" + fmt(ttq, "%.1f s") + ")") +

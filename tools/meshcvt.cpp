@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
       init = cvt.initialization == CvtInitialization::farthest_point ? "farthest" : "random";
   double relaxation = cvt.relaxation;
   int graph_lloyd = cvt.graph_lloyd_iterations;
+  int surface_lloyd = cvt.surface_lloyd_iterations;
   bool no_split = !cvt.split_nonmanifold_cells, paper = false;
   int sites = cvt.sites, iterations = cvt.iterations, threads = cvt.threads;
   unsigned seed = cvt.seed;
@@ -74,6 +75,11 @@ int main(int argc, char** argv) {
   app.add_option("--graph-lloyd", graph_lloyd,
                  "graph-Lloyd iterations on the initial sites, run during the factorisation (0 = off)")
       ->capture_default_str();
+  app.add_option("--surface-lloyd", surface_lloyd,
+                 "surface-Lloyd iterations on the initial sites (restricted Euclidean cells, exact centroids "
+                 "projected onto the surface), run during the factorisation; the start sites' quality is checked "
+                 "before the first heat iteration (0 = off)")
+      ->capture_default_str();
   app.add_flag("--no-split", no_split,
                "keep the site count: do not add sites to cells that are too big for thin parts (non-manifold dual)");
   app.add_flag("--paper", paper,
@@ -103,12 +109,14 @@ int main(int argc, char** argv) {
     if (!given("--init")) init = "random";
     if (!given("--relaxation")) relaxation = paper_cvt.relaxation;
     if (!given("--graph-lloyd")) graph_lloyd = paper_cvt.graph_lloyd_iterations;
+    if (!given("--surface-lloyd")) surface_lloyd = paper_cvt.surface_lloyd_iterations;
     if (!given("--no-split")) no_split = !paper_cvt.split_nonmanifold_cells;
     cvt = paper_cvt;
   }
   const int rc = cli::run_tool("meshcvt", [&]() -> int {
     if (!(relaxation >= 1 && relaxation < 2)) throw InvalidInputError("--relaxation must be in [1, 2)");
     if (graph_lloyd < 0) throw InvalidInputError("--graph-lloyd must be >= 0");
+    if (surface_lloyd < 0) throw InvalidInputError("--surface-lloyd must be >= 0");
     if (sites < 1) throw InvalidInputError("--sites must be at least 1, got " + std::to_string(sites));
     if (iterations < 0) throw InvalidInputError("--iterations must be >= 0, got " + std::to_string(iterations));
     if (!(tolerance >= 0) || !std::isfinite(tolerance)) throw InvalidInputError("--tolerance must be >= 0");
@@ -174,6 +182,7 @@ int main(int argc, char** argv) {
     cvt.initialization = init == "farthest" ? CvtInitialization::farthest_point : CvtInitialization::random;
     cvt.relaxation = relaxation;
     cvt.graph_lloyd_iterations = graph_lloyd;
+    cvt.surface_lloyd_iterations = surface_lloyd;
     cvt.split_nonmanifold_cells = !no_split;
     cli::Progress progress("lloyd", iterations, quiet);
     CvtResult r = centroidal_voronoi(mesh.V, mesh.F, lap, cvt, {},
@@ -219,7 +228,7 @@ int main(int argc, char** argv) {
           .add("factor_memory_bytes", static_cast<long>(r.factor_bytes)).add("time_per_iteration_s", per_iter)
           .add("total_s", total_s).add("cell_area_variance", r.final_area_variance)
           .add("revived_sites", revived).add("inserted_sites", r.inserted_sites)
-          .add("graph_lloyd_iterations", r.graph_lloyd_iterations).add("triangles", q.triangles).add("phi_min_deg", q.min_angle_deg)
+          .add("graph_lloyd_iterations", r.graph_lloyd_iterations).add("surface_lloyd_iterations", r.surface_lloyd_iterations).add("triangles", q.triangles).add("phi_min_deg", q.min_angle_deg)
           .add("phi_mean_deg", q.mean_min_angle_deg).add("share_below_30", q.below_30_fraction)
           .add("split_voronoi_vertices", r.dual.split_vertices)
           .add("duplicate_triangles", r.dual.duplicate_triangles)
