@@ -73,6 +73,9 @@ struct ReconstructionResult {
   bool polish_fallback = false;    ///< the valence-flip polish self-intersected; redone with Delaunay flips only
   int unused_sites = 0;            ///< sites that ended in no triangle (dropped from the mesh)
   bool angle_polish_undone = false;  ///< the smallest-angle polish self-intersected and was undone
+  int thin_rounds = 0;             ///< refinement rounds for holes of the sampled surface (thin parts)
+  int collapsed_edges = 0;         ///< short edges of slivers (< 25 degrees) collapsed at the end
+  int thin_split_sites = 0;        ///< sites added by those rounds (the output may have more than `sites` vertices)
 };
 
 /// Reconstructs a surface from the points P (#P by 3; NaN-free, duplicates allowed).
