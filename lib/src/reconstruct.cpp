@@ -549,7 +549,6 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
           ++crossing;
           break;
         }
-    if (std::getenv("HEATCVT_DBG")) std::fprintf(stderr, "DBG crossing local triangles %ld of %ld\n", crossing, (long)pl.triangles.rows());
     if (crossing > 0) {
       lopt.oriented_normals = &N;
       pl = point_laplacian(P, lopt);
@@ -599,19 +598,6 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   for (const auto& st : cvt.iterations) res.iteration_seconds.push_back(st.seconds);
   report("mesh", 0);
 
-  // Thin parts (fingers, ears thinner than the site spacing) can leave holes or detached pieces
-  // in the dual. Each round extracts the mesh from the current sites; if holes of the sampled
-  // surface remain (boundary loops with cloud beyond their edges, see is_surrounded_hole), the
-  // cells on them are split (a new site at the cell's point farthest from its site) and the Lloyd
-  // iteration is resumed from the enlarged set of sites (at most kThinRounds times).
-  const int kThinRounds = std::getenv("HEATCVT_THIN") ? std::atoi(std::getenv("HEATCVT_THIN")) : 0;
-  CvtResult cvt_refined;
-  const CvtResult* cvt_current = &cvt;
-  for (int thin_round = 0;; ++thin_round) {
-  const CvtResult& cvt = *cvt_current;
-  res.rejected_triangles = res.removed_triangles = res.holes_filled = 0;
-  res.polish_fallback = res.angle_polish_undone = false;
-
   // 4. Cell label of every point (original vertices keep their indices in the refined mesh).
   const VoronoiDiagram& D = cvt.diagram;
   const int ns = D.num_cells();
@@ -635,17 +621,6 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     }
     return nb;
   };
-  // DEBUG-THIN
-  const bool dbg = std::getenv("HEATCVT_DBG") != nullptr;
-  std::vector<int> dbg_opp(ns, 0), dbg_cnt(ns, 0);
-  if (dbg) {
-    std::vector<int> sc(ns);
-    for (int s = 0; s < ns; ++s) { int corner = 0; cvt.sites[s].bary.maxCoeff(&corner); sc[s] = T(cvt.sites[s].face, corner); }
-    for (int i = 0; i < n; ++i) if (label[i] >= 0) { ++dbg_cnt[label[i]]; if (N.row(i).dot(N.row(sc[label[i]])) < 0) ++dbg_opp[label[i]]; }
-    int c1 = 0, c10 = 0;
-    for (int s = 0; s < ns; ++s) { if (dbg_opp[s] > 0) ++c1; if (dbg_opp[s] > 0.1 * dbg_cnt[s]) ++c10; }
-    std::fprintf(stderr, "DBG cells %d, with opposite-normal points %d, >10%% %d\n", ns, c1, c10);
-  }
   // 5. Site positions on the fitted surface, fitted normals.
   Eigen::MatrixX3d S(ns, 3), SN(ns, 3);
 #pragma omp parallel for num_threads(resolve_threads(options.threads)) schedule(static)
@@ -695,8 +670,11 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     int vv_witnesses;  // of which Voronoi vertices of the heat tessellation
     double quality;
   };
-  std::vector<Candidate> cands, dbg_incoh, loose;
-  const double loose_dot = std::getenv("HEATCVT_LOOSE") ? std::atof(std::getenv("HEATCVT_LOOSE")) : -0.3;
+  // Candidates that fail the 75-degree test but whose normal is within about 107 degrees of each
+  // site's normal (rims of parts thinner than the site spacing, where the dual triangles turn
+  // around the edge) are kept aside and only tried in the second pass, to close holes.
+  std::vector<Candidate> cands, loose;
+  const double loose_dot = -0.3;
   {
     // Merge the two sorted lists with their multiplicities.
     size_t i = 0, k = 0;
@@ -723,7 +701,6 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
       if (!(min_dot > 0.25)) coherent = false;
       if (q > 0 && coherent) cands.push_back({f, w + wv, wv, q});
       else if (q > 0 && fo.norm() > 0 && min_dot > loose_dot) loose.push_back({f, w + wv, wv, q});
-      if (dbg && !(q > 0 && coherent)) dbg_incoh.push_back({f, w + wv, wv, q});
     }
   }
   res.candidate_triangles = static_cast<int>(cands.size());
@@ -768,7 +745,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
         ++undirected[EdgeKey::make(std::min(a, b), std::max(a, b))];
       }
   };
-  // Non-manifold vertices: keep the largest fan; tiny components (< 4 faces) dropped.
+  // Non-manifold vertices: keep the largest fan; tiny components (<= 4 faces) dropped.
   auto make_vertices_manifold = [&]() {
     for (int round = 0; round < 10; ++round) {
       std::vector<std::vector<int>> vf(ns);
@@ -896,7 +873,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   };
   // Second test for longer or curved loops (whose centre may be off the surface): beyond every
   // boundary edge, one edge length outward in the plane of its triangle, there is sampled surface
-  // (a cloud point within half an edge length) for at least 80 % of the edges. Across the
+  // (a cloud point within half an edge length) for at least 30 % of the edges. Across the
   // border of an open scan there is none.
   auto is_surrounded_hole = [&](const std::vector<int>& loop) {
     int sampled = 0;
@@ -917,8 +894,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
       for (int q = 0; q < n; ++q) dp = std::min(dp, (P.row(q).transpose() - probe).squaredNorm());
       if (std::sqrt(dp) < 0.5 * len) ++sampled;
     }
-    if (std::getenv("HEATCVT_DBG")) std::fprintf(stderr, "DBG surrounded? L %d sampled %d\n", L, sampled);
-    return sampled >= (std::getenv("HEATCVT_SURR") ? std::atof(std::getenv("HEATCVT_SURR")) : 0.3) * L;
+    return sampled >= 0.3 * L;
   };
   const int max_loop = 8 * options.max_hole_edges;
   auto fill_holes = [&]() {
@@ -954,7 +930,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
         used[EdgeKey::make(cur, it->second[0])] = 1;
         cur = it->second[0];
       }
-      if (!simple || cur != a0 || static_cast<int>(loop.size()) > max_loop || loop.size() < 3) { if (std::getenv("HEATCVT_DBG")) std::fprintf(stderr, "DBG loop skipped simple %d closed %d L %zu\n", simple, cur == a0, loop.size()); continue; }
+      if (!simple || cur != a0 || static_cast<int>(loop.size()) > max_loop || loop.size() < 3) continue;
       if (static_cast<int>(loop.size()) > options.max_hole_edges &&
           !((static_cast<int>(loop.size()) <= 4 * options.max_hole_edges && is_sampled_hole(loop)) ||
             is_surrounded_hole(loop)))
@@ -971,8 +947,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
             directed[EdgeKey::make(loop[2], loop[1])] == directed[EdgeKey::make(loop[0], loop[2])])
           continue;
       }
-      if (!fill_loop(loop, S, undirected, tris)) { if (std::getenv("HEATCVT_DBG")) std::fprintf(stderr, "DBG fill_loop failed L %zu\n", loop.size()); continue; }
-      if (std::getenv("HEATCVT_DBG") && loop.size() > 8) std::fprintf(stderr, "DBG filled L %zu\n", loop.size());
+      if (!fill_loop(loop, S, undirected, tris)) continue;
       for (const auto& t : tris) added.push_back(t);
       ++filled;
     }
@@ -1259,7 +1234,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   }
 
   // Slivers left where the polish could not reach (filled holes at thin tips, held vertices):
-  // the shortest edge of a triangle whose smallest angle is below 25 degrees is collapsed when
+  // an edge of a triangle whose smallest angle is below 25 degrees (the shortest that qualifies) is collapsed when
   // the link condition holds, the two opposite vertices keep valence >= 3, no triangle of the new
   // ring turns by more than 60 degrees, and the ring's smallest angle improves (merged vertex at
   // either end point or at the midpoint projected to the fitted surface, whichever is best).
@@ -1279,9 +1254,13 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
         const std::array<int, 3> f = F[id];
         if (dead[id] || touched[f[0]] || touched[f[1]] || touched[f[2]]) continue;
         if (tri_min_angle(S, f[0], f[1], f[2]) >= thr) continue;
-        int k = 0;
-        for (int q = 1; q < 3; ++q)
-          if ((S.row(f[q]) - S.row(f[(q + 1) % 3])).norm() < (S.row(f[k]) - S.row(f[(k + 1) % 3])).norm()) k = q;
+        // Edges by increasing length; the first one whose collapse is allowed and helps.
+        std::array<int, 3> order = {0, 1, 2};
+        std::sort(order.begin(), order.end(), [&](int x, int y) {
+          const double lx = (S.row(f[x]) - S.row(f[(x + 1) % 3])).norm(), ly = (S.row(f[y]) - S.row(f[(y + 1) % 3])).norm();
+          return lx != ly ? lx < ly : x < y;
+        });
+        for (int k : order) {
         const int a = f[k], b = f[(k + 1) % 3];
         std::vector<int> shared, others;
         std::set<int> na, nb;
@@ -1346,6 +1325,8 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
           for (int v : F[g]) touched[v] = 1;
         touched[a] = touched[b] = 1;
         ++pass_done;
+        break;
+        }
       }
       if (pass_done == 0) break;
       collapsed += pass_done;
@@ -1383,98 +1364,6 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     if (!G.empty()) F.swap(G);
   }
 
-  if (dbg) {  // DEBUG-THIN
-    std::unordered_map<long long,int> dr; for (size_t i=0;i<F.size();++i) for(int k=0;k<3;++k) dr[EdgeKey::make(F[i][k],F[i][(k+1)%3])]=i;
-    std::map<int,int> nx; int nb=0;
-    for (auto& f:F) for(int k=0;k<3;++k){int a=f[k],b=f[(k+1)%3]; if(!dr.count(EdgeKey::make(b,a))){nx[a]=b;++nb;}}
-    std::set<int> seen;
-    for (auto& [a0,b0]:nx){ if(seen.count(a0)) continue; std::vector<int> L; int c=a0; while(!seen.count(c)&&nx.count(c)){seen.insert(c);L.push_back(c);c=nx[c];}
-      Eigen::Vector3d g=Eigen::Vector3d::Zero(); int opp=0; for(int v:L){g+=S.row(v).transpose(); if(dbg_opp[v]>0.1*dbg_cnt[v]) ++opp;} g/=L.size();
-      std::fprintf(stderr,"DBG loop len %zu centre %.4f %.4f %.4f straddling-sites %d\n",L.size(),g.x(),g.y(),g.z(),opp);
-      for (size_t i=0;i<L.size();++i){int a=L[i],b=L[(i+1)%L.size()]; int inc=0,cc=0,incw=0; double best=-2;
-        for(auto&c:dbg_incoh){bool ha=false,hb=false;for(int v:c.f){ha|=v==a;hb|=v==b;} if(ha&&hb){++inc;incw+=c.witnesses;
-          const Eigen::Vector3d fo=(S.row(c.f[1])-S.row(c.f[0])).cross(S.row(c.f[2])-S.row(c.f[0])).transpose().normalized(); double mn=2; for(int k=0;k<3;++k) mn=std::min(mn,fo.dot(SN.row(c.f[k]).transpose())); best=std::max(best,mn);}}
-        for(auto&c:cands){bool ha=false,hb=false;for(int v:c.f){ha|=v==a;hb|=v==b;} if(ha&&hb)++cc;}
-        std::fprintf(stderr,"   edge %d-%d len %.4f cands %d incoherent %d (w %d, best min-dot %.2f) nA.nB %.2f cell %d/%d %d/%d\n",a,b,(S.row(a)-S.row(b)).norm(),cc,inc,incw,best,SN.row(a).dot(SN.row(b)),dbg_opp[a],dbg_cnt[a],dbg_opp[b],dbg_cnt[b]);}
-    }
-    std::fprintf(stderr,"DBG boundary edges %d faces %zu\n",nb,F.size());
-    { std::vector<int> par(ns); for(int i=0;i<ns;++i) par[i]=i; std::function<int(int)> fd=[&](int i){return par[i]==i?i:par[i]=fd(par[i]);};
-      for(auto&f:F){par[fd(f[0])]=fd(f[1]);par[fd(f[1])]=fd(f[2]);}
-      std::map<int,std::pair<int,Eigen::Vector3d>> comp; for(auto&f:F){auto& c=comp[fd(f[0])]; if(c.first==0) c.second.setZero(); ++c.first; c.second+=S.row(f[0]).transpose();}
-      for(auto&[r,c]:comp) std::fprintf(stderr,"DBG component faces %d centre %.4f %.4f %.4f\n",c.first,c.second.x()/c.first,c.second.y()/c.first,c.second.z()/c.first); }
-    FILE* fo=std::fopen("/tmp/dbg_rec.obj","w"); for(int v=0;v<ns;++v) std::fprintf(fo,"v %.6f %.6f %.6f\n",S(v,0),S(v,1),S(v,2)); for(auto&f:F) std::fprintf(fo,"f %d %d %d\n",f[0]+1,f[1]+1,f[2]+1); std::fclose(fo);
-    fo=std::fopen("/tmp/dbg_straddle.txt","w"); for(int v=0;v<ns;++v) std::fprintf(fo,"%d %d %d %.6f %.6f %.6f\n",v,dbg_cnt[v],dbg_opp[v],S(v,0),S(v,1),S(v,2)); std::fclose(fo);
-  }
-  // Thin-part refinement (see above).
-  if (thin_round < kThinRounds) {
-    rebuild_edges();
-    // Cells to split: the end points of every boundary edge beyond which the cloud continues
-    // (a cloud point within half an edge length of the point one edge length outward, in the
-    // plane of the edge's triangle): a hole of the sampled surface, not the border of a scan.
-    std::vector<int> split;
-    {
-      std::vector<char> mark(ns, 0);
-      for (const auto& f : F)
-        for (int k = 0; k < 3; ++k) {
-          const int a = f[k], b = f[(k + 1) % 3];
-          if (directed.count(EdgeKey::make(b, a))) continue;
-          const Eigen::Vector3d p0 = S.row(f[0]), p1 = S.row(f[1]), p2 = S.row(f[2]);
-          const Eigen::Vector3d fn = (p1 - p0).cross(p2 - p0);
-          const Eigen::Vector3d e = S.row(b) - S.row(a);
-          if (!(fn.norm() > 0) || !(e.norm() > 0)) continue;
-          const Eigen::Vector3d out = e.cross(fn).normalized();
-          const double len = e.norm();
-          const Eigen::Vector3d probe = 0.5 * (S.row(a) + S.row(b)).transpose() + len * out;
-          double dp = std::numeric_limits<double>::infinity();
-          for (int q = 0; q < n; ++q) dp = std::min(dp, (P.row(q).transpose() - probe).squaredNorm());
-          if (std::sqrt(dp) < 0.5 * len) mark[a] = mark[b] = 1;
-        }
-      for (int v = 0; v < ns; ++v)
-        if (mark[v]) split.push_back(v);
-    }
-    if (dbg) std::fprintf(stderr, "DBG thin round %d: %zu cells to split\n", thin_round, split.size());
-    if (!split.empty()) {
-      // Per cloud point, a local triangle that has it as a corner (its SurfacePoint).
-      std::vector<int> point_face(n, -1), point_corner(n, -1);
-      for (Eigen::Index t = T.rows() - 1; t >= 0; --t)
-        for (int k = 0; k < 3; ++k) point_face[T(t, k)] = static_cast<int>(t), point_corner[T(t, k)] = k;
-      std::vector<int> far(ns, -1);
-      std::vector<double> far_d(ns, -1);
-      std::vector<char> want(ns, 0);
-      for (int s : split) want[s] = 1;
-      for (int i = 0; i < n; ++i) {
-        const int s = label[i];
-        if (s < 0 || !want[s] || point_face[i] < 0) continue;
-        const double d = (P.row(i) - cvt.positions.row(s)).squaredNorm();
-        if (d > far_d[s]) far_d[s] = d, far[s] = i;
-      }
-      std::vector<SurfacePoint> init = cvt.sites;
-      for (int s : split)
-        if (far[s] >= 0) {
-          SurfacePoint sp;
-          sp.face = point_face[far[s]];
-          sp.bary = Eigen::Vector3d::Zero();
-          sp.bary[point_corner[far[s]]] = 1.0;
-          init.push_back(sp);
-        }
-      if (static_cast<int>(init.size()) > ns) {
-        CvtOptions topt = copt;
-        topt.sites = static_cast<int>(init.size());
-        topt.iterations = std::max(1, options.iterations / 2);
-        const auto t1 = Clock::now();
-        cvt_refined = centroidal_voronoi(P, T, lap, topt, init, {}, metric_area);
-        res.cvt_seconds += since(t1);
-        res.factor_seconds += cvt_refined.factor_seconds;
-        res.iterations += static_cast<int>(cvt_refined.iterations.size());
-        for (const auto& st : cvt_refined.iterations) res.iteration_seconds.push_back(st.seconds);
-        res.thin_split_sites += static_cast<int>(init.size()) - ns;
-        ++res.thin_rounds;
-        cvt_current = &cvt_refined;
-        continue;
-      }
-    }
-  }
-
   // 7. Compact: drop unused sites, restore the frame.
   std::vector<int> remap(ns, -1);
   int nv = 0;
@@ -1508,7 +1397,6 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   report("validate", 1);
   res.total_seconds = since(t_start);
   return res;
-  }  // thin_round
 }
 
 }  // namespace heatcvt
