@@ -1249,6 +1249,16 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
       for (int id = 0; id < static_cast<int>(F.size()); ++id)
         for (int v : F[id]) vf[v].push_back(id);
       std::vector<char> dead(F.size(), 0), touched(ns, 0);
+      // Vertices on a boundary are left alone (collapsing an inner edge between two of them
+      // would pinch the surface into a non-manifold vertex).
+      {
+        std::unordered_map<long long, char> half;
+        for (const auto& f : F)
+          for (int q = 0; q < 3; ++q) half[EdgeKey::make(f[q], f[(q + 1) % 3])] = 1;
+        for (const auto& f : F)
+          for (int q = 0; q < 3; ++q)
+            if (!half.count(EdgeKey::make(f[(q + 1) % 3], f[q]))) touched[f[q]] = touched[f[(q + 1) % 3]] = 1;
+      }
       int pass_done = 0;
       for (int id = 0; id < static_cast<int>(F.size()); ++id) {
         const std::array<int, 3> f = F[id];
