@@ -112,7 +112,7 @@ Eigen::MatrixX3d estimate_normals(const Eigen::MatrixX3d& P, int k, int threads)
   return estimate_normals(P, k_nearest_neighbors(P, k, threads), threads);
 }
 
-void orient_normals_mst(const Eigen::MatrixX3d& P, Eigen::MatrixX3d& N, int k, int threads) {
+void orient_normals_mst(const Eigen::MatrixX3d& P, Eigen::MatrixX3d& N, int k, int threads, double offset_penalty) {
   if (N.rows() != P.rows())
     throw InvalidInputError("orient_normals_mst: " + std::to_string(N.rows()) + " normals for " +
                             std::to_string(P.rows()) + " points");
@@ -158,7 +158,15 @@ void orient_normals_mst(const Eigen::MatrixX3d& P, Eigen::MatrixX3d& N, int k, i
       done[v] = 1;
       if (parent >= 0 && N.row(parent).dot(N.row(v)) < 0) N.row(v) *= -1.0;
       for (int u : adj[v])
-        if (!done[u]) heap.push({1.0 - std::abs(N.row(v).dot(N.row(u))), {u, v}});
+        if (!done[u]) {
+          double w = 1.0 - std::abs(N.row(v).dot(N.row(u)));
+          if (offset_penalty > 0) {
+            const Eigen::Vector3d d = P.row(u) - P.row(v);
+            const double len = d.norm();
+            if (len > 0) w += offset_penalty * std::abs(N.row(v).dot(d)) / len;
+          }
+          heap.push({w, {u, v}});
+        }
     }
   }
 }

@@ -250,6 +250,10 @@ PointLaplacian point_laplacian(const Eigen::MatrixX3d& P, const PointLaplacianOp
   // Validates finiteness too (throws InvalidInputError naming the point).
   const Eigen::MatrixXi nb = k_nearest_neighbors(P, k, threads);
 
+  const Eigen::MatrixX3d* on = options.oriented_normals;
+  if (on && on->rows() != n)
+    throw InvalidInputError("point_laplacian: " + std::to_string(on->rows()) + " oriented normals for " +
+                            std::to_string(n) + " points");
   PointLaplacian out;
   out.normals.resize(n, 3);
   std::vector<LocalFan> fans(n);
@@ -298,6 +302,7 @@ PointLaplacian point_laplacian(const Eigen::MatrixX3d& P, const PointLaplacianOp
       Delaunay::Vertex_handle centre = dt.insert(Kernel::Point_2(0.0, 0.0));
       centre->info() = 0;
       for (int c = 1; c <= k; ++c) {
+        if (on && on->row(i).dot(on->row(ids[c])) < 0) continue;  // other side of a thin part
         const auto before = dt.number_of_vertices();
         Delaunay::Vertex_handle vh = dt.insert(Kernel::Point_2(q[c].x(), q[c].y()));
         if (dt.number_of_vertices() != before) vh->info() = c;  // else: duplicate, keep the first
@@ -312,6 +317,10 @@ PointLaplacian point_laplacian(const Eigen::MatrixX3d& P, const PointLaplacianOp
         for (int c = 0; c < 3; ++c) local[c] = fc->vertex(c)->info();
         // Rotate so the centre comes first (keeps CCW order, makes output deterministic).
         while (local[0] != 0) std::rotate(local, local + 1, local + 3);
+        if (on && (on->row(ids[local[0]]).dot(on->row(ids[local[1]])) < 0 ||
+                   on->row(ids[local[1]]).dot(on->row(ids[local[2]])) < 0 ||
+                   on->row(ids[local[0]]).dot(on->row(ids[local[2]])) < 0))
+          continue;
         const Eigen::Vector2d a = q[local[0]], b = q[local[1]], d = q[local[2]];
         const double twice_area2d = (b - a).x() * (d - a).y() - (b - a).y() * (d - a).x();
         if (!(0.5 * twice_area2d > min_area) || !(twice_area2d > 0)) {

@@ -340,7 +340,8 @@ struct RingQuality {
 // ring's smallest angle does not drop below min(old, cap) and (ring min, ring sum of smallest
 // angles) improves, and no ring triangle turns against the vertex normal. Returns the moves kept.
 int angle_polish(Eigen::MatrixX3d& S, Eigen::MatrixX3d& SN, const std::vector<std::array<int, 3>>& F, int rounds,
-                 const std::function<void(int, const Eigen::Vector3d&, Eigen::Vector3d&, Eigen::Vector3d&)>& project) {
+                 const std::function<void(int, const Eigen::Vector3d&, Eigen::Vector3d&, Eigen::Vector3d&)>& project,
+                 const std::vector<char>& frozen) {
   const int ns = static_cast<int>(S.rows());
   std::vector<std::vector<int>> vf(ns);
   for (int id = 0; id < static_cast<int>(F.size()); ++id)
@@ -371,7 +372,7 @@ int angle_polish(Eigen::MatrixX3d& S, Eigen::MatrixX3d& SN, const std::vector<st
   for (int round = 0; round < rounds; ++round) {
     int round_moves = 0;
     for (int v = 0; v < ns; ++v) {
-      if (vf[v].size() < 3) continue;
+      if (vf[v].size() < 3 || frozen[v]) continue;
       const Eigen::Vector3d x = S.row(v), nv = SN.row(v);
       // Tangent frame.
       Eigen::Vector3d u = nv.unitOrthogonal(), w = nv.cross(u);
@@ -537,7 +538,25 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   const Eigen::MatrixXi knn_fit =
       fit_k == options.neighbors ? knn : k_nearest_neighbors(P, fit_k, options.threads);
   Eigen::MatrixX3d N = pl.normals;
-  orient_normals_mst(P, N, std::min(10, options.neighbors), options.threads);
+  // Orientation: edges leaving the tangent plane are propagated through last, so that the two
+  // sides of a part thinner than the kNN neighbourhood (ears, fingers) get opposite normals.
+  orient_normals_mst(P, N, std::min(10, options.neighbors), options.threads, 1.0);
+  // Where local triangles join points of opposite normals (the two sides of a thin part), the
+  // Laplacian is rebuilt without them: heat (hence a cell) must not cross to the other side.
+  {
+    long crossing = 0;
+    for (Eigen::Index t = 0; t < pl.triangles.rows(); ++t)
+      for (int k = 0; k < 3; ++k)
+        if (N.row(pl.triangles(t, k)).dot(N.row(pl.triangles(t, (k + 1) % 3))) < 0) {
+          ++crossing;
+          break;
+        }
+    if (crossing > 0) {
+      lopt.oriented_normals = &N;
+      pl = point_laplacian(P, lopt);
+      lopt.oriented_normals = nullptr;
+    }
+  }
   const Eigen::MatrixX3i& T = pl.triangles;
   Laplacian lap;
   Eigen::VectorXd metric_area;
@@ -659,7 +678,11 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     int vv_witnesses;  // of which Voronoi vertices of the heat tessellation
     double quality;
   };
-  std::vector<Candidate> cands;
+  // Candidates that fail the 75-degree test but whose normal is within about 107 degrees of each
+  // site's normal (rims of parts thinner than the site spacing, where the dual triangles turn
+  // around the edge) are kept aside and only tried in the second pass, to close holes.
+  std::vector<Candidate> cands, loose;
+  const double loose_dot = -0.3;
   {
     // Merge the two sorted lists with their multiplicities.
     size_t i = 0, k = 0;
@@ -681,9 +704,11 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
       // folds the surface: not a candidate.
       const Eigen::Vector3d fo = (S.row(f[1]) - S.row(f[0])).cross(S.row(f[2]) - S.row(f[0])).transpose();
       bool coherent = fo.norm() > 0;
-      for (int k = 0; k < 3 && coherent; ++k)
-        if (!(fo.normalized().dot(SN.row(f[k]).transpose()) > 0.25)) coherent = false;
+      double min_dot = 1;
+      for (int k = 0; k < 3 && fo.norm() > 0; ++k) min_dot = std::min(min_dot, fo.normalized().dot(SN.row(f[k]).transpose()));
+      if (!(min_dot > 0.25)) coherent = false;
       if (q > 0 && coherent) cands.push_back({f, w + wv, wv, q});
+      else if (q > 0 && fo.norm() > 0 && min_dot > loose_dot) loose.push_back({f, w + wv, wv, q});
     }
   }
   res.candidate_triangles = static_cast<int>(cands.size());
@@ -728,7 +753,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
         ++undirected[EdgeKey::make(std::min(a, b), std::max(a, b))];
       }
   };
-  // Non-manifold vertices: keep the largest fan; tiny components (< 4 faces) dropped.
+  // Non-manifold vertices: keep the largest fan; tiny components (<= 4 faces) dropped.
   auto make_vertices_manifold = [&]() {
     for (int round = 0; round < 10; ++round) {
       std::vector<std::vector<int>> vf(ns);
@@ -771,7 +796,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     for (size_t i = 0; i < F.size(); ++i) ++size[find(static_cast<int>(i))];
     std::vector<std::array<int, 3>> G;
     for (size_t i = 0; i < F.size(); ++i)
-      if (size[find(static_cast<int>(i))] >= 4) G.push_back(F[i]);
+      if (size[find(static_cast<int>(i))] > 4) G.push_back(F[i]);
       else ++res.removed_triangles;
     F.swap(G);
     rebuild_edges();
@@ -791,7 +816,14 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     for (int id = 0; id < static_cast<int>(F.size()); ++id)
       for (int k = 0; k < 3; ++k) vf[F[id][k]].push_back(id);
     int added = 0;
-    for (const Candidate& c : cands) {
+    std::stable_sort(loose.begin(), loose.end(), [](const Candidate& x, const Candidate& y) {
+      if (x.witnesses != y.witnesses) return x.witnesses > y.witnesses;
+      if (x.quality != y.quality) return x.quality > y.quality;
+      return x.f < y.f;
+    });
+    std::vector<Candidate> second = cands;
+    second.insert(second.end(), loose.begin(), loose.end());
+    for (const Candidate& c : second) {
       if (present.count(canon(c.f))) continue;
       bool ok = true;
       for (int k = 0; k < 3 && ok; ++k) {
@@ -849,7 +881,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   };
   // Second test for longer or curved loops (whose centre may be off the surface): beyond every
   // boundary edge, one edge length outward in the plane of its triangle, there is sampled surface
-  // (a cloud point within half an edge length) for at least 80 % of the edges. Across the
+  // (a cloud point within half an edge length) for at least 30 % of the edges. Across the
   // border of an open scan there is none.
   auto is_surrounded_hole = [&](const std::vector<int>& loop) {
     int sampled = 0;
@@ -870,7 +902,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
       for (int q = 0; q < n; ++q) dp = std::min(dp, (P.row(q).transpose() - probe).squaredNorm());
       if (std::sqrt(dp) < 0.5 * len) ++sampled;
     }
-    return sampled >= 0.8 * L;
+    return sampled >= 0.3 * L;
   };
   const int max_loop = 8 * options.max_hole_edges;
   auto fill_holes = [&]() {
@@ -1183,18 +1215,171 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     const Eigen::MatrixX3d S_before = S, SN_before = SN;
     const std::vector<std::array<int, 3>> F_before = F;
     const int flips_before = res.flipped_edges;
-    if (remove_valence3() > 0) res.flipped_edges += improve_by_flips(S, F, 5, false);
-    for (int r = 0; r < 4; ++r) {
-      angle_polish(S, SN, F, 2, project);
-      res.flipped_edges += improve_by_flips(S, F, 5, false);
-    }
-    if (self_intersections() > 0) {
+    // Where it makes the mesh self-intersect (thin parts), it is redone from the same start with
+    // the vertices of the intersecting triangles and their neighbours held fixed (twice), and
+    // undone as a whole only if that does not help.
+    std::vector<char> frozen(ns, 0);
+    for (int attempt = 0; attempt < 3; ++attempt) {
+      if (remove_valence3() > 0) res.flipped_edges += improve_by_flips(S, F, 5, false);
+      for (int r = 0; r < 4; ++r) {
+        angle_polish(S, SN, F, 2, project, frozen);
+        res.flipped_edges += improve_by_flips(S, F, 5, false);
+      }
+      const std::vector<int> bad = intersecting_faces();
+      if (bad.empty()) break;
+      std::vector<char> vbad(ns, 0);
+      for (int f : bad)
+        for (int v : F[f]) vbad[v] = 1;
+      for (const auto& f : F)
+        if (vbad[f[0]] || vbad[f[1]] || vbad[f[2]])
+          for (int v : f) frozen[v] = 1;
       S = S_before;
       SN = SN_before;
       F = F_before;
       res.flipped_edges = flips_before;
-      res.angle_polish_undone = true;
+      if (attempt == 2) res.angle_polish_undone = true;
     }
+  }
+
+  // Slivers left where the polish could not reach (filled holes at thin tips, held vertices):
+  // an edge of a triangle whose smallest angle is below 25 degrees (the shortest that qualifies) is collapsed when
+  // the link condition holds, the two opposite vertices keep valence >= 3, no triangle of the new
+  // ring turns by more than 60 degrees, and the ring's smallest angle improves (merged vertex at
+  // either end point or at the midpoint projected to the fitted surface, whichever is best).
+  // Undone if the result self-intersects.
+  if (options.relaxation_iterations > 0) {
+    const Eigen::MatrixX3d S_before = S, SN_before = SN;
+    const std::vector<std::array<int, 3>> F_before = F;
+    const double thr = 25.0 * M_PI / 180.0;
+    int collapsed = 0;
+    for (int pass = 0; pass < 6; ++pass) {
+      std::vector<std::vector<int>> vf(ns);
+      for (int id = 0; id < static_cast<int>(F.size()); ++id)
+        for (int v : F[id]) vf[v].push_back(id);
+      std::vector<char> dead(F.size(), 0), touched(ns, 0);
+      // Vertices on a boundary are left alone (collapsing an inner edge between two of them
+      // would pinch the surface into a non-manifold vertex).
+      {
+        std::unordered_map<long long, char> half;
+        for (const auto& f : F)
+          for (int q = 0; q < 3; ++q) half[EdgeKey::make(f[q], f[(q + 1) % 3])] = 1;
+        for (const auto& f : F)
+          for (int q = 0; q < 3; ++q)
+            if (!half.count(EdgeKey::make(f[(q + 1) % 3], f[q]))) touched[f[q]] = touched[f[(q + 1) % 3]] = 1;
+      }
+      int pass_done = 0;
+      for (int id = 0; id < static_cast<int>(F.size()); ++id) {
+        const std::array<int, 3> f = F[id];
+        if (dead[id] || touched[f[0]] || touched[f[1]] || touched[f[2]]) continue;
+        if (tri_min_angle(S, f[0], f[1], f[2]) >= thr) continue;
+        // Edges by increasing length; the first one whose collapse is allowed and helps.
+        std::array<int, 3> order = {0, 1, 2};
+        std::sort(order.begin(), order.end(), [&](int x, int y) {
+          const double lx = (S.row(f[x]) - S.row(f[(x + 1) % 3])).norm(), ly = (S.row(f[y]) - S.row(f[(y + 1) % 3])).norm();
+          return lx != ly ? lx < ly : x < y;
+        });
+        for (int k : order) {
+        const int a = f[k], b = f[(k + 1) % 3];
+        std::vector<int> shared, others;
+        std::set<int> na, nb;
+        for (int g : vf[a]) {
+          const auto& h = F[g];
+          if (h[0] == b || h[1] == b || h[2] == b) shared.push_back(g);
+          for (int v : h)
+            if (v != a) na.insert(v);
+        }
+        for (int g : vf[b]) {
+          const auto& h = F[g];
+          if (!(h[0] == a || h[1] == a || h[2] == a)) others.push_back(g);
+          for (int v : h)
+            if (v != b) nb.insert(v);
+        }
+        if (shared.size() != 2) continue;
+        std::vector<int> common;
+        for (int v : na)
+          if (v != b && nb.count(v)) common.push_back(v);
+        if (common.size() != 2) continue;
+        if (vf[common[0]].size() < 4 || vf[common[1]].size() < 4 || vf[a].size() + vf[b].size() < 7) continue;
+        // The ring after the collapse: faces of a and b except the two shared ones, b -> a.
+        std::vector<int> ring;
+        for (int g : vf[a])
+          if (std::find(shared.begin(), shared.end(), g) == shared.end()) ring.push_back(g);
+        for (int g : others) ring.push_back(g);
+        double old_min = M_PI;
+        for (int g : vf[a]) old_min = std::min(old_min, tri_min_angle(S, F[g][0], F[g][1], F[g][2]));
+        for (int g : others) old_min = std::min(old_min, tri_min_angle(S, F[g][0], F[g][1], F[g][2]));
+        Eigen::Vector3d mid_pos, mid_nrm;
+        project(a, 0.5 * (S.row(a) + S.row(b)).transpose(), mid_pos, mid_nrm);
+        const Eigen::Vector3d cand_pos[3] = {mid_pos, S.row(a).transpose(), S.row(b).transpose()};
+        const Eigen::Vector3d cand_nrm[3] = {mid_nrm, SN.row(a).transpose(), SN.row(b).transpose()};
+        double best_min = old_min;
+        int best = -1;
+        for (int c = 0; c < 3; ++c) {
+          if (!cand_pos[c].allFinite() || !cand_nrm[c].allFinite()) continue;
+          double m = M_PI;
+          bool ok = true;
+          for (int g : ring) {
+            Eigen::Vector3d p[3];
+            for (int q = 0; q < 3; ++q) p[q] = (F[g][q] == a || F[g][q] == b) ? cand_pos[c] : Eigen::Vector3d(S.row(F[g][q]));
+            const Eigen::Vector3d old_n =
+                (S.row(F[g][1]) - S.row(F[g][0])).cross(S.row(F[g][2]) - S.row(F[g][0])).transpose();
+            const Eigen::Vector3d new_n = (p[1] - p[0]).cross(p[2] - p[0]);
+            if (!(new_n.norm() > 0) || !(old_n.norm() > 0) || new_n.normalized().dot(old_n.normalized()) < 0.5) {
+              ok = false;
+              break;
+            }
+            m = std::min(m, min_angle_pts(p[0], p[1], p[2]));
+          }
+          if (ok && m > best_min + 1e-9) best_min = m, best = c;
+        }
+        if (best < 0) continue;
+        S.row(a) = cand_pos[best].transpose();
+        SN.row(a) = cand_nrm[best].transpose();
+        for (int g : shared) dead[g] = 1;
+        for (int g : others)
+          for (int q = 0; q < 3; ++q)
+            if (F[g][q] == b) F[g][q] = a;
+        for (int g : ring)
+          for (int v : F[g]) touched[v] = 1;
+        touched[a] = touched[b] = 1;
+        ++pass_done;
+        break;
+        }
+      }
+      if (pass_done == 0) break;
+      collapsed += pass_done;
+      std::vector<std::array<int, 3>> G;
+      for (size_t i = 0; i < F.size(); ++i)
+        if (!dead[i]) G.push_back(F[i]);
+      F.swap(G);
+      res.flipped_edges += improve_by_flips(S, F, 5, false);
+    }
+    if (collapsed > 0 && self_intersections() > 0) {
+      S = S_before;
+      SN = SN_before;
+      F = F_before;
+    } else {
+      res.collapsed_edges = collapsed;
+    }
+  }
+
+  // Tiny closed pieces (a few sites of a thin tip that closed up on their own, detached from the
+  // surface by the clean-up): components of fewer than 20 triangles are dropped.
+  {
+    std::vector<int> parent(ns);
+    for (int i = 0; i < ns; ++i) parent[i] = i;
+    std::function<int(int)> find = [&](int i) { return parent[i] == i ? i : parent[i] = find(parent[i]); };
+    for (const auto& f : F) {
+      parent[find(f[0])] = find(f[1]);
+      parent[find(f[1])] = find(f[2]);
+    }
+    std::vector<int> count(ns, 0);
+    for (const auto& f : F) ++count[find(f[0])];
+    std::vector<std::array<int, 3>> G;
+    for (const auto& f : F)
+      if (count[find(f[0])] >= 20) G.push_back(f);
+      else ++res.removed_triangles;
+    if (!G.empty()) F.swap(G);
   }
 
   // 7. Compact: drop unused sites, restore the frame.

@@ -33,8 +33,12 @@ Eigen::MatrixX3d estimate_normals(const Eigen::MatrixX3d& P, const Eigen::Matrix
 /// On a closed, well-sampled surface the result points consistently outward or inward;
 /// started at the topmost point with +z, it points outward for convex shapes.
 ///   P  #P by 3, N  #P by 3 (unit normals, any signs; modified in place). Default k = 10.
+/// offset_penalty > 0 adds offset_penalty · |n_i · (p_j − p_i)| / |p_j − p_i| to the edge weight:
+/// edges leaving the tangent plane (across a part thinner than the neighbourhood, whose two sides
+/// are parallel) are taken last, so the two sides get opposite orientations. Default 0.
 /// Deterministic (ties broken by index).
 /// \throw InvalidInputError if the shapes differ, k < 1, #P < k + 1, or non-finite input.
-void orient_normals_mst(const Eigen::MatrixX3d& P, Eigen::MatrixX3d& N, int k = 10, int threads = 0);
+void orient_normals_mst(const Eigen::MatrixX3d& P, Eigen::MatrixX3d& N, int k = 10, int threads = 0,
+                        double offset_penalty = 0.0);
 
 }  // namespace heatcvt

@@ -76,6 +76,12 @@ struct PointLaplacianOptions {
   /// Points that end up in no local triangle (e.g. collinear neighbourhoods, exact duplicates)
   /// get this fraction of the mean point mass so that M > 0. Default 1e-6.
   double min_mass_fraction = 1e-6;
+  /// Optional consistently oriented unit normals (#P by 3, e.g. from orient_normals_mst()). When
+  /// given, a neighbour j is left out of point i's local triangulation if n_i · n_j < 0, and a
+  /// local triangle is skipped if two of its corners have opposite normals: the two sides of a
+  /// part thinner than the neighbourhood are not connected (the PCA `normals` still use all k
+  /// neighbours). Default nullptr (all neighbours).
+  const Eigen::MatrixX3d* oriented_normals = nullptr;
 };
 
 /// Result of point_laplacian().

@@ -33,9 +33,11 @@ struct ReconstructionOptions {
   /// the extraction (not scan boundaries) and filled. Loops of up to 4× this many edges are
   /// filled only if their centre is > h/4 away from every triangle yet < h/2 from a cloud point
   /// (h = mean loop edge length): a hole in sampled surface, not the border of a scan. Loops of
-  /// up to 8× this many edges are filled when, for >= 80 % of their edges, a cloud point lies
+  /// up to 8× this many edges are filled when, for >= 30 % of their edges, a cloud point lies
   /// within half an edge length of the point one edge length outward (in the plane of the edge's
-  /// triangle): the cloud continues beyond the loop. Default 8.
+  /// triangle): the cloud continues beyond the loop (around the tip of a thin part, where the
+  /// dual lost the tip, only the edges facing the tip find cloud; across the border of an open
+  /// scan none does). Default 8.
   int max_hole_edges = 8;
   /// Final polish: iterations of tangential relaxation (each vertex towards the area-weighted
   /// centroid of its one-ring, re-projected to the fitted surface) alternating with edge flips
@@ -85,6 +87,7 @@ struct ReconstructionResult {
   bool polish_fallback = false;    ///< the valence-flip polish self-intersected; redone with Delaunay flips only
   int unused_sites = 0;            ///< sites that ended in no triangle (dropped from the mesh)
   bool angle_polish_undone = false;  ///< the smallest-angle polish self-intersected and was undone
+  int collapsed_edges = 0;         ///< short edges of slivers (< 25 degrees) collapsed at the end
 };
 
 /// Reconstructs a surface from the points P (#P by 3; NaN-free, duplicates allowed).
@@ -92,7 +95,10 @@ struct ReconstructionResult {
 /// Pipeline (all in the cloud's bounding_box_frame, restored at the end):
 ///  1. exact duplicates merged; optional statistical outlier removal and voxel grid (PCL);
 ///  2. point_laplacian() with k = `neighbors` (tufted intrinsic Delaunay, kNN via FLANN), PCA
-///     normals oriented by orient_normals_mst(); with anisotropy λ > 0 the Laplacian is rebuilt
+///     normals oriented by orient_normals_mst() (edges leaving the tangent plane penalised); where
+///     local triangles join points of opposite oriented normals (the two sides of a part thinner
+///     than the neighbourhood) the Laplacian is rebuilt without them
+///     (PointLaplacianOptions::oriented_normals); with anisotropy λ > 0 the Laplacian is rebuilt
 ///     from the edge lengths of the local triangles lifted to (p, λ n) ∈ R⁶ (paper §7.1);
 ///  3. centroidal_voronoi() on (points, local triangles, Laplacian): `sites` sites, `iterations`
 ///     Lloyd steps, seeded random start;
@@ -103,10 +109,13 @@ struct ReconstructionResult {
 ///     traversed in opposite directions (orientation from the MST-oriented normals);
 ///  5. site positions projected to a weighted least-squares quadratic height field fitted to the
 ///     k nearest points (PCA frame);
-///  6. non-manifold vertices resolved (largest fan kept), components of < 4 triangles dropped,
-///     a second greedy pass over the remaining candidates, holes filled (see max_hole_edges;
-///     max-min-angle triangulation), max-min-angle edge flips, then the polish of
-///     `relaxation_iterations` (tangential relaxation + flips), unused sites removed;
+///  6. non-manifold vertices resolved (largest fan kept), components of <= 4 triangles dropped,
+///     a second greedy pass over the remaining candidates (then also those turning around the rim
+///     of a thin part), holes filled (see max_hole_edges; max-min-angle triangulation),
+///     max-min-angle edge flips, then the polish of `relaxation_iterations` (tangential
+///     relaxation + flips, angle polish with the vertices of any self-intersection held, collapse
+///     of the edges of remaining slivers < 25°), components of < 20 triangles dropped, unused
+///     sites removed;
 ///  7. validate_triangle_mesh() (require_closed = false: open scans legitimately keep boundaries).
 /// Deterministic for a given input, options and seed, independent of `threads`.
 /// \throw InvalidInputError for empty / too small clouds, sites < 4 or > usable points, bad options.
