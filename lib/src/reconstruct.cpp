@@ -529,7 +529,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   lopt.k = options.neighbors;
   lopt.threads = options.threads;
   PointLaplacian pl = point_laplacian(P, lopt);
-  const Eigen::MatrixXi& knn = pl.neighbors;  // the Laplacian's kNN (k = neighbors)
+  const Eigen::MatrixXi knn = pl.neighbors;  // the Laplacian's kNN (k = neighbors); pl is rebuilt below
   // Neighbourhoods of the fitted surface: about one output edge length across (4 cells' worth of
   // points), so that noise averages out instead of passing into the vertex positions; at least
   // `neighbors`, at most 100 points.
