@@ -1,7 +1,7 @@
 // Per-phase profile of the CVT on a point cloud (development aid for cloud2mesh's speed):
-//   bench_point_cvt_profile [mesh=kitten.obj] [points=50000] [sites=3000] [iterations=10] [threads=2]
+//   bench_point_cvt_profile [mesh=kitten.obj] [points=50000] [sites=3000] [iterations=30] [threads=2]
 // Samples `points` points (seed 11, no noise) from ../shared/data/meshes/<mesh>, builds the point
-// Laplacian, and runs the heat CVT with cloud2mesh's options (farthest-point start, ω = 1.5),
+// Laplacian, and runs the heat CVT with cloud2mesh's default Lloyd options (ReconstructionOptions),
 // printing the time of each Lloyd phase. The reconstruction steps after the CVT are not run.
 #include <cstdio>
 #include <cstdlib>

@@ -8,7 +8,7 @@
 // Usage: bench_reconstruct [points=50000] [sites=3000]
 //            [shapes=bunny_pmp.off,armadillo.obj,kitten.obj,fertility.off,elephant.off]
 //            [--only-heatcvt] [--clean-only | --noisy-only] [--threads T] [--anisotropy L]
-//            [--iterations N] [--relaxation W] [--tolerance X] [--random-start]   (heatcvt options)
+//            [--iterations N] [--relaxation W] [--tolerance X] [--random-start | --fast-start]   (heatcvt options)
 #define CGAL_EIGEN3_ENABLED 1  // CGAL Poisson's sparse solver (Eigen is linked through heatcvt)
 #include <CGAL/Advancing_front_surface_reconstruction.h>
 #include <CGAL/compute_average_spacing.h>
@@ -182,7 +182,7 @@ int main(int argc, char** argv) {
   double anisotropy = -1;  // < 0: the library default
   int iterations = -1;     // < 0: the library default (as the next two)
   double relaxation = -1, tolerance = -1;
-  bool random_start = false;
+  bool random_start = false, fast_start = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--only-heatcvt") only_heat = true;
@@ -194,6 +194,7 @@ int main(int argc, char** argv) {
     else if (a == "--relaxation" && i + 1 < argc) relaxation = std::atof(argv[++i]);
     else if (a == "--tolerance" && i + 1 < argc) tolerance = std::atof(argv[++i]);
     else if (a == "--random-start") random_start = true;
+    else if (a == "--fast-start") fast_start = true;
     else if (!a.empty() && a[0] == '-') {
       std::fprintf(stderr, "bench_reconstruct: unknown option %s\n", a.c_str());
       return 2;
@@ -253,6 +254,7 @@ int main(int argc, char** argv) {
         if (relaxation >= 0) o.lloyd_relaxation = relaxation;
         if (tolerance >= 0) o.lloyd_tolerance = tolerance;
         if (random_start) o.farthest_point_start = false;
+        if (fast_start) o.farthest_point_start = true;
         heat = reconstruct_surface(P, o);
         return heat.mesh;
       });

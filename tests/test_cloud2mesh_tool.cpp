@@ -59,8 +59,8 @@ void write_sphere_cloud(const std::string& path, int n) {
 TEST(Cloud2MeshTool, HelpListsDefaults) {
   auto r = test::run_tool("cloud2mesh", "--help");
   EXPECT_EQ(r.exit_code, 0);
-  for (const char* needle : {"-n", "3000", "--iterations", "10", "--neighbours", "--anisotropy", "--denoise", "--seed",
-                             "--relaxation", "1.5", "--random-start", "--threads", "--report", "--quiet"})
+  for (const char* needle : {"-n", "3000", "--iterations", "30", "--neighbours", "--anisotropy", "--denoise", "--seed",
+                             "--relaxation", "--fast-start", "--threads", "--report", "--quiet"})
     EXPECT_NE(r.out.find(needle), std::string::npos) << needle;
 }
 
