@@ -974,14 +974,13 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   fill_holes();
 
   // Faces of F involved in a self-intersection (CGAL, face i = F[i]).
-  auto intersecting_faces = [&]() {
-    std::vector<int> out;
+  // CGAL checks of the current faces F on the sites S (unused sites left out; face i = F[i]).
+  auto check_current = [&](int max_listed) {
     std::vector<int> map(ns, -1);
     int m = 0;
     for (const auto& f : F)
       for (int v : f)
         if (map[v] < 0) map[v] = m++;
-    if (m == 0) return out;
     Eigen::MatrixX3d VV(m, 3);
     for (int v = 0; v < ns; ++v)
       if (map[v] >= 0) VV.row(map[v]) = S.row(v);
@@ -990,8 +989,13 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
       for (int k = 0; k < 3; ++k) FF(i, k) = map[F[i][k]];
     ValidationOptions vo;
     vo.require_closed = false;
-    vo.max_listed = std::numeric_limits<int>::max();
-    const ValidationReport rep = validate_triangle_mesh(VV, FF, vo);
+    vo.max_listed = max_listed;
+    return validate_triangle_mesh(VV, FF, vo);
+  };
+  auto intersecting_faces = [&]() {
+    std::vector<int> out;
+    if (F.empty()) return out;
+    const ValidationReport rep = check_current(std::numeric_limits<int>::max());
     for (const auto& c : rep.checks)
       if (c.name == "no_self_intersections")
         for (const auto& w : c.where)
@@ -1178,23 +1182,8 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   // Valence flips can fold thin parts through themselves: if the polished mesh self-intersects,
   // polish again from the unpolished mesh with Delaunay flips only.
   auto self_intersections = [&]() -> long {
-    std::vector<int> map(ns, -1);
-    int m = 0;
-    for (const auto& f : F)
-      for (int v : f)
-        if (map[v] < 0) map[v] = m++;
-    if (m == 0) return 0;
-    Eigen::MatrixX3d VV(m, 3);
-    for (int v = 0; v < ns; ++v)
-      if (map[v] >= 0) VV.row(map[v]) = S.row(v);
-    Eigen::MatrixX3i FF(F.size(), 3);
-    for (size_t i = 0; i < F.size(); ++i)
-      for (int k = 0; k < 3; ++k) FF(i, k) = map[F[i][k]];
-    ValidationOptions vo;
-    vo.require_closed = false;
-    vo.max_listed = 1;
-    const ValidationReport rep = validate_triangle_mesh(VV, FF, vo);
-    return std::max(0L, rep.self_intersecting_pairs);
+    if (F.empty()) return 0;
+    return std::max(0L, check_current(1).self_intersecting_pairs);
   };
   polish(true);
   // Where the valence polish folded a thin part through itself, untangle locally first.
