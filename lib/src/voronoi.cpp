@@ -17,6 +17,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <array>
+#include <climits>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -228,6 +229,7 @@ struct LocalPoint {
 
 struct FaceResult {
   bool whole = false;  // the face is one refined face of `cell` (no allocation)
+  bool fast = false;   // whole because one site is strictly hottest at all three corners
   int cell = -1;
   std::vector<LocalPoint> points;
   std::vector<std::array<int, 3>> tris;
@@ -262,6 +264,25 @@ double bary_det(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1, const Eige
 FaceResult tessellate_face(const Eigen::MatrixX3i& F, const HeatField& field, int f, const VoronoiOptions& opt) {
   FaceResult res;
   const int vtx[3] = {F(f, 0), F(f, 1), F(f, 2)};
+  // Fast path (most faces): one site is strictly hottest, with positive heat, at all three
+  // corners. It beats every other site at every corner (absent sites count as 0), hence on the
+  // whole face (linear interpolation), which is what the general path below would conclude.
+  {
+    int top = -1;
+    bool whole = true;
+    for (int c = 0; c < 3 && whole; ++c) {
+      const int b = field.offsets[vtx[c]], e = field.offsets[vtx[c] + 1];
+      whole = e > b && field.heat[b] > 0.0 && (e - b == 1 || field.heat[b] > field.heat[b + 1]) &&
+              (top < 0 || field.site[b] == top);
+      if (whole) top = field.site[b];
+    }
+    if (whole) {
+      res.whole = true;
+      res.fast = true;
+      res.cell = top;
+      return res;
+    }
+  }
   // candidate sites: union of the three rows (scratch buffers reused per thread)
   thread_local std::vector<int> sites;
   thread_local std::vector<std::array<double, 3>> U;
@@ -328,6 +349,22 @@ FaceResult tessellate_face(const Eigen::MatrixX3i& F, const HeatField& field, in
       if (!dup) distinct.push_back(r);
     }
     cand.swap(distinct);
+  }
+  // A candidate below another one at all three corners wins nowhere in this face (linear
+  // interpolation) and its bisectors never bound the winners' regions: drop it before clipping
+  // (most cut faces keep 2–3 of up to 24 candidates; clipping is quadratic in their number).
+  {
+    std::vector<int> alive;
+    for (int r : cand) {
+      bool dominated = false;
+      for (int q : cand)
+        if (q != r && U[q][0] > U[r][0] && U[q][1] > U[r][1] && U[q][2] > U[r][2]) {
+          dominated = true;
+          break;
+        }
+      if (!dominated) alive.push_back(r);
+    }
+    cand.swap(alive);
   }
 
   // Canonical points: corners, then the switch points of each edge (edge k = corners k, k+1).
@@ -554,24 +591,27 @@ FaceResult tessellate_face(const Eigen::MatrixX3i& F, const HeatField& field, in
   }
   bool valid = !res.tris.empty();
   if (valid) {
-    std::map<std::pair<int, int>, int> directed;
+    // every directed edge once; an edge without its reverse must be a boundary step of `chain`,
+    // and every boundary step must be covered (sorted vectors: small, allocation-light)
+    std::vector<std::pair<int, int>> directed, boundary;
     double total = 0;
     for (const auto& t : res.tris) {
       const double det = bary_det(res.points[t[0]].bary, res.points[t[1]].bary, res.points[t[2]].bary);
       total += det;
       if (!(det > -1e-14)) valid = false;
-      for (int c = 0; c < 3; ++c)
-        if (++directed[{t[c], t[(c + 1) % 3]}] > 1) valid = false;
+      for (int c = 0; c < 3; ++c) directed.push_back({t[c], t[(c + 1) % 3]});
     }
     if (std::abs(total - 1.0) > 1e-9) valid = false;
-    std::map<std::pair<int, int>, int> boundary;
-    for (size_t i = 0; i < chain.size(); ++i) boundary[{chain[i], chain[(i + 1) % chain.size()]}] = 1;
-    for (const auto& [e, n] : directed) {
-      if (directed.count({e.second, e.first})) continue;
-      if (!boundary.count(e)) valid = false;  // a crack or a T-junction on the face boundary
+    std::sort(directed.begin(), directed.end());
+    if (std::adjacent_find(directed.begin(), directed.end()) != directed.end()) valid = false;
+    for (size_t i = 0; i < chain.size(); ++i) boundary.push_back({chain[i], chain[(i + 1) % chain.size()]});
+    std::sort(boundary.begin(), boundary.end());
+    for (const auto& e : directed) {
+      if (std::binary_search(directed.begin(), directed.end(), std::make_pair(e.second, e.first))) continue;
+      if (!std::binary_search(boundary.begin(), boundary.end(), e)) valid = false;  // a crack or a T-junction
     }
-    for (const auto& [e, n] : boundary)
-      if (!directed.count(e)) valid = false;
+    for (const auto& e : boundary)
+      if (!std::binary_search(directed.begin(), directed.end(), e)) valid = false;
   }
   if (!valid) {
     res.tris.clear();
@@ -609,8 +649,15 @@ FaceResult tessellate_face(const Eigen::MatrixX3i& F, const HeatField& field, in
 namespace {
 
 // Adjacency, Voronoi vertices, edges and areas of a refined mesh whose faces carry cells.
-void finish_diagram(VoronoiDiagram& d, int num_sites) {
+// `interior[v]` (original vertices): every face around v took the fast path (one site strictly
+// hottest at its three corners), so all faces around v are whole faces of one cell (that site is
+// v's strict top). Such a vertex is no Voronoi vertex, and an edge joining two such vertices has
+// two whole faces of the same cell on its sides. Both are skipped: on a typical diagram that is
+// most of the mesh.
+void finish_diagram(VoronoiDiagram& d, int num_sites, const std::vector<char>& interior) {
   const int nrv = static_cast<int>(d.V.rows()), nrf = static_cast<int>(d.F.rows());
+  const int nv = static_cast<int>(interior.size());
+  auto skipped = [&](int v) { return v < nv && interior[v]; };
   d.cell_area = Eigen::VectorXd::Zero(num_sites);
   for (int r = 0; r < nrf; ++r)
     if (d.face_cell[r] >= 0) d.cell_area[d.face_cell[r]] += d.face_area[r];
@@ -628,8 +675,10 @@ void finish_diagram(VoronoiDiagram& d, int num_sites) {
   }
   d.voronoi_vertices.clear();
   std::vector<char> is_vvertex(nrv, 0);
+  std::vector<int> cells;
   for (int v = 0; v < nrv; ++v) {
-    std::vector<int> cells;
+    if (skipped(v)) continue;
+    cells.clear();
     for (int i = inc_off[v]; i < inc_off[v + 1]; ++i)
       if (d.face_cell[inc[i]] >= 0) cells.push_back(d.face_cell[inc[i]]);
     std::sort(cells.begin(), cells.end());
@@ -643,25 +692,25 @@ void finish_diagram(VoronoiDiagram& d, int num_sites) {
     while (d.F(r, k) != v) ++k;
     vv.location.face = d.face_parent[r];
     vv.location.bary = d.face_bary.row(3 * r + k).transpose();
-    vv.cells = std::move(cells);
+    vv.cells = cells;
     d.voronoi_vertices.push_back(std::move(vv));
   }
 
-  // refined edges: (min, max, face)
+  // refined edges that may separate cells: (min, max, face)
   std::vector<std::array<int, 3>> half;
-  half.reserve(3 * nrf);
   for (int r = 0; r < nrf; ++r)
     for (int k = 0; k < 3; ++k) {
       const int a = d.F(r, k), b = d.F(r, (k + 1) % 3);
+      if (skipped(a) && skipped(b)) continue;
       half.push_back({std::min(a, b), std::max(a, b), r});
     }
   std::sort(half.begin(), half.end());
   d.cell_adjacency.assign(num_sites, {});
-  std::map<std::pair<int, int>, std::vector<std::pair<int, int>>> separating;  // (cell a, cell b) → edges
+  std::vector<std::array<int, 4>> separating;  // (cell a, cell b, v0, v1), cell a < cell b, v0 < v1
   for (size_t i = 0; i < half.size();) {
     size_t j = i;
     while (j < half.size() && half[j][0] == half[i][0] && half[j][1] == half[i][1]) ++j;
-    std::vector<int> cells;
+    cells.clear();
     for (size_t k = i; k < j; ++k)
       if (d.face_cell[half[k][2]] >= 0) cells.push_back(d.face_cell[half[k][2]]);
     std::sort(cells.begin(), cells.end());
@@ -670,7 +719,7 @@ void finish_diagram(VoronoiDiagram& d, int num_sites) {
       for (size_t y = x + 1; y < cells.size(); ++y) {
         d.cell_adjacency[cells[x]].push_back(cells[y]);
         d.cell_adjacency[cells[y]].push_back(cells[x]);
-        separating[{cells[x], cells[y]}].push_back({half[i][0], half[i][1]});
+        separating.push_back({cells[x], cells[y], half[i][0], half[i][1]});
       }
     i = j;
   }
@@ -678,48 +727,63 @@ void finish_diagram(VoronoiDiagram& d, int num_sites) {
     std::sort(adj.begin(), adj.end());
     adj.erase(std::unique(adj.begin(), adj.end()), adj.end());
   }
+  std::sort(separating.begin(), separating.end());
 
-  // chain the separating edges of each pair of cells into polylines
+  // chain the separating edges of each pair of cells into polylines (pairs in increasing order;
+  // within a pair: start at chain ends in increasing vertex order, neighbours in increasing order,
+  // then the closed loops)
   d.edges.clear();
-  for (auto& [pair, edges] : separating) {
-    std::map<int, std::vector<int>> graph;
-    for (auto& e : edges) {
-      graph[e.first].push_back(e.second);
-      graph[e.second].push_back(e.first);
+  std::vector<std::array<int, 3>> adj;  // (vertex, neighbour, edge slot) sorted
+  std::vector<char> used;
+  for (size_t i = 0; i < separating.size();) {
+    size_t j = i;
+    while (j < separating.size() && separating[j][0] == separating[i][0] && separating[j][1] == separating[i][1]) ++j;
+    const int m = static_cast<int>(j - i);
+    adj.clear();
+    for (int e = 0; e < m; ++e) {
+      adj.push_back({separating[i + e][2], separating[i + e][3], e});
+      adj.push_back({separating[i + e][3], separating[i + e][2], e});
     }
-    for (auto& [v, nb] : graph) std::sort(nb.begin(), nb.end());
-    std::map<std::pair<int, int>, bool> used;
-    auto is_end = [&](int v) { return graph[v].size() != 2 || is_vvertex[v]; };
-    auto walk = [&](int start, int first_next) {
+    std::sort(adj.begin(), adj.end());
+    used.assign(m, 0);
+    auto range = [&](int v) {
+      auto lo = std::lower_bound(adj.begin(), adj.end(), std::array<int, 3>{v, INT_MIN, INT_MIN});
+      auto hi = lo;
+      while (hi != adj.end() && (*hi)[0] == v) ++hi;
+      return std::make_pair(lo, hi);
+    };
+    auto is_end = [&](int v) {
+      auto [lo, hi] = range(v);
+      return hi - lo != 2 || is_vvertex[v];
+    };
+    auto walk = [&](int start, int first_next, int slot) {
       VoronoiEdge e;
-      e.cell_a = pair.first;
-      e.cell_b = pair.second;
+      e.cell_a = separating[i][0];
+      e.cell_b = separating[i][1];
       e.polyline.push_back(start);
-      int prev = start, cur = first_next;
-      used[{std::min(prev, cur), std::max(prev, cur)}] = true;
+      int cur = first_next;
+      used[slot] = 1;
       while (true) {
         e.polyline.push_back(cur);
         if (cur == start || is_end(cur)) break;
-        int nxt = -1;
-        for (int w : graph[cur])
-          if (!used[{std::min(cur, w), std::max(cur, w)}]) {
-            nxt = w;
+        auto [lo, hi] = range(cur);
+        auto nxt = hi;
+        for (auto it = lo; it != hi; ++it)
+          if (!used[(*it)[2]]) {
+            nxt = it;
             break;
           }
-        if (nxt < 0) break;
-        used[{std::min(cur, nxt), std::max(cur, nxt)}] = true;
-        prev = cur;
-        cur = nxt;
+        if (nxt == hi) break;
+        used[(*nxt)[2]] = 1;
+        cur = (*nxt)[1];
       }
       d.edges.push_back(std::move(e));
     };
-    for (auto& [v, nb] : graph)
-      if (is_end(v))
-        for (int w : nb)
-          if (!used[{std::min(v, w), std::max(v, w)}]) walk(v, w);
-    for (auto& [v, nb] : graph)  // closed loops
-      for (int w : nb)
-        if (!used[{std::min(v, w), std::max(v, w)}]) walk(v, w);
+    for (size_t k = 0; k < adj.size(); ++k)
+      if (!used[adj[k][2]] && is_end(adj[k][0])) walk(adj[k][0], adj[k][1], adj[k][2]);
+    for (size_t k = 0; k < adj.size(); ++k)  // closed loops
+      if (!used[adj[k][2]]) walk(adj[k][0], adj[k][1], adj[k][2]);
+    i = j;
   }
 }
 
@@ -822,7 +886,11 @@ VoronoiDiagram tessellate(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, 
   for (int c = 0; c < ncomp; ++c)
     if (has_face[c] && !reached[c]) d.unreached_components.push_back(c);
 
-  finish_diagram(d, field.num_sites);
+  std::vector<char> interior(nv, 1);
+  for (int f = 0; f < nf; ++f)
+    if (!results[f].fast)
+      for (int k = 0; k < 3; ++k) interior[F(f, k)] = 0;
+  finish_diagram(d, field.num_sites, interior);
   return d;
 }
 
