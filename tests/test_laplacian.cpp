@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/SparseCholesky>
+#include <string>
 
 #include "heatcvt/heat_solver.h"
 #include "heatcvt/errors.h"
@@ -90,6 +91,22 @@ TEST(HeatSolver, MatchesEigenCholeskyAndConservesHeat) {
   Eigen::MatrixXd B = Eigen::MatrixXd::Random(A.rows(), 11);
   Eigen::MatrixXd U = solver.solve(B);
   for (int c = 0; c < B.cols(); ++c) EXPECT_LT((U.col(c) - solver.solve(Eigen::VectorXd(B.col(c)))).norm(), 1e-12 * U.col(c).norm());
+}
+
+TEST(HeatSolver, BlasThreadCountDoesNotChangeTheFactorAndIsRestored) {
+  // icosphere(5): 10k vertices, large enough for CHOLMOD's supernodal path to call the BLAS.
+  auto sphere = test::icosphere(5);
+  Laplacian lap = cotan_laplacian(sphere.V, sphere.F);
+  const std::string before = blas_description();
+  HeatSolverOptions one, library_setting;
+  one.blas_threads = 1;
+  library_setting.blas_threads = 0;
+  HeatSolver a(lap, one), b(lap, library_setting);
+  EXPECT_EQ(blas_description(), before);  // the scoped setting was undone
+  ASSERT_EQ(a.factor().nonzeros(), b.factor().nonzeros());
+  Eigen::VectorXd rhs = Eigen::VectorXd::Random(lap.L.rows());
+  Eigen::VectorXd ua = a.solve(rhs), ub = b.solve(rhs);
+  EXPECT_LT((ua - ub).norm(), 1e-12 * ub.norm());
 }
 
 TEST(HeatSolver, RejectsNonPositiveTimeStep) {

@@ -11,6 +11,7 @@
 #include "cli_common.h"
 #include "heatcvt/cloud_io.h"
 #include "heatcvt/errors.h"
+#include "heatcvt/heat_solver.h"
 #include "heatcvt/mesh_io.h"
 #include "heatcvt/reconstruct.h"
 #include "report_json.h"
@@ -107,6 +108,7 @@ int main(int argc, char** argv) {
       timings.add("laplacian_s", res.laplacian_seconds).add("factor_s", res.factor_seconds)
           .add("cvt_s", res.cvt_seconds).add("per_iteration_s", per_iter).add("reconstruct_s", res.total_seconds)
           .add("total_s", total_s);
+      timings.add("blas", heatcvt::blas_description());
       cli::JsonObject j;
       j.add("input", cloud_path).add("output", out_path).add("format", rr.format)
           .add("points_in_file", rr.points_in_file).add("non_finite_dropped", rr.non_finite_dropped)

@@ -15,6 +15,7 @@
 #include "heatcvt/cvt.h"
 #include "heatcvt/dual_mesh.h"
 #include "heatcvt/errors.h"
+#include "heatcvt/heat_solver.h"
 #include "heatcvt/laplacian.h"
 #include "heatcvt/mesh_io.h"
 #include "heatcvt/validate.h"
@@ -225,7 +226,7 @@ int main(int argc, char** argv) {
           .add("input_genus", input_genus).add("sites", static_cast<int>(r.sites.size()))
           .add("anisotropy", anisotropy).add("seed", static_cast<long>(seed)).add("iterations", done)
           .add("converged", r.converged).add("reached_quality_target", r.reached_quality).add("laplacian_s", laplacian_s).add("factor_s", r.factor_seconds)
-          .add("factor_memory_bytes", static_cast<long>(r.factor_bytes)).add("time_per_iteration_s", per_iter)
+          .add("blas", heatcvt::blas_description()).add("factor_memory_bytes", static_cast<long>(r.factor_bytes)).add("time_per_iteration_s", per_iter)
           .add("total_s", total_s).add("cell_area_variance", r.final_area_variance)
           .add("revived_sites", revived).add("inserted_sites", r.inserted_sites)
           .add("graph_lloyd_iterations", r.graph_lloyd_iterations).add("surface_lloyd_iterations", r.surface_lloyd_iterations).add("triangles", q.triangles).add("phi_min_deg", q.min_angle_deg)
@@ -254,8 +255,8 @@ int main(int argc, char** argv) {
     if (!quiet) {
       std::printf("meshcvt: %s (%d vertices) -> %s (%d vertices, %d triangles)\n", mesh_path.c_str(), nv,
                   out_path.c_str(), static_cast<int>(r.dual.V.rows()), q.triangles);
-      std::printf("  factor: %.3f s, %.1f MB; %d iterations%s, %.4f s per iteration; total %.2f s\n", r.factor_seconds,
-                  r.factor_bytes / 1e6, done, r.converged ? " (converged)" : (r.reached_quality ? " (quality target reached)" : ""), per_iter, total_s);
+      std::printf("  factor: %.3f s, %.1f MB (%s); %d iterations%s, %.4f s per iteration; total %.2f s\n", r.factor_seconds,
+                  r.factor_bytes / 1e6, heatcvt::blas_description().c_str(), done, r.converged ? " (converged)" : (r.reached_quality ? " (quality target reached)" : ""), per_iter, total_s);
       std::printf("  quality: phi_min %.2f deg, phi_m %.2f deg, %.2f%% of triangles below 30 deg\n", q.min_angle_deg,
                   q.mean_min_angle_deg, 100.0 * q.below_30_fraction);
       std::printf("  cell-area variance %.4g%s\n", r.final_area_variance,

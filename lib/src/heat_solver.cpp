@@ -1,6 +1,7 @@
 #include "heatcvt/heat_solver.h"
 
 #include <cholmod.h>
+#include <dlfcn.h>
 #include <omp.h>
 
 #include <algorithm>
@@ -12,6 +13,58 @@
 #include "heatcvt/parallel.h"
 
 namespace heatcvt {
+
+namespace {
+
+// OpenBLAS's thread controls, looked up at run time: CHOLMOD links the generic libblas.so.3,
+// which Debian's alternatives may point at OpenBLAS, the reference BLAS or another library.
+struct OpenBlasControls {
+  void (*set_threads)(int) = nullptr;
+  int (*get_threads)() = nullptr;
+  char* (*get_config)() = nullptr;
+  OpenBlasControls() {
+    set_threads = reinterpret_cast<void (*)(int)>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
+    get_threads = reinterpret_cast<int (*)()>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
+    get_config = reinterpret_cast<char* (*)()>(dlsym(RTLD_DEFAULT, "openblas_get_config"));
+  }
+};
+
+const OpenBlasControls& openblas() {
+  static const OpenBlasControls controls;
+  return controls;
+}
+
+// Sets the OpenBLAS thread count for its lifetime (no-op for 0 or without OpenBLAS).
+class ScopedBlasThreads {
+ public:
+  explicit ScopedBlasThreads(int threads) {
+    const auto& ob = openblas();
+    if (threads <= 0 || !ob.set_threads || !ob.get_threads) return;
+    previous_ = ob.get_threads();
+    if (previous_ != threads) ob.set_threads(threads);
+    else previous_ = 0;
+  }
+  ~ScopedBlasThreads() {
+    if (previous_ > 0) openblas().set_threads(previous_);
+  }
+  ScopedBlasThreads(const ScopedBlasThreads&) = delete;
+  ScopedBlasThreads& operator=(const ScopedBlasThreads&) = delete;
+
+ private:
+  int previous_ = 0;
+};
+
+}  // namespace
+
+std::string blas_description() {
+  const auto& ob = openblas();
+  if (!ob.get_config) return "reference or unknown BLAS";
+  std::string config = ob.get_config();
+  const size_t cut = config.find(' ', config.find(' ') + 1);  // "OpenBLAS 0.3.21 DYNAMIC_ARCH ..."
+  std::string name = cut == std::string::npos ? config : config.substr(0, cut);
+  if (ob.get_threads) name += " (" + std::to_string(ob.get_threads()) + " threads)";
+  return name;
+}
 
 size_t CholeskyFactor::memory_bytes() const {
   return value.size() * (sizeof(double) + sizeof(int)) + col_ptr.size() * sizeof(int64_t) +
@@ -114,7 +167,11 @@ HeatSolver::HeatSolver(const Laplacian& laplacian, const HeatSolverOptions& opti
     Ax[k] = lower.valuePtr()[k];
   }
   cholmod_factor* cL = cholmod_l_analyze(cA, &common);
-  bool ok = cL != nullptr && cholmod_l_factorize(cA, cL, &common);
+  bool ok = false;
+  {
+    const ScopedBlasThreads blas(options.blas_threads);
+    ok = cL != nullptr && cholmod_l_factorize(cA, cL, &common);
+  }
   if (!ok || common.status == CHOLMOD_NOT_POSDEF || (cL && static_cast<int>(cL->minor) < n)) {
     if (cL) cholmod_l_free_factor(&cL, &common);
     cholmod_l_free_sparse(&cA, &common);

@@ -6,6 +6,7 @@
 #include <Eigen/SparseCore>
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "heatcvt/laplacian.h"
@@ -21,7 +22,19 @@ struct HeatSolverOptions {
   double time_step = 0.0;
   /// Threads for batched solves; 0 = all hardware threads. Default 0.
   int threads = 0;
+  /// Threads of the BLAS inside CHOLMOD's supernodal factorisation, set for its duration and
+  /// restored afterwards (OpenBLAS only, found at run time; other BLAS libraries are left alone).
+  /// 0 = leave the BLAS library's own setting. Default 1: the factorisation usually overlaps
+  /// other work (meshcvt's surface Lloyd), and idle OpenBLAS threads spin-wait on the cores our
+  /// OpenMP loops need. Measured on 2 cores, cloud2mesh -n 3000 on a 50k-point kitten cloud
+  /// (bench_reconstruct): 14.4–14.9 s with 1 BLAS thread against 17.0–18.0 s with 2.
+  int blas_threads = 1;
 };
+
+/// Name and thread count of the BLAS that CHOLMOD calls, e.g. "OpenBLAS 0.3.21 (2 threads)", or
+/// "reference or unknown BLAS" when no OpenBLAS is loaded (its supernodal factorisation is then
+/// 3–4× slower: install an optimised BLAS, on Debian libopenblas0-pthread).
+std::string blas_description();
 
 /// Sparse Cholesky factor `P A Pᵀ = L Lᵀ`, lower triangular, compressed columns with sorted
 /// row indices and the diagonal first in each column. Exposed for localized solves
