@@ -255,6 +255,25 @@ TEST(CvtAcceleration, FastOptionsAreDeterministicAcrossThreadCounts) {
   for (const auto& s : a.iterations) EXPECT_EQ(s.phi_mean_deg >= 0.0, s.iteration % o.quality_every == 0);
 }
 
+TEST(CvtAcceleration, ParallelSurfaceLloydMatchesOneThreadOnALargeMesh) {
+  // 40,962 vertices: the surface Lloyd's label sweeps, face moments and projections run in
+  // parallel (sweeps only above 4,096 active vertices); results are combined in index order.
+  auto sphere = test::icosphere(6);
+  CvtOptions o = fast_cvt_options(500);
+  o.iterations = 2;
+  o.target_phi_mean_deg = 60;  // unreachable: the start is evaluated, then 2 heat iterations
+  const Laplacian lap = cotan_laplacian(sphere.V, sphere.F);
+  o.threads = 1;
+  CvtResult a = centroidal_voronoi(sphere.V, sphere.F, lap, o);
+  o.threads = 2;
+  CvtResult b = centroidal_voronoi(sphere.V, sphere.F, lap, o);
+  EXPECT_GT(a.surface_lloyd_iterations, 10);
+  EXPECT_EQ(a.surface_lloyd_iterations, b.surface_lloyd_iterations);
+  ASSERT_EQ(a.sites.size(), b.sites.size());
+  EXPECT_EQ(a.positions, b.positions);
+  EXPECT_EQ(a.dual.F, b.dual.F);
+}
+
 TEST(CvtAcceleration, FastOptionsReachTheQualityTargetOnTheSphere) {
   auto sphere = test::icosphere(5);
   CvtOptions o = fast_cvt_options(400);
