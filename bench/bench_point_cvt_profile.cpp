@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
   o.graph_lloyd_iterations = defaults.farthest_point_start ? 20 : 0;
   o.relaxation = defaults.lloyd_relaxation;
   o.build_dual = false;
+  if (const char* e = std::getenv("CVT_DROP_TOLERANCE")) o.drop_tolerance = std::atof(e);  // development override
   const TriangleMesh src = read_mesh(std::string(HEATCVT_DATA_DIR) + "/meshes/" + mesh);
   const Eigen::MatrixX3d P = sample_surface(src.V, src.F, points, 11);
   double t0 = bench::now_seconds();

@@ -610,15 +610,17 @@ struct FaceMoments {
   Eigen::Vector3d sum[3];
 };
 
+// `whole_moment`: area · centroid of face f (the first moment when one cell holds the face).
 void restricted_face_moments(const std::vector<Eigen::Vector3d>& X, const Eigen::MatrixX3i& F, int f, double area,
-                             const std::vector<int>& label, const std::vector<Eigen::Vector3d>& P, FaceMoments& out) {
+                             const Eigen::Vector3d& whole_moment, const std::vector<int>& label,
+                             const std::vector<Eigen::Vector3d>& P, FaceMoments& out) {
   out.count = 0;
   const int c[3] = {F(f, 0), F(f, 1), F(f, 2)};
   const int l[3] = {label[c[0]], label[c[1]], label[c[2]]};
   if (l[0] < 0 || l[1] < 0 || l[2] < 0) return;
   if (l[0] == l[1] && l[1] == l[2]) {
     out.cell[0] = l[0];
-    out.sum[0] = area * (X[c[0]] + X[c[1]] + X[c[2]]) / 3.0;
+    out.sum[0] = whole_moment;
     out.mass[0] = area;
     out.count = 1;
     return;
@@ -697,6 +699,8 @@ std::vector<SurfacePoint> surface_lloyd(const Graph& g, const Eigen::MatrixX3d& 
   bool full_flood = true;  // first iteration and after relocated sites: labels from scratch
   const int nf = static_cast<int>(F.rows());
   std::vector<FaceMoments> moments(nf);
+  std::vector<Eigen::Vector3d> whole_moment(nf);
+  for (int f = 0; f < nf; ++f) whole_moment[f] = face_area[f] * (X[F(f, 0)] + X[F(f, 1)] + X[F(f, 2)]) / 3.0;
   std::vector<double> vertex_distance(n);
   for (int it = 0; it < iterations; ++it) {
     // Parallel loops write per-vertex / per-face / per-site results that are then combined
@@ -711,7 +715,7 @@ std::vector<SurfacePoint> surface_lloyd(const Graph& g, const Eigen::MatrixX3d& 
     for (int v = 0; v < n; ++v)
       if (label[v] >= 0) energy += vertex_area[v] * key[v];
 #pragma omp parallel for schedule(dynamic, 1024) num_threads(threads)
-    for (int f = 0; f < nf; ++f) restricted_face_moments(X, F, f, face_area[f], label, P, moments[f]);
+    for (int f = 0; f < nf; ++f) restricted_face_moments(X, F, f, face_area[f], whole_moment[f], label, P, moments[f]);
     for (int f = 0; f < nf; ++f)
       for (int i = 0; i < moments[f].count; ++i) {
         sum[moments[f].cell[i]] += moments[f].sum[i];

@@ -21,6 +21,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <unordered_map>
 #include <numeric>
 #include <string>
 
@@ -696,15 +697,26 @@ void finish_diagram(VoronoiDiagram& d, int num_sites, const std::vector<char>& i
     d.voronoi_vertices.push_back(std::move(vv));
   }
 
-  // refined edges that may separate cells: (min, max, face)
-  std::vector<std::array<int, 3>> half;
+  // refined edges that may separate cells: (min, max, face), sorted; bucketed by the smaller
+  // vertex (counting sort), then each small bucket sorted
+  std::vector<int> bucket(nrv + 1, 0);
   for (int r = 0; r < nrf; ++r)
     for (int k = 0; k < 3; ++k) {
       const int a = d.F(r, k), b = d.F(r, (k + 1) % 3);
-      if (skipped(a) && skipped(b)) continue;
-      half.push_back({std::min(a, b), std::max(a, b), r});
+      if (!(skipped(a) && skipped(b))) ++bucket[std::min(a, b) + 1];
     }
-  std::sort(half.begin(), half.end());
+  for (int v = 0; v < nrv; ++v) bucket[v + 1] += bucket[v];
+  std::vector<std::array<int, 3>> half(bucket[nrv]);
+  {
+    std::vector<int> fill(bucket.begin(), bucket.end() - 1);
+    for (int r = 0; r < nrf; ++r)
+      for (int k = 0; k < 3; ++k) {
+        const int a = d.F(r, k), b = d.F(r, (k + 1) % 3);
+        if (!(skipped(a) && skipped(b))) half[fill[std::min(a, b)]++] = {std::min(a, b), std::max(a, b), r};
+      }
+  }
+  for (int v = 0; v < nrv; ++v)
+    if (bucket[v + 1] - bucket[v] > 1) std::sort(half.begin() + bucket[v], half.begin() + bucket[v + 1]);
   d.cell_adjacency.assign(num_sites, {});
   std::vector<std::array<int, 4>> separating;  // (cell a, cell b, v0, v1), cell a < cell b, v0 < v1
   for (size_t i = 0; i < half.size();) {
@@ -820,7 +832,14 @@ VoronoiDiagram tessellate(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, 
   }
   std::vector<Eigen::Vector3d> new_points;
   new_points.reserve(num_new);
-  std::map<std::array<int, 4>, int> edge_ids;
+  struct KeyHash {
+    size_t operator()(const std::array<int, 4>& k) const {
+      uint64_t h = 1469598103934665603ull;
+      for (int x : k) h = (h ^ static_cast<uint32_t>(x)) * 1099511628211ull;
+      return static_cast<size_t>(h ^ (h >> 29));
+    }
+  };
+  std::unordered_map<std::array<int, 4>, int, KeyHash> edge_ids;  // lookups only: order never used
   d.F.resize(num_tris, 3);
   d.face_cell.resize(num_tris);
   d.face_parent.resize(num_tris);
