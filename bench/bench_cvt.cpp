@@ -2,7 +2,7 @@
 // CGAL's isotropic remeshing (5 iterations, same vertex count) side by side and the time to quality
 // (φm ≥ 51°, φmin ≥ 25°).
 //
-//   bench_cvt [--iterations N] [--threads T] [--quality-every K] [--only NAME] [--quick] [--no-cgal]
+//   bench_cvt [--iterations N] [--threads T] [--quality-every K] [--only NAME] [--quick] [--no-cgal] [--repeat R]
 //             [--config default|paper|both]
 //
 // Two CVT configurations per model: `default` = fast_cvt_options() (meshcvt's defaults:
@@ -27,6 +27,7 @@
 #include <CGAL/Polygon_mesh_processing/remesh.h>
 #include <CGAL/Surface_mesh.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -74,6 +75,15 @@ struct CgalResult {
   TriangleQuality quality;
   bool valid = false;
 };
+
+// "4.2 s" for one time, "4.2 s (3.9–4.6)" median (min–max) for several.
+std::string median_range(std::vector<double> t) {
+  std::sort(t.begin(), t.end());
+  char buf[96];
+  if (t.size() == 1) std::snprintf(buf, sizeof buf, "%.1f s", t[0]);
+  else std::snprintf(buf, sizeof buf, "%.1f s (%.1f–%.1f)", t[t.size() / 2], t.front(), t.back());
+  return buf;
+}
 
 CgalResult cgal_remesh(const TriangleMesh& m, int target_vertices) {
   std::vector<Kernel::Point_3> points;
@@ -124,6 +134,7 @@ int main(int argc, char** argv) {
   int iterations = 100, threads = 0, quality_every = 5;
   std::string only;
   bool quick = false, no_cgal = false;
+  int repeat = 1;  // default config and CGAL run R times, interleaved: median (min–max) times
   std::string config = "both";
   for (int i = 1; i < argc; ++i) {
     auto next = [&]() -> const char* {
@@ -140,9 +151,10 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--quick")) quick = true;
     else if (!std::strcmp(argv[i], "--no-cgal")) no_cgal = true;
     else if (!std::strcmp(argv[i], "--config")) config = next();
+    else if (!std::strcmp(argv[i], "--repeat")) repeat = std::max(1, std::atoi(next()));
     else {
       std::fprintf(stderr,
-                   "usage: bench_cvt [--iterations N] [--threads T] [--quality-every K] [--only NAME] [--quick] [--no-cgal] "
+                   "usage: bench_cvt [--iterations N] [--threads T] [--quality-every K] [--only NAME] [--quick] [--no-cgal] [--repeat R] "
                    "[--config default|paper|both]\n");
       return 1;
     }
@@ -184,11 +196,15 @@ int main(int argc, char** argv) {
     vo.check_self_intersections = false;
     // (CGAL 5.5's remeshing spent > 8 minutes in Euler::does_satisfy_link_condition on dragon-L1
     // here; --no-cgal skips it.)
-    const CgalResult cg = no_cgal ? CgalResult{} : cgal_remesh(m, c.sites);
+    CgalResult cg = no_cgal ? CgalResult{} : cgal_remesh(m, c.sites);
+    std::vector<double> cgal_times = {cg.seconds};
     const bool cg_ok = cg.quality.mean_min_angle_deg >= kTargetMean && cg.quality.min_angle_deg >= kTargetMin;
-    const std::string cgal_cols = std::to_string(cg.vertices) + " | " + fmt(cg.quality.min_angle_deg, "%.1f°") + " | " +
-                                  fmt(cg.quality.mean_min_angle_deg, "%.1f°") + " | " + fmt(cg.seconds, "%.1f s") +
-                                  (cg_ok ? "" : " (targets not met)") + (cg.valid ? "" : " (invalid)") + " |";
+    auto cgal_columns = [&]() {
+      return std::to_string(cg.vertices) + " | " + fmt(cg.quality.min_angle_deg, "%.1f°") + " | " +
+             fmt(cg.quality.mean_min_angle_deg, "%.1f°") + " | " + median_range(cgal_times) +
+             (cg_ok ? "" : " (targets not met)") + (cg.valid ? "" : " (invalid)") + " |";
+    };
+    std::string cgal_cols = cgal_columns();
     std::string row;
     if (config != "paper") {
       CvtOptions o = fast_cvt_options(c.sites);
@@ -209,12 +225,22 @@ int main(int argc, char** argv) {
       if (const char* e = std::getenv("CVT_SPLIT_ROUNDS")) o.surface_lloyd_split_rounds = std::atoi(e);
       if (const char* e = std::getenv("CVT_SPLIT_IT")) o.surface_lloyd_split_iterations = std::atoi(e);
       if (const char* e = std::getenv("CVT_REFINE")) o.refine_small_angles = std::atoi(e) != 0;
-      CvtResult r = centroidal_voronoi(m.V, m.F, lap, o, {}, [&](const CvtIterationStats& s) {
-        std::fprintf(stderr, "  it %d: %.3f s, phi_min %.1f phi_m %.2f, spots %d, inserted %d, omega %.2f, aa %d, res %.3g, move %.3g\n",
-                     s.iteration, s.seconds, s.phi_min_deg, s.phi_mean_deg, s.nonmanifold_spots, s.inserted_sites,
-                     s.relaxation, s.anderson_columns, s.residual, s.max_move);
-        return true;
-      });
+      auto run = [&]() {
+        return centroidal_voronoi(m.V, m.F, lap, o, {}, [&](const CvtIterationStats& s) {
+          std::fprintf(stderr, "  it %d: %.3f s, phi_min %.1f phi_m %.2f, spots %d, inserted %d, omega %.2f, aa %d, res %.3g, move %.3g\n",
+                       s.iteration, s.seconds, s.phi_min_deg, s.phi_mean_deg, s.nonmanifold_spots, s.inserted_sites,
+                       s.relaxation, s.anderson_columns, s.residual, s.max_move);
+          return true;
+        });
+      };
+      CvtResult r = run();
+      // --repeat: the same (deterministic) computation again, interleaved with CGAL, for the spread
+      std::vector<double> ttq_times = {laplacian_s + r.total_seconds};
+      for (int rep = 1; rep < repeat; ++rep) {
+        if (!no_cgal) cgal_times.push_back(cgal_remesh(m, c.sites).seconds);
+        ttq_times.push_back(laplacian_s + run().total_seconds);
+      }
+      cgal_cols = cgal_columns();
       double per_iteration = 0;
       for (const auto& s : r.iterations) per_iteration += s.seconds;
       per_iteration /= std::max<size_t>(1, r.iterations.size());
@@ -234,7 +260,7 @@ int main(int argc, char** argv) {
             fmt(q.min_angle_deg, "%.1f°") + " | " + fmt(q.mean_min_angle_deg, "%.1f°") + " | " +
             (r.iterations.empty() ? std::string("– (0 it)") : fmt(per_iteration, "%.3f s")) + " | " +
             (valid ? "yes" : "NO") + " | " +
-            (r.reached_quality ? fmt(ttq, "%.1f s") + " (" + std::to_string(r.iterations.size()) + " it)"
+            (r.reached_quality ? median_range(ttq_times) + " (" + std::to_string(r.iterations.size()) + " it)"
                                : std::string("not reached: ") + (r.stalled ? "φm stalled after " : "stopped after ") +
                                      std::to_string(r.iterations.size()) + " it (" + fmt(ttq, "%.1f s") + ")") +
             " | " + cgal_cols;

@@ -1084,6 +1084,7 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
 
   HeatSolverOptions so;
   so.time_coefficient = options.time_coefficient;
+  so.ordering = options.ordering;
   so.threads = threads;
   std::unique_ptr<HeatSolver> solver_ptr;
   try {
@@ -1597,6 +1598,9 @@ CvtOptions fast_cvt_options(int sites) {
   o.target_phi_min_deg = 25.0;
   o.split_nonmanifold_cells = true;
   o.quality_patience = 10;
+  // less fill: heat iterations and evaluations ~20 % cheaper; the slower analysis overlaps the
+  // surface Lloyd (kitten Loop ×2: time to quality unchanged, 0.58 instead of 0.75 s/iteration)
+  o.ordering = FillOrdering::metis;
   return o;
 }
 

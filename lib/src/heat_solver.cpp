@@ -157,6 +157,11 @@ HeatSolver::HeatSolver(const Laplacian& laplacian, const HeatSolverOptions& opti
   common.print = 0;
   common.error_handler = nullptr;
   common.supernodal = CHOLMOD_SUPERNODAL;  // fastest factorisation; converted below
+  if (options.ordering != FillOrdering::automatic) {
+    common.nmethods = 1;
+    common.method[0].ordering = options.ordering == FillOrdering::amd ? CHOLMOD_AMD : CHOLMOD_METIS;
+    common.postorder = 1;
+  }
   cholmod_sparse* cA = cholmod_l_allocate_sparse(n, n, lower.nonZeros(), 1, 1, -1, CHOLMOD_REAL, &common);
   auto* Ap = static_cast<SuiteSparse_long*>(cA->p);
   auto* Ai = static_cast<SuiteSparse_long*>(cA->i);

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "heatcvt/dual_mesh.h"
+#include "heatcvt/heat_solver.h"
 #include "heatcvt/laplacian.h"
 #include "heatcvt/mesh.h"
 #include "heatcvt/voronoi.h"
@@ -45,6 +46,9 @@ struct CvtOptions {
   int threads = 0;
   /// t = time_coefficient · h̄² of the Laplacian's mean edge length. Default 1 (paper).
   double time_coefficient = 1.0;
+  /// Fill-reducing ordering of the heat factor (HeatSolverOptions::ordering). Less fill makes
+  /// every localized solve cheaper. Default automatic.
+  FillOrdering ordering = FillOrdering::automatic;
   /// Index set of a site's Voronoi diffusion: its cell plus this many rings of neighbouring cells
   /// (previous iteration's adjacency). Default 2 (paper: cell, neighbours, their neighbours).
   int voronoi_rings = 2;
