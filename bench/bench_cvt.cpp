@@ -13,7 +13,7 @@
 // CvtOptions{} (random start, plain Lloyd, N iterations, quality every K).
 // Development overrides of the default configuration (environment): CVT_RELAXATION, CVT_ANDERSON,
 // CVT_GRAPH_LLOYD, CVT_SPLIT, CVT_INIT_RANDOM, CVT_SURFACE_LLOYD, CVT_SURFACE_OMEGA, CVT_SURFACE_TOL,
-// CVT_QUALITY_AT_START, CVT_QUALITY_EVERY, CVT_RINGS_SETTLED, CVT_SPLIT_ROUNDS, CVT_SPLIT_IT,
+// CVT_QUALITY_AT_START, CVT_QUALITY_EVERY, CVT_RINGS_SETTLED, CVT_SPLIT_ROUNDS, CVT_SPLIT_IT, CVT_ORDERING,
 // CVT_REFINE (e.g. the previous defaults: CVT_SURFACE_LLOYD=0 CVT_QUALITY_AT_START=0 CVT_GRAPH_LLOYD=20).
 // For `default` the time to quality is Laplacian + the whole centroidal_voronoi() call (set-up,
 // factorisation, iterations, evaluations, final diagram and dual) when it stopped at quality.
@@ -225,6 +225,9 @@ int main(int argc, char** argv) {
       if (const char* e = std::getenv("CVT_SPLIT_ROUNDS")) o.surface_lloyd_split_rounds = std::atoi(e);
       if (const char* e = std::getenv("CVT_SPLIT_IT")) o.surface_lloyd_split_iterations = std::atoi(e);
       if (const char* e = std::getenv("CVT_REFINE")) o.refine_small_angles = std::atoi(e) != 0;
+      if (const char* e = std::getenv("CVT_ORDERING"))  // amd | metis | automatic
+        o.ordering = !std::strcmp(e, "amd") ? FillOrdering::amd
+                     : !std::strcmp(e, "metis") ? FillOrdering::metis : FillOrdering::automatic;
       auto run = [&]() {
         return centroidal_voronoi(m.V, m.F, lap, o, {}, [&](const CvtIterationStats& s) {
           std::fprintf(stderr, "  it %d: %.3f s, phi_min %.1f phi_m %.2f, spots %d, inserted %d, omega %.2f, aa %d, res %.3g, move %.3g\n",

@@ -187,9 +187,9 @@ TEST(Cvt, GivenInitialSitesAreUsedAndBadInputThrows) {
 TEST(CvtAcceleration, OverRelaxedLloydEqualisesAtLeastAsFastAsPlainLloyd) {
   // Same random start on the unit-area sphere; after the same number of iterations the
   // over-relaxed (safeguarded) Lloyd step has a cell-area variance no larger than plain Lloyd's.
-  auto sphere = test::icosphere(5);
-  test::scale_to_area(sphere, 1.0);
-  const Laplacian lap = cotan_laplacian(sphere.V, sphere.F);
+  const test::UnitSphere unit = test::unit_area_sphere(5);
+  const TriangleMesh& sphere = unit.mesh;
+  const Laplacian& lap = unit.laplacian;
   CvtOptions o;
   o.sites = 300;
   o.iterations = 12;
@@ -216,9 +216,9 @@ TEST(CvtAcceleration, OverRelaxedLloydEqualisesAtLeastAsFastAsPlainLloyd) {
 }
 
 TEST(CvtAcceleration, GraphLloydStartIsCloserToCentroidalThanRandomStart) {
-  auto sphere = test::icosphere(5);
-  test::scale_to_area(sphere, 1.0);
-  const Laplacian lap = cotan_laplacian(sphere.V, sphere.F);
+  const test::UnitSphere unit = test::unit_area_sphere(5);
+  const TriangleMesh& sphere = unit.mesh;
+  const Laplacian& lap = unit.laplacian;
   CvtOptions o;
   o.sites = 300;
   o.iterations = 1;
@@ -359,9 +359,9 @@ TEST(CvtAcceleration, SurfaceLloydStartIsCloserToCentroidalThanGraphLloyd) {
   // The cheap surface Lloyd (restricted Euclidean cells, projected mass-lumped centroids) brings the
   // farthest-point start closer to a CVT than the vertex-snapped graph Lloyd: smaller cell-area
   // variance of the first heat diagram; its sites lie on the surface; deterministic.
-  auto sphere = test::icosphere(5);
-  test::scale_to_area(sphere, 1.0);
-  const Laplacian lap = cotan_laplacian(sphere.V, sphere.F);
+  const test::UnitSphere unit = test::unit_area_sphere(5);
+  const TriangleMesh& sphere = unit.mesh;
+  const Laplacian& lap = unit.laplacian;
   CvtOptions o;
   o.sites = 300;
   o.iterations = 1;

@@ -12,9 +12,9 @@
 using namespace heatcvt;
 
 TEST(CvtLocalization, SettledSitesWithOneRingGiveTheCellsOfTwoRings) {
-  auto sphere = test::icosphere(5);
-  test::scale_to_area(sphere, 1.0);
-  const Laplacian lap = cotan_laplacian(sphere.V, sphere.F);
+  const test::UnitSphere unit = test::unit_area_sphere(5);
+  const TriangleMesh& sphere = unit.mesh;
+  const Laplacian& lap = unit.laplacian;
   CvtOptions o;
   o.sites = 300;
   o.iterations = 15;

@@ -108,6 +108,14 @@ void scale_to_area(TriangleMesh& mesh, double area) {
   mesh.V *= std::sqrt(area / surface_area(mesh.V, mesh.F));
 }
 
+UnitSphere unit_area_sphere(int subdivisions) {
+  UnitSphere u;
+  u.mesh = icosphere(subdivisions);
+  scale_to_area(u.mesh, 1.0);
+  u.laplacian = cotan_laplacian(u.mesh.V, u.mesh.F);
+  return u;
+}
+
 }  // namespace heatcvt::test
 
 #include <fstream>

@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 #include <string>
 
+#include "heatcvt/laplacian.h"
 #include "heatcvt/mesh.h"
 
 namespace heatcvt::test {
@@ -23,6 +24,14 @@ TriangleMesh torus(int n, int m, double R = 1.0, double r = 0.4);
 
 /// Scales V so the surface area is exactly `area`.
 void scale_to_area(TriangleMesh& mesh, double area);
+
+/// The shape on which the CVT tests compare configurations: icosphere(subdivisions) scaled to
+/// unit area, with its cotan Laplacian.
+struct UnitSphere {
+  TriangleMesh mesh;
+  Laplacian laplacian;
+};
+UnitSphere unit_area_sphere(int subdivisions);
 
 }  // namespace heatcvt::test
 
