@@ -8,7 +8,8 @@
 // Usage: bench_reconstruct [points=50000] [sites=3000]
 //            [shapes=bunny_pmp.off,armadillo.obj,kitten.obj,fertility.off,elephant.off]
 //            [--only-heatcvt] [--clean-only | --noisy-only] [--threads T] [--anisotropy L]
-//            [--iterations N] [--relaxation W] [--tolerance X] [--random-start | --fast-start]   (heatcvt options)
+//            [--iterations N] [--relaxation W] [--tolerance X] [--random-start | --fast-start]
+//            [--surface-lloyd N] [--points-per-site X]   (heatcvt options)
 #define CGAL_EIGEN3_ENABLED 1  // CGAL Poisson's sparse solver (Eigen is linked through heatcvt)
 #include <CGAL/Advancing_front_surface_reconstruction.h>
 #include <CGAL/compute_average_spacing.h>
@@ -183,6 +184,8 @@ int main(int argc, char** argv) {
   int iterations = -1;     // < 0: the library default (as the next two)
   double relaxation = -1, tolerance = -1;
   bool random_start = false, fast_start = false;
+  int surface_lloyd = -1;       // < 0: the library default
+  double points_per_site = -1;  // < 0: the library default
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--only-heatcvt") only_heat = true;
@@ -195,6 +198,8 @@ int main(int argc, char** argv) {
     else if (a == "--tolerance" && i + 1 < argc) tolerance = std::atof(argv[++i]);
     else if (a == "--random-start") random_start = true;
     else if (a == "--fast-start") fast_start = true;
+    else if (a == "--surface-lloyd" && i + 1 < argc) surface_lloyd = std::atoi(argv[++i]);
+    else if (a == "--points-per-site" && i + 1 < argc) points_per_site = std::atof(argv[++i]);
     else if (!a.empty() && a[0] == '-') {
       std::fprintf(stderr, "bench_reconstruct: unknown option %s\n", a.c_str());
       return 2;
@@ -255,6 +260,8 @@ int main(int argc, char** argv) {
         if (tolerance >= 0) o.lloyd_tolerance = tolerance;
         if (random_start) o.farthest_point_start = false;
         if (fast_start) o.farthest_point_start = true;
+        if (surface_lloyd >= 0) o.surface_lloyd_iterations = surface_lloyd;
+        if (points_per_site >= 0) o.cvt_points_per_site = points_per_site;
         heat = reconstruct_surface(P, o);
         return heat.mesh;
       });

@@ -43,6 +43,14 @@ int main(int argc, char** argv) {
   app.add_flag("--fast-start", opt.farthest_point_start,
                "farthest-point initial sites relaxed on the point graph instead of seeded random ones (the paper's); "
                "with --relaxation 1.5 about 10 iterations suffice");
+  app.add_option("--surface-lloyd", opt.surface_lloyd_iterations,
+                 "iterations of the cheap surface Lloyd on farthest-point start sites (during the factorisation); "
+                 "0 = the paper's seeded random start")
+      ->capture_default_str();
+  app.add_option("--points-per-site", opt.cvt_points_per_site,
+                 "the CVT runs on a uniform subset of about this many points per site (site positions are still "
+                 "fitted to every point); 0 = every point")
+      ->capture_default_str();
   app.add_option("--threads", opt.threads, "worker threads (0 = all cores)")->capture_default_str();
   app.add_option("--report", report_path, "write a JSON report");
   app.add_flag("-q,--quiet", quiet, "no progress and no summary");
@@ -66,6 +74,9 @@ int main(int argc, char** argv) {
     if (!(opt.time_coefficient > 0) || !std::isfinite(opt.time_coefficient))
       throw InvalidInputError("--t-coef must be a positive number");
     if (opt.threads < 0) throw InvalidInputError("--threads must be >= 0");
+    if (opt.surface_lloyd_iterations < 0) throw InvalidInputError("--surface-lloyd must be >= 0");
+    if (!(opt.cvt_points_per_site == 0 || opt.cvt_points_per_site >= 3) || !std::isfinite(opt.cvt_points_per_site))
+      throw InvalidInputError("--points-per-site must be 0 (every point) or at least 3");
     if (!(opt.lloyd_relaxation >= 1 && opt.lloyd_relaxation < 2)) throw InvalidInputError("--relaxation must be in [1, 2)");
     cli::check_output_path(out_path, {".ply", ".obj", ".off", ".stl"});
     cli::check_output_path(report_path, {".json"});
@@ -109,6 +120,9 @@ int main(int argc, char** argv) {
           .add("cvt_s", res.cvt_seconds).add("per_iteration_s", per_iter).add("reconstruct_s", res.total_seconds)
           .add("total_s", total_s);
       timings.add("blas", heatcvt::blas_description());
+      cli::JsonObject stages;
+      for (const auto& [name, seconds] : res.stage_seconds) stages.add(name, seconds);
+      timings.add_object("stages", stages);
       cli::JsonObject j;
       j.add("input", cloud_path).add("output", out_path).add("format", rr.format)
           .add("points_in_file", rr.points_in_file).add("non_finite_dropped", rr.non_finite_dropped)
@@ -134,6 +148,9 @@ int main(int argc, char** argv) {
                   res.points_denoised, res.points_voxel_removed, res.points_used);
       std::printf("  time: Laplacian %.3f s, factor %.3f s, %d iterations %.3f s (%.3f s/iteration), total %.3f s\n",
                   res.laplacian_seconds, res.factor_seconds, res.iterations, res.cvt_seconds, per_iter, total_s);
+      std::printf("  stages:");
+      for (const auto& [name, seconds] : res.stage_seconds) std::printf(" %s %.2f s;", name.c_str(), seconds);
+      std::printf("\n");
       std::printf("  mesh: %ld vertices, %ld faces, %d components, %d boundary loops, genus %d; %d holes filled, "
                   "%d unused sites\n",
                   static_cast<long>(res.mesh.V.rows()), static_cast<long>(res.mesh.F.rows()), val.components,

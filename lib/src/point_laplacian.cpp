@@ -247,8 +247,22 @@ PointLaplacian point_laplacian(const Eigen::MatrixX3d& P, const PointLaplacianOp
                             "degenerate_area_epsilon and mollify_factor >= 0");
   const int n = static_cast<int>(P.rows());
   const int threads = resolve_threads(options.threads);
-  // Validates finiteness too (throws InvalidInputError naming the point).
-  const Eigen::MatrixXi nb = k_nearest_neighbors(P, k, threads);
+  Eigen::MatrixXi nb;
+  if (options.neighbors) {
+    const Eigen::MatrixXi& given = *options.neighbors;
+    if (given.rows() != n || given.cols() < k)
+      throw InvalidInputError("point_laplacian: the neighbour table is " + std::to_string(given.rows()) + " by " +
+                              std::to_string(given.cols()) + ", need " + std::to_string(n) + " by at least " +
+                              std::to_string(k));
+    for (Eigen::Index i = 0; i < P.rows(); ++i)
+      if (!P.row(i).allFinite())
+        throw InvalidInputError("point_laplacian: point " + std::to_string(i) + " has a NaN or infinite coordinate");
+    if ((given.leftCols(k).array() < 0).any() || (given.leftCols(k).array() >= n).any())
+      throw InvalidInputError("point_laplacian: the neighbour table has an index outside [0, " + std::to_string(n) + ")");
+    nb = given.leftCols(k);
+  } else {
+    nb = k_nearest_neighbors(P, k, threads);  // validates finiteness too (throws naming the point)
+  }
 
   const Eigen::MatrixX3d* on = options.oriented_normals;
   if (on && on->rows() != n)

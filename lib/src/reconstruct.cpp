@@ -17,11 +17,13 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <numeric>
 #include <set>
 #include <random>
 #include <string>
 #include <tuple>
 #include <unordered_map>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -54,6 +56,9 @@ void check_options(const ReconstructionOptions& o) {
   if (o.relaxation_iterations < 0) bad("relaxation_iterations must be >= 0");
   if (!(o.lloyd_relaxation >= 1 && o.lloyd_relaxation < 2)) bad("lloyd_relaxation must be in [1, 2)");
   if (!(o.lloyd_tolerance >= 0) || !std::isfinite(o.lloyd_tolerance)) bad("lloyd_tolerance must be a finite number >= 0");
+  if (o.surface_lloyd_iterations < 0) bad("surface_lloyd_iterations must be >= 0");
+  if (!(o.cvt_points_per_site == 0 || o.cvt_points_per_site >= 3) || !std::isfinite(o.cvt_points_per_site))
+    bad("cvt_points_per_site must be 0 (every point) or at least 3");
   if (o.denoise && o.denoise_neighbors < 2) bad("denoise_neighbors must be >= 2");
   if (o.denoise && (!(o.denoise_stddev > 0) || !std::isfinite(o.denoise_stddev))) bad("denoise_stddev must be > 0");
 }
@@ -144,6 +149,54 @@ struct EdgeKey {
 };
 
 // Smallest angle of the triangle (a, b, c) given as points (radians).
+// A spatially uniform subset of about `target` of the points: a voxel grid sized (by a few
+// secant steps on the voxel size) so that about `target` voxels are occupied, and in each voxel
+// the point nearest the centroid of its points. Returns the chosen indices, ascending.
+std::vector<int> voxel_subsample(const Eigen::MatrixX3d& P, long target) {
+  const Eigen::Vector3d lo = P.colwise().minCoeff().transpose();
+  const Eigen::Vector3d extent = P.colwise().maxCoeff().transpose() - lo;
+  auto key_of = [&](Eigen::Index i, double size) {
+    const Eigen::Vector3d c = ((P.row(i).transpose() - lo) / size).array().floor();
+    return (static_cast<long long>(c[0]) * 2097152LL + static_cast<long long>(c[1])) * 2097152LL + static_cast<long long>(c[2]);
+  };
+  auto occupied = [&](double size) {
+    std::unordered_set<long long> keys;
+    keys.reserve(static_cast<size_t>(P.rows()));
+    for (Eigen::Index i = 0; i < P.rows(); ++i) keys.insert(key_of(i, size));
+    return static_cast<long>(keys.size());
+  };
+  // A surface occupies about area / size² voxels: size ← size · sqrt(count / target).
+  double size = std::max(extent.maxCoeff(), 1e-12) / std::sqrt(static_cast<double>(target));
+  double best_size = size;
+  long best_gap = std::numeric_limits<long>::max();
+  for (int step = 0; step < 6; ++step) {
+    const long count = occupied(size);
+    if (std::labs(count - target) < best_gap) best_gap = std::labs(count - target), best_size = size;
+    if (std::labs(count - target) <= target / 50) break;
+    size *= std::sqrt(static_cast<double>(count) / static_cast<double>(target));
+  }
+  std::unordered_map<long long, int> voxel;  // key -> slot
+  std::vector<Eigen::Vector3d> sum;
+  std::vector<int> members;
+  std::vector<int> slot_of(P.rows());
+  for (Eigen::Index i = 0; i < P.rows(); ++i) {
+    auto [it, fresh] = voxel.emplace(key_of(i, best_size), static_cast<int>(sum.size()));
+    if (fresh) sum.push_back(Eigen::Vector3d::Zero()), members.push_back(0);
+    sum[it->second] += P.row(i).transpose();
+    ++members[it->second];
+    slot_of[i] = it->second;
+  }
+  std::vector<int> chosen(sum.size(), -1);
+  std::vector<double> best(sum.size(), std::numeric_limits<double>::infinity());
+  for (Eigen::Index i = 0; i < P.rows(); ++i) {
+    const int v = slot_of[i];
+    const double d = (P.row(i).transpose() - sum[v] / members[v]).squaredNorm();
+    if (d < best[v]) best[v] = d, chosen[v] = static_cast<int>(i);
+  }
+  std::sort(chosen.begin(), chosen.end());
+  return chosen;
+}
+
 double min_angle_pts(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
   const Eigen::Vector3d p[3] = {a, b, c};
   double best = M_PI;
@@ -234,7 +287,7 @@ bool fill_loop(const std::vector<int>& loop, const Eigen::MatrixX3d& V,
 // angle of the pair increases, and the two new triangles stay within `max_normal_deviation` of
 // the old pair's normal (no folds). Returns the number of flips.
 int improve_by_flips(const Eigen::MatrixX3d& V, std::vector<std::array<int, 3>>& F, int max_passes,
-                     bool valence_mode = false) {
+                     bool valence_mode = false, const std::vector<char>* only_at = nullptr) {
   std::unordered_map<long long, int> dir;  // directed edge -> face
   auto key = [](int a, int b) { return EdgeKey::make(a, b); };
   std::vector<int> valence(V.rows(), 0);
@@ -265,6 +318,7 @@ int improve_by_flips(const Eigen::MatrixX3d& V, std::vector<std::array<int, 3>>&
         for (int q = 0; q < 3; ++q)
           if (F[f2][q] != a && F[f2][q] != b) d = F[f2][q];
         if (d < 0 || d == c) continue;
+        if (only_at && !(*only_at)[a] && !(*only_at)[b]) continue;
         if (undirected.count(key(std::min(c, d), std::max(c, d)))) continue;
         if (valence[a] <= 3 || valence[b] <= 3) continue;
         const double before = std::min(tri_min_angle(V, a, b, c), tri_min_angle(V, b, a, d));
@@ -467,6 +521,11 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     if (progress) progress(stage, std::clamp(f, 0.0, 1.0));
   };
   ReconstructionResult res;
+  auto t_stage = Clock::now();
+  auto stage_done = [&](const char* name) {  // closes the stage that started at t_stage
+    res.stage_seconds.emplace_back(name, since(t_stage));
+    t_stage = Clock::now();
+  };
   res.points_input = static_cast<int>(P_in.rows());
   if (P_in.rows() == 0) throw InvalidInputError("reconstruct_surface: the point cloud is empty");
   for (Eigen::Index i = 0; i < P_in.rows(); ++i)
@@ -522,53 +581,77 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     throw InvalidInputError("reconstruct_surface: " + std::to_string(options.sites) + " sites requested but only " +
                             std::to_string(n) + " usable points");
 
+  // The CVT's points: every point, or a spatially uniform subset (cvt_points_per_site). Laplacian,
+  // normals, CVT and dual candidates live on them; the fitted surface uses every point.
+  std::vector<int> sub;  // CVT point -> cloud point
+  if (options.cvt_points_per_site > 0) {
+    const long target = std::lround(options.cvt_points_per_site * options.sites);
+    if (target < 0.8 * n) sub = voxel_subsample(P, target);
+    if (static_cast<int>(sub.size()) < std::max(options.sites, options.neighbors + 1)) sub.clear();
+  }
+  const bool subsampled = !sub.empty();
+  if (!subsampled) {
+    sub.resize(n);
+    std::iota(sub.begin(), sub.end(), 0);
+  }
+  const int nc = static_cast<int>(sub.size());
+  res.points_cvt = nc;
+  Eigen::MatrixX3d PC(nc, 3);
+  for (int i = 0; i < nc; ++i) PC.row(i) = P.row(sub[i]);
+
   // 2. Point Laplacian, normals.
+  stage_done("preprocess");
   report("laplacian", 0);
   auto t0 = Clock::now();
+  // Neighbourhoods, PCA normals and their orientation first: the Laplacian is then built once,
+  // knowing whether the two sides of thin parts must be kept apart.
+  const Eigen::MatrixXi knn_cvt = k_nearest_neighbors(PC, options.neighbors, options.threads);
+  Eigen::MatrixX3d NC = estimate_normals(PC, knn_cvt, options.threads);
+  // Orientation: edges leaving the tangent plane are propagated through last, so that the two
+  // sides of a part thinner than the kNN neighbourhood (ears, fingers) get opposite normals.
+  orient_normals_mst(PC, NC, std::min(10, options.neighbors), options.threads, 1.0);
+  stage_done("normals");
+  // Points with a neighbour of opposite normal (the other side of a thin part): where there are
+  // some, the Laplacian leaves such neighbours out of each local triangulation, so that heat
+  // (hence a cell) does not cross to the other side. Only where they are rare (thin parts: 4.5 %
+  // on armadillo at 30k points, 5.8 % with noise): where they are common the orientation itself
+  // is unreliable (cluttered scene scans: 9-80 %), and cutting the point graph there would leave
+  // pieces too small to carry any dual triangle. (Measured on every cloud of ../shared/data: the
+  // same decisions as the previous rule on the built Laplacian, <= 5 % of its triangles joining
+  // opposite normals.)
+  long crossing_points = 0;
+  for (int i = 0; i < nc; ++i)
+    for (Eigen::Index q = 0; q < knn_cvt.cols(); ++q)
+      if (NC.row(i).dot(NC.row(knn_cvt(i, q))) < 0) {
+        ++crossing_points;
+        break;
+      }
   PointLaplacianOptions lopt;
   lopt.k = options.neighbors;
   lopt.threads = options.threads;
-  PointLaplacian pl = point_laplacian(P, lopt);
-  const Eigen::MatrixXi knn = pl.neighbors;  // the Laplacian's kNN (k = neighbors); pl is rebuilt below
+  lopt.neighbors = &knn_cvt;
+  if (crossing_points > 0 && crossing_points <= 0.08 * nc) lopt.oriented_normals = &NC;
+  PointLaplacian pl = point_laplacian(PC, lopt);
+  stage_done("point laplacian");
   // Neighbourhoods of the fitted surface: about one output edge length across (4 cells' worth of
   // points), so that noise averages out instead of passing into the vertex positions; at least
   // `neighbors`, at most 100 points.
   const int fit_k = std::min(std::max(options.neighbors, static_cast<int>(std::lround(4.0 * n / options.sites))),
                              std::min(100, n - 1));
   const Eigen::MatrixXi knn_fit =
-      fit_k == options.neighbors ? knn : k_nearest_neighbors(P, fit_k, options.threads);
-  Eigen::MatrixX3d N = pl.normals;
-  // Orientation: edges leaving the tangent plane are propagated through last, so that the two
-  // sides of a part thinner than the kNN neighbourhood (ears, fingers) get opposite normals.
-  orient_normals_mst(P, N, std::min(10, options.neighbors), options.threads, 1.0);
-  // Where local triangles join points of opposite normals (the two sides of a thin part), the
-  // Laplacian is rebuilt without them: heat (hence a cell) must not cross to the other side.
-  {
-    long crossing = 0;
-    for (Eigen::Index t = 0; t < pl.triangles.rows(); ++t)
-      for (int k = 0; k < 3; ++k)
-        if (N.row(pl.triangles(t, k)).dot(N.row(pl.triangles(t, (k + 1) % 3))) < 0) {
-          ++crossing;
-          break;
-        }
-    // Only where such triangles are rare (thin parts: 1.1 % on armadillo). Where they are common
-    // the orientation itself is unreliable (cluttered scene scans), and removing them would cut
-    // the point graph into pieces too small to carry any dual triangle.
-    if (crossing > 0 && crossing <= pl.triangles.rows() / 20) {
-      lopt.oriented_normals = &N;
-      pl = point_laplacian(P, lopt);
-      lopt.oriented_normals = nullptr;
-    }
-  }
+      fit_k == options.neighbors && !subsampled ? knn_cvt : k_nearest_neighbors(P, fit_k, options.threads);
+  // Walks towards the nearest cloud point (polish) step along the first `neighbors` of them.
+  const Eigen::MatrixXi knn = knn_fit.leftCols(std::min<Eigen::Index>(knn_fit.cols(), options.neighbors));
+  stage_done("fit neighbourhoods");
   const Eigen::MatrixX3i& T = pl.triangles;
   Laplacian lap;
   Eigen::VectorXd metric_area;
   if (options.anisotropy > 0) {
-    Eigen::MatrixXd X(n, 6);
-    X.leftCols(3) = P;
-    X.rightCols(3) = options.anisotropy * N;
+    Eigen::MatrixXd X(nc, 6);
+    X.leftCols(3) = PC;
+    X.rightCols(3) = options.anisotropy * NC;
     const Eigen::MatrixX3d lengths = face_edge_lengths(X, T);
-    lap = cotan_laplacian_from_lengths(lengths, T, n);
+    lap = cotan_laplacian_from_lengths(lengths, T, nc);
     metric_area.resize(T.rows());
     for (Eigen::Index f = 0; f < T.rows(); ++f) {
       const double a = lengths(f, 0), b = lengths(f, 1), c = lengths(f, 2), s = 0.5 * (a + b + c);
@@ -577,7 +660,23 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   } else {
     lap = std::move(pl.laplacian);
   }
+  // Oriented normals of every cloud point: the CVT point's own, else that of the nearest CVT point
+  // among its fit neighbours (on the same side of a thin part as the point).
+  Eigen::MatrixX3d N;
+  if (!subsampled) {
+    N = NC;
+  } else {
+    std::vector<int> cvt_index(n, -1);
+    for (int i = 0; i < nc; ++i) cvt_index[sub[i]] = i;
+    N.resize(n, 3);
+    for (int i = 0; i < n; ++i) {
+      int c = cvt_index[i];
+      for (Eigen::Index q = 0; q < knn_fit.cols() && c < 0; ++q) c = cvt_index[knn_fit(i, q)];
+      N.row(i) = NC.row(std::max(c, 0));  // (every voxel of the fit neighbourhood's size holds a CVT point)
+    }
+  }
   res.laplacian_seconds = since(t0);
+  stage_done("cloud normals");
   report("laplacian", 1);
 
   // 3. Heat CVT on the points.
@@ -596,14 +695,20 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   copt.tolerance = options.lloyd_tolerance;
   t0 = Clock::now();
   report("cvt", 0);
+  if (options.surface_lloyd_iterations > 0) {
+    copt.initialization = CvtInitialization::farthest_point;
+    copt.surface_lloyd_iterations = options.surface_lloyd_iterations;
+    copt.surface_lloyd_relaxation = 1.5;
+  }
   const CvtResult cvt = centroidal_voronoi(
-      P, T, lap, copt, {},
+      PC, T, lap, copt, {},
       [&](const CvtIterationStats& st) {
         report("cvt", options.iterations > 0 ? static_cast<double>(st.iteration) / options.iterations : 1.0);
         return true;
       },
       metric_area);
   res.cvt_seconds = since(t0);
+  stage_done("cvt");
   res.factor_seconds = cvt.factor_seconds;
   res.iterations = static_cast<int>(cvt.iterations.size());
   for (const auto& st : cvt.iterations) res.iteration_seconds.push_back(st.seconds);
@@ -611,12 +716,12 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
 
   // 4. Cell label of every point (original vertices keep their indices in the refined mesh).
   const VoronoiDiagram& D = cvt.diagram;
-  const int ns = D.num_cells();
-  std::vector<int> label(n, -1);
+  int ns = D.num_cells();  // grows when long edges of slivers are split (below)
+  std::vector<int> label(nc, -1);
   for (Eigen::Index r = 0; r < D.F.rows(); ++r)
     for (int k = 0; k < 3; ++k) {
       const int v = D.F(r, k);
-      if (v < n && label[v] < 0) label[v] = D.face_cell[r];
+      if (v < nc && label[v] < 0) label[v] = D.face_cell[r];
     }
 
   // Fit neighbourhood of cloud point c: c and its fit_k nearest points whose oriented normal
@@ -639,10 +744,10 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     const SurfacePoint& sp = cvt.sites[s];
     int corner = 0;
     sp.bary.maxCoeff(&corner);
-    const int c = T(sp.face, corner);
+    const int c = sub[T(sp.face, corner)];
     const std::vector<int> nb = fit_neighbourhood(c);
     Eigen::Vector3d orient = Eigen::Vector3d::Zero();
-    for (int k = 0; k < 3; ++k) orient += sp.bary[k] * N.row(T(sp.face, k)).transpose();
+    for (int k = 0; k < 3; ++k) orient += sp.bary[k] * NC.row(T(sp.face, k)).transpose();
     if (orient.norm() == 0) orient = N.row(c).transpose();
     Eigen::Vector3d pos, nrm;
     fit_and_project(P, nb, cvt.positions.row(s).transpose(), orient, pos, nrm);
@@ -715,6 +820,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     }
   }
   res.candidate_triangles = static_cast<int>(cands.size());
+  stage_done("sites and candidates");
   std::stable_sort(cands.begin(), cands.end(), [](const Candidate& x, const Candidate& y) {
     if (x.witnesses != y.witnesses) return x.witnesses > y.witnesses;
     if (x.quality != y.quality) return x.quality > y.quality;
@@ -972,6 +1078,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   }
   };
   fill_holes();
+  stage_done("extraction and holes");
 
   // Faces of F involved in a self-intersection (CGAL, face i = F[i]).
   // CGAL checks of the current faces F on the sites S (unused sites left out; face i = F[i]).
@@ -1030,6 +1137,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     }
   };
   untangle();
+  stage_done("untangle");
 
   // Interior vertices of valence 3 (a tiny cell squeezed between three others; their triangles
   // cannot have a smallest angle above 30 degrees, and no flip can remove them): the vertex and
@@ -1103,7 +1211,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     for (int s = 0; s < ns; ++s) {
       int corner = 0;
       cvt.sites[s].bary.maxCoeff(&corner);
-      anchor[s] = T(cvt.sites[s].face, corner);
+      anchor[s] = sub[T(cvt.sites[s].face, corner)];
     }
   };
   auto walk = [&](int start, const Eigen::Vector3d& x) {
@@ -1204,6 +1312,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     }
   }
 
+  stage_done("relaxation polish");
   // Angle polish (smallest-angle-improving tangential moves on the fitted surface) alternating
   // with max-min-angle flips. Undone if it makes the mesh self-intersect.
   if (options.relaxation_iterations > 0) {
@@ -1236,6 +1345,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     }
   }
 
+  stage_done("angle polish");
   // Slivers left where the polish could not reach (filled holes at thin tips, held vertices):
   // an edge of a triangle whose smallest angle is below 25 degrees (the shortest that qualifies) is collapsed when
   // the link condition holds, the two opposite vertices keep valence >= 3, no triangle of the new
@@ -1358,6 +1468,115 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     }
   }
 
+  stage_done("sliver collapse");
+
+  // Slivers still left have a long edge (a filled hole at a thin tip spans several cell widths):
+  // each such edge, > 1.5 × the mean edge length, is split at its midpoint projected onto the
+  // fitted surface (both triangles halved), then max-min-angle flips and an angle polish of the
+  // new vertices and their neighbours. A split whose neighbourhood then self-intersects (around a
+  // tip the midpoint may project onto the other side) is left out and the rest redone.
+  if (options.relaxation_iterations > 0) {
+    const Eigen::MatrixX3d S_before = S, SN_before = SN;
+    const std::vector<std::array<int, 3>> F_before = F;
+    const std::vector<int> anchor_before = anchor;
+    const int ns_before = ns, flips_before = res.flipped_edges;
+    const double thr = 25.0 * M_PI / 180.0;
+    std::set<long long> excluded;  // edges (of the original vertices) not to split
+    auto restore = [&]() {
+      S = S_before;
+      SN = SN_before;
+      F = F_before;
+      anchor = anchor_before;
+      ns = ns_before;
+      res.flipped_edges = flips_before;
+    };
+    for (int attempt = 0; attempt < 4; ++attempt) {
+      int split = 0;
+      std::vector<std::pair<std::array<int, 5>, long long>> made;  // (a, b, c, d, new vertex), split edge
+      for (int pass = 0; pass < 3 && !F.empty(); ++pass) {
+        double mean_edge = 0;
+        std::unordered_map<long long, std::vector<int>> edge_faces;
+        for (int id = 0; id < static_cast<int>(F.size()); ++id)
+          for (int k = 0; k < 3; ++k) {
+            const int a = F[id][k], b = F[id][(k + 1) % 3];
+            mean_edge += (S.row(a) - S.row(b)).norm();
+            edge_faces[EdgeKey::make(std::min(a, b), std::max(a, b))].push_back(id);
+          }
+        mean_edge /= 3.0 * static_cast<double>(F.size());
+        std::vector<char> touched(F.size(), 0);
+        std::vector<std::array<int, 3>> added;
+        std::vector<char> near_new(ns, 0);
+        for (int id = 0; id < static_cast<int>(F.size()); ++id) {
+          const std::array<int, 3> f = F[id];
+          if (touched[id] || tri_min_angle(S, f[0], f[1], f[2]) >= thr) continue;
+          int k = 0;
+          double longest = 0;
+          for (int q = 0; q < 3; ++q) {
+            const double len = (S.row(f[q]) - S.row(f[(q + 1) % 3])).norm();
+            if (len > longest) longest = len, k = q;
+          }
+          if (!(longest > 1.5 * mean_edge)) continue;
+          const int a = f[k], b = f[(k + 1) % 3], c = f[(k + 2) % 3];
+          const long long key = EdgeKey::make(std::min(a, b), std::max(a, b));
+          if (excluded.count(key)) continue;
+          const auto& ef = edge_faces[key];
+          if (ef.size() != 2) continue;
+          const int other = ef[0] == id ? ef[1] : ef[0];
+          if (touched[other]) continue;
+          int d = -1;
+          for (int v : F[other])
+            if (v != a && v != b) d = v;
+          if (d < 0 || d == c) continue;
+          Eigen::Vector3d pos, nrm;
+          project(a, 0.5 * (S.row(a) + S.row(b)).transpose(), pos, nrm);
+          if (!pos.allFinite() || !nrm.allFinite()) continue;
+          const int m = ns++;
+          S.conservativeResize(ns, 3);
+          SN.conservativeResize(ns, 3);
+          S.row(m) = pos.transpose();
+          SN.row(m) = nrm.transpose();
+          anchor.push_back(anchor[a]);
+          // (a, b, c) → (a, m, c), (m, b, c); the neighbour (b, a, d) → (b, m, d), (m, a, d).
+          F[id] = {a, m, c};
+          added.push_back({m, b, c});
+          F[other] = {b, m, d};
+          added.push_back({m, a, d});
+          touched[id] = touched[other] = 1;
+          near_new.resize(ns, 0);
+          for (int v : {a, b, c, d, m}) near_new[v] = 1;
+          made.push_back({{a, b, c, d, m}, key});
+          ++split;
+        }
+        if (added.empty()) break;
+        for (const auto& t : added) F.push_back(t);
+        res.flipped_edges += improve_by_flips(S, F, 5, false, &near_new);
+        std::vector<char> frozen(ns, 1);
+        for (int v = 0; v < ns; ++v)
+          if (near_new[v]) frozen[v] = 0;
+        angle_polish(S, SN, F, 4, project, frozen);
+        res.flipped_edges += improve_by_flips(S, F, 5, false, &near_new);
+      }
+      if (split == 0) break;
+      const std::vector<int> bad = intersecting_faces();
+      if (bad.empty()) {
+        res.split_edges = split;
+        break;
+      }
+      // Leave out the splits whose vertices are in or next to an intersecting face; redo.
+      std::vector<char> in_bad(ns, 0), vbad(ns, 0);
+      for (int f : bad)
+        for (int v : F[f]) in_bad[v] = 1;
+      for (const auto& f : F)
+        if (in_bad[f[0]] || in_bad[f[1]] || in_bad[f[2]])
+          for (int v : f) vbad[v] = 1;
+      bool any = false;
+      for (const auto& [verts, key] : made)
+        if (std::any_of(verts.begin(), verts.end(), [&](int v) { return vbad[v] != 0; })) excluded.insert(key), any = true;
+      restore();
+      if (!any) break;  // the intersection is not the splits' doing: keep the mesh as it was
+    }
+  }
+  stage_done("long-edge split");
   // Tiny closed pieces (a few sites of a thin tip that closed up on their own, detached from the
   // surface by the clean-up): components of fewer than 20 triangles are dropped.
   {
@@ -1403,10 +1622,12 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   const TriangleQuality tq = triangle_quality(res.mesh.V, res.mesh.F);
   res.min_angle_deg = tq.min_angle_deg;
   res.mean_min_angle_deg = tq.mean_min_angle_deg;
+  stage_done("compact");
   report("validate", 0);
   ValidationOptions vopt;
   vopt.require_closed = false;
   res.validation = validate_triangle_mesh(res.mesh.V, res.mesh.F, vopt);
+  stage_done("validate");
   report("validate", 1);
   res.total_seconds = since(t_start);
   return res;

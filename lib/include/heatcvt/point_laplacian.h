@@ -82,6 +82,10 @@ struct PointLaplacianOptions {
   /// part thinner than the neighbourhood are not connected (the PCA `normals` still use all k
   /// neighbours). Default nullptr (all neighbours).
   const Eigen::MatrixX3d* oriented_normals = nullptr;
+  /// Optional precomputed neighbours (#P by ≥ k, nearest first, as k_nearest_neighbors()
+  /// returns them; the first k columns are used), so that a caller who already searched does not
+  /// search again. Default nullptr (searched here).
+  const Eigen::MatrixXi* neighbors = nullptr;
 };
 
 /// Result of point_laplacian().

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "heatcvt/mesh.h"
@@ -60,6 +61,14 @@ struct ReconstructionOptions {
   /// Stop the Lloyd iterations early when no site moved more than this fraction of the site
   /// spacing sqrt(area / sites); 0 = always run `iterations`. Default 0.
   double lloyd_tolerance = 0.0;
+  /// Iterations of the cheap surface Lloyd (CvtOptions::surface_lloyd_iterations, ω = 1.5) on
+  /// the start sites, run while the Cholesky factor is computed; 0 = off. Default 0.
+  int surface_lloyd_iterations = 0;
+  /// The CVT (Laplacian, heat Voronoi, Lloyd, dual candidates) runs on a spatially uniform subset
+  /// of about this many points per site (one point per voxel of a grid sized to that count, the
+  /// one nearest its voxel's centroid); the site positions are still fitted to every point, so
+  /// noise keeps averaging out over the whole cloud. 0 = every point. Default 0.
+  double cvt_points_per_site = 0.0;
 };
 
 /// Progress of a reconstruction: a stage name and a fraction in [0, 1].
@@ -89,6 +98,10 @@ struct ReconstructionResult {
   int unused_sites = 0;            ///< sites that ended in no triangle (dropped from the mesh)
   bool angle_polish_undone = false;  ///< the smallest-angle polish self-intersected and was undone
   int collapsed_edges = 0;         ///< short edges of slivers (< 25 degrees) collapsed at the end
+  /// Wall time of each stage in pipeline order (name, seconds): where the time went.
+  std::vector<std::pair<std::string, double>> stage_seconds;
+  int split_edges = 0;             ///< long edges of remaining slivers split at their midpoint (on the fitted surface)
+  int points_cvt = 0;              ///< points the CVT ran on (points_used unless cvt_points_per_site thins them)
 };
 
 /// Reconstructs a surface from the points P (#P by 3; NaN-free, duplicates allowed).
