@@ -59,8 +59,9 @@ void write_sphere_cloud(const std::string& path, int n) {
 TEST(Cloud2MeshTool, HelpListsDefaults) {
   auto r = test::run_tool("cloud2mesh", "--help");
   EXPECT_EQ(r.exit_code, 0);
-  for (const char* needle : {"-n", "3000", "--iterations", "30", "--neighbours", "--anisotropy", "--denoise", "--seed",
-                             "--relaxation", "--fast-start", "--threads", "--report", "--quiet"})
+  for (const char* needle : {"-n", "3000", "--iterations", "INT=6", "--neighbours", "--anisotropy", "--denoise", "--seed",
+                             "--relaxation", "--fast-start", "--surface-lloyd", "INT=40", "--points-per-site",
+                             "FLOAT=10", "--threads", "--report", "--quiet"})
     EXPECT_NE(r.out.find(needle), std::string::npos) << needle;
 }
 
@@ -71,7 +72,7 @@ TEST(Cloud2MeshTool, SphereCloudClosedGenus0WithReportAndSameSeedSameOutput) {
                                             dir.path("r.json"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   // The summary on stdout names every stage's figure and the CGAL checks.
-  for (const char* needle : {"6000 read", "Laplacian", "factor", "s/iteration", "400 vertices", "phi_min", "phi_m",
+  for (const char* needle : {"6000 read", "Laplacian", "factor", "heat iterations", "stages:", "400 vertices", "phi_min", "phi_m",
                              "PASS manifold_edges", "PASS no_self_intersections"})
     EXPECT_NE(r.out.find(needle), std::string::npos) << needle << " not in:\n" << r.out;
   TriangleMesh m = read_mesh(dir.path("a.ply"));

@@ -360,6 +360,28 @@ TEST(PointLaplacian, KnnIsExactAndExcludesSelf) {
   }
 }
 
+// A caller's own neighbour table (e.g. reconstruct_surface, which needs it for the normals
+// first) gives the same Laplacian as the search inside; a wrong table is refused.
+TEST(PointLaplacian, PrecomputedNeighboursGiveTheSameLaplacian) {
+  const Eigen::MatrixX3d P = random_sphere(2000, 31);
+  PointLaplacianOptions o;
+  o.k = 16;
+  const PointLaplacian inside = point_laplacian(P, o);
+  const Eigen::MatrixXi nb = k_nearest_neighbors(P, 20);  // more columns than k: the first k are used
+  o.neighbors = &nb;
+  const PointLaplacian given = point_laplacian(P, o);
+  EXPECT_EQ((inside.laplacian.L - given.laplacian.L).norm(), 0.0);
+  EXPECT_TRUE(inside.laplacian.M == given.laplacian.M);
+  EXPECT_TRUE(inside.triangles == given.triangles);
+  const Eigen::MatrixXi narrow = nb.leftCols(10);
+  o.neighbors = &narrow;
+  EXPECT_THROW(point_laplacian(P, o), InvalidInputError);
+  Eigen::MatrixXi out_of_range = nb;
+  out_of_range(7, 3) = 2000;
+  o.neighbors = &out_of_range;
+  EXPECT_THROW(point_laplacian(P, o), InvalidInputError);
+}
+
 TEST(PointLaplacian, RejectsBadInput) {
   const Eigen::MatrixX3d P = random_sphere(100, 2);
   PointLaplacianOptions o;

@@ -187,6 +187,42 @@ TEST(Reconstruct, DeterministicForSeedAndThreads) {
   EXPECT_EQ(a.validation.genus, 1) << a.validation.summary();
 }
 
+// The CVT runs on a voxel subset of about cvt_points_per_site points per site, while the
+// vertices are fitted to every point: on a clean unit sphere they stay on it; with 0 every point
+// is a CVT point. The stage timings account for the whole run.
+TEST(Reconstruct, CvtOnAVoxelSubsetFitsToEveryPoint) {
+  const TriangleMesh src = test::icosphere(4);
+  const Eigen::MatrixX3d P = sample_surface(src.V, src.F, 20000, 3);
+  ReconstructionOptions opt;
+  opt.sites = 300;
+  opt.cvt_points_per_site = 10;
+  const ReconstructionResult r = reconstruct_surface(P, opt);
+  EXPECT_EQ(r.points_used, 20000);
+  EXPECT_GE(r.points_cvt, 0.85 * 3000);
+  EXPECT_LE(r.points_cvt, 1.15 * 3000);
+  EXPECT_EQ(r.validation.genus, 0) << r.validation.summary();
+  EXPECT_EQ(r.validation.boundary_loops, 0);
+  EXPECT_GE(r.mesh.V.rows(), 290);
+  // icosphere(4) is within 0.3 % of the unit sphere; the fitted vertices are no further off.
+  for (Eigen::Index i = 0; i < r.mesh.V.rows(); ++i) EXPECT_NEAR(r.mesh.V.row(i).norm(), 1.0, 0.005);
+  double stage_sum = 0;
+  bool has_iterations = false;
+  for (const auto& [name, seconds] : r.stage_seconds) {
+    EXPECT_GE(seconds, 0.0) << name;
+    stage_sum += seconds;
+    has_iterations = has_iterations || name == "cvt iterations";
+  }
+  EXPECT_TRUE(has_iterations);
+  EXPECT_LE(stage_sum, r.total_seconds + 1e-3);
+  EXPECT_GE(stage_sum, 0.9 * r.total_seconds);
+  opt.cvt_points_per_site = 0;
+  const ReconstructionResult all = reconstruct_surface(P, opt);
+  EXPECT_EQ(all.points_cvt, 20000);
+  EXPECT_EQ(all.validation.genus, 0);
+  opt.cvt_points_per_site = 2;  // fewer than 3 points per site cannot carry a cell
+  EXPECT_THROW(reconstruct_surface(P, opt), InvalidInputError);
+}
+
 // Outliers far from the surface are removed by --denoise; without it they would be used.
 TEST(Reconstruct, DenoiseRemovesOutliers) {
   const TriangleMesh src = test::icosphere(3);

@@ -395,11 +395,29 @@ struct RingQuality {
 // angles) improves, and no ring triangle turns against the vertex normal. Returns the moves kept.
 int angle_polish(Eigen::MatrixX3d& S, Eigen::MatrixX3d& SN, const std::vector<std::array<int, 3>>& F, int rounds,
                  const std::function<void(int, const Eigen::Vector3d&, Eigen::Vector3d&, Eigen::Vector3d&)>& project,
-                 const std::vector<char>& frozen) {
+                 const std::vector<char>& frozen, int threads) {
   const int ns = static_cast<int>(S.rows());
   std::vector<std::vector<int>> vf(ns);
   for (int id = 0; id < static_cast<int>(F.size()); ++id)
     for (int v : F[id]) vf[v].push_back(id);
+  // Greedy colouring of the vertex graph in index order: a vertex's move only reads its one-ring,
+  // so the vertices of one colour move in parallel, with the same result for any thread count.
+  std::vector<int> colour(ns, -1);
+  std::vector<std::vector<int>> by_colour;
+  for (int v = 0; v < ns; ++v) {
+    std::vector<char> taken;
+    for (int id : vf[v])
+      for (int w : F[id])
+        if (w != v && colour[w] >= 0) {
+          if (static_cast<int>(taken.size()) <= colour[w]) taken.resize(colour[w] + 1, 0);
+          taken[colour[w]] = 1;
+        }
+    int c = 0;
+    while (c < static_cast<int>(taken.size()) && taken[c]) ++c;
+    colour[v] = c;
+    if (static_cast<int>(by_colour.size()) <= c) by_colour.resize(c + 1);
+    by_colour[c].push_back(v);
+  }
   const double cap = 35.0 * M_PI / 180.0;
   // Ring quality with vertex v at x (3D).
   auto ring3 = [&](int v, const Eigen::Vector3d& x, const Eigen::Vector3d& nv) {
@@ -425,7 +443,10 @@ int angle_polish(Eigen::MatrixX3d& S, Eigen::MatrixX3d& SN, const std::vector<st
   int moves = 0;
   for (int round = 0; round < rounds; ++round) {
     int round_moves = 0;
-    for (int v = 0; v < ns; ++v) {
+    for (const std::vector<int>& group : by_colour) {
+#pragma omp parallel for num_threads(resolve_threads(threads)) schedule(dynamic, 16) reduction(+ : round_moves)
+    for (size_t gi = 0; gi < group.size(); ++gi) {
+      const int v = group[gi];
       if (vf[v].size() < 3 || frozen[v]) continue;
       const Eigen::Vector3d x = S.row(v), nv = SN.row(v);
       // Tangent frame.
@@ -504,6 +525,7 @@ int angle_polish(Eigen::MatrixX3d& S, Eigen::MatrixX3d& SN, const std::vector<st
         SN.row(v) = nrm.transpose();
         ++round_moves;
       }
+    }
     }
     moves += round_moves;
     if (round_moves == 0) break;
@@ -708,10 +730,13 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
       },
       metric_area);
   res.cvt_seconds = since(t0);
-  stage_done("cvt");
   res.factor_seconds = cvt.factor_seconds;
   res.iterations = static_cast<int>(cvt.iterations.size());
-  for (const auto& st : cvt.iterations) res.iteration_seconds.push_back(st.seconds);
+  double iteration_sum = 0;
+  for (const auto& st : cvt.iterations) res.iteration_seconds.push_back(st.seconds), iteration_sum += st.seconds;
+  res.stage_seconds.emplace_back("cvt start and final diagram", res.cvt_seconds - iteration_sum);
+  res.stage_seconds.emplace_back("cvt iterations", iteration_sum);
+  t_stage = Clock::now();
   report("mesh", 0);
 
   // 4. Cell label of every point (original vertices keep their indices in the refined mesh).
@@ -1326,7 +1351,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     for (int attempt = 0; attempt < 3; ++attempt) {
       if (remove_valence3() > 0) res.flipped_edges += improve_by_flips(S, F, 5, false);
       for (int r = 0; r < 4; ++r) {
-        angle_polish(S, SN, F, 2, project, frozen);
+        angle_polish(S, SN, F, 2, project, frozen, options.threads);
         res.flipped_edges += improve_by_flips(S, F, 5, false);
       }
       const std::vector<int> bad = intersecting_faces();
@@ -1553,7 +1578,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
         std::vector<char> frozen(ns, 1);
         for (int v = 0; v < ns; ++v)
           if (near_new[v]) frozen[v] = 0;
-        angle_polish(S, SN, F, 4, project, frozen);
+        angle_polish(S, SN, F, 4, project, frozen, options.threads);
         res.flipped_edges += improve_by_flips(S, F, 5, false, &near_new);
       }
       if (split == 0) break;
@@ -1617,6 +1642,40 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   res.mesh.F.resize(F.size(), 3);
   for (size_t i = 0; i < F.size(); ++i)
     for (int k = 0; k < 3; ++k) res.mesh.F(i, k) = remap[F[i][k]];
+  // Closed pieces face outward. The normals' global sign comes from the MST orientation's root
+  // (the topmost point, made to face +z), which a noisy tip can get wrong; a closed component
+  // with negative enclosed volume is turned inside out. Open pieces (scans) keep the sign.
+  {
+    const Eigen::Index nf = res.mesh.F.rows();
+    std::vector<int> parent(nv);
+    std::iota(parent.begin(), parent.end(), 0);
+    std::function<int(int)> find = [&](int i) { return parent[i] == i ? i : parent[i] = find(parent[i]); };
+    for (Eigen::Index f = 0; f < nf; ++f) {
+      parent[find(res.mesh.F(f, 0))] = find(res.mesh.F(f, 1));
+      parent[find(res.mesh.F(f, 1))] = find(res.mesh.F(f, 2));
+    }
+    std::unordered_set<long long> half;
+    for (Eigen::Index f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) half.insert(EdgeKey::make(res.mesh.F(f, k), res.mesh.F(f, (k + 1) % 3)));
+    std::unordered_map<int, double> volume;
+    std::unordered_set<int> open;
+    const Eigen::RowVector3d centre = res.mesh.V.colwise().mean();
+    for (Eigen::Index f = 0; f < nf; ++f) {
+      const int root = find(res.mesh.F(f, 0));
+      const Eigen::RowVector3d a = res.mesh.V.row(res.mesh.F(f, 0)) - centre, b = res.mesh.V.row(res.mesh.F(f, 1)) - centre,
+                               c = res.mesh.V.row(res.mesh.F(f, 2)) - centre;
+      volume[root] += a.dot(b.cross(c)) / 6.0;
+      for (int k = 0; k < 3; ++k)
+        if (!half.count(EdgeKey::make(res.mesh.F(f, (k + 1) % 3), res.mesh.F(f, k)))) open.insert(root);
+    }
+    for (Eigen::Index f = 0; f < nf; ++f) {
+      const int root = find(res.mesh.F(f, 0));
+      if (!open.count(root) && volume[root] < 0) {
+        std::swap(res.mesh.F(f, 1), res.mesh.F(f, 2));
+        ++res.faces_turned_outward;
+      }
+    }
+  }
   restore_frame(res.mesh.V, frame);
 
   const TriangleQuality tq = triangle_quality(res.mesh.V, res.mesh.F);
