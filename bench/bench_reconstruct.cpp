@@ -9,7 +9,7 @@
 //            [shapes=bunny_pmp.off,armadillo.obj,kitten.obj,fertility.off,elephant.off]
 //            [--only-heatcvt] [--clean-only | --noisy-only] [--threads T] [--anisotropy L]
 //            [--iterations N] [--relaxation W] [--tolerance X] [--random-start | --fast-start]
-//            [--surface-lloyd N] [--points-per-site X]   (heatcvt options)
+//            [--surface-lloyd N] [--points-per-site X] [--polish N] [--no-smooth]   (heatcvt options)
 #define CGAL_EIGEN3_ENABLED 1  // CGAL Poisson's sparse solver (Eigen is linked through heatcvt)
 #include <CGAL/Advancing_front_surface_reconstruction.h>
 #include <CGAL/compute_average_spacing.h>
@@ -186,6 +186,8 @@ int main(int argc, char** argv) {
   bool random_start = false, fast_start = false;
   int surface_lloyd = -1;       // < 0: the library default
   double points_per_site = -1;  // < 0: the library default
+  int polish = -1;              // < 0: the library default (relaxation_iterations)
+  bool no_smooth = false;       // smooth_cvt_points = false
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--only-heatcvt") only_heat = true;
@@ -200,6 +202,8 @@ int main(int argc, char** argv) {
     else if (a == "--fast-start") fast_start = true;
     else if (a == "--surface-lloyd" && i + 1 < argc) surface_lloyd = std::atoi(argv[++i]);
     else if (a == "--points-per-site" && i + 1 < argc) points_per_site = std::atof(argv[++i]);
+    else if (a == "--polish" && i + 1 < argc) polish = std::atoi(argv[++i]);
+    else if (a == "--no-smooth") no_smooth = true;
     else if (!a.empty() && a[0] == '-') {
       std::fprintf(stderr, "bench_reconstruct: unknown option %s\n", a.c_str());
       return 2;
@@ -262,6 +266,8 @@ int main(int argc, char** argv) {
         if (fast_start) o.farthest_point_start = true;
         if (surface_lloyd >= 0) o.surface_lloyd_iterations = surface_lloyd;
         if (points_per_site >= 0) o.cvt_points_per_site = points_per_site;
+        if (polish >= 0) o.relaxation_iterations = polish;
+        if (no_smooth) o.smooth_cvt_points = false;
         heat = reconstruct_surface(P, o);
         return heat.mesh;
       });

@@ -51,6 +51,8 @@ int main(int argc, char** argv) {
                  "the CVT runs on a uniform subset of about this many points per site (site positions are still "
                  "fitted to every point); 0 = every point")
       ->capture_default_str();
+  app.add_flag("--no-smooth-cvt-points", [&](std::int64_t) { opt.smooth_cvt_points = false; },
+               "build the Laplacian on the raw CVT points instead of their projections onto the fitted surface");
   app.add_option("--threads", opt.threads, "worker threads (0 = all cores)")->capture_default_str();
   app.add_option("--report", report_path, "write a JSON report");
   app.add_flag("-q,--quiet", quiet, "no progress and no summary");

@@ -197,16 +197,20 @@ std::vector<int> voxel_subsample(const Eigen::MatrixX3d& P, long target) {
   return chosen;
 }
 
+// Smallest angle of a triangle: the one opposite its shortest edge (one acos instead of three;
+// the polish evaluates it millions of times).
 double min_angle_pts(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
   const Eigen::Vector3d p[3] = {a, b, c};
-  double best = M_PI;
-  for (int k = 0; k < 3; ++k) {
-    const Eigen::Vector3d e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
-    const double n1 = e1.norm(), n2 = e2.norm();
-    if (n1 == 0 || n2 == 0) return 0;
-    best = std::min(best, std::acos(std::clamp(e1.dot(e2) / (n1 * n2), -1.0, 1.0)));
+  int k = 0;  // the corner opposite the shortest edge
+  double shortest = std::numeric_limits<double>::infinity();
+  for (int q = 0; q < 3; ++q) {
+    const double len = (p[(q + 1) % 3] - p[(q + 2) % 3]).squaredNorm();
+    if (len < shortest) shortest = len, k = q;
   }
-  return best;
+  const Eigen::Vector3d e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
+  const double n1 = e1.norm(), n2 = e2.norm();
+  if (n1 == 0 || n2 == 0 || shortest == 0) return 0;
+  return std::acos(std::clamp(e1.dot(e2) / (n1 * n2), -1.0, 1.0));
 }
 
 double tri_min_angle(const Eigen::MatrixX3d& V, int a, int b, int c) {
@@ -372,12 +376,14 @@ double min_angle_2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Ei
   const double cr = (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
   if (!(cr > 0)) return -1;
   const Eigen::Vector2d p[3] = {a, b, c};
-  double best = M_PI;
-  for (int k = 0; k < 3; ++k) {
-    const Eigen::Vector2d e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
-    best = std::min(best, std::atan2(std::abs(e1.x() * e2.y() - e1.y() * e2.x()), e1.dot(e2)));
+  int k = 0;  // the smallest angle is opposite the shortest edge
+  double shortest = std::numeric_limits<double>::infinity();
+  for (int q = 0; q < 3; ++q) {
+    const double len = (p[(q + 1) % 3] - p[(q + 2) % 3]).squaredNorm();
+    if (len < shortest) shortest = len, k = q;
   }
-  return best;
+  const Eigen::Vector2d e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
+  return std::atan2(cr, e1.dot(e2));  // |e1 × e2| = cr for every corner of a CCW triangle
 }
 
 // Quality of a one-ring: smallest angle over its triangles, and the sum of the triangles'
@@ -633,6 +639,57 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   // sides of a part thinner than the kNN neighbourhood (ears, fingers) get opposite normals.
   orient_normals_mst(PC, NC, std::min(10, options.neighbors), options.threads, 1.0);
   stage_done("normals");
+  // Neighbourhoods of the fitted surface: about one output edge length across (4 cells' worth of
+  // points), so that noise averages out instead of passing into the vertex positions; at least
+  // `neighbors`, at most 100 points.
+  const int fit_k = std::min(std::max(options.neighbors, static_cast<int>(std::lround(4.0 * n / options.sites))),
+                             std::min(100, n - 1));
+  const Eigen::MatrixXi knn_fit =
+      fit_k == options.neighbors && !subsampled ? knn_cvt : k_nearest_neighbors(P, fit_k, options.threads);
+  // Walks towards the nearest cloud point (polish) step along the first `neighbors` of them.
+  const Eigen::MatrixXi knn = knn_fit.leftCols(std::min<Eigen::Index>(knn_fit.cols(), options.neighbors));
+  stage_done("fit neighbourhoods");
+  // Oriented normals of every cloud point: the CVT point's own, else that of the nearest CVT point
+  // among its fit neighbours (on the same side of a thin part as the point).
+  Eigen::MatrixX3d N;
+  if (!subsampled) {
+    N = NC;
+  } else {
+    std::vector<int> cvt_index(n, -1);
+    for (int i = 0; i < nc; ++i) cvt_index[sub[i]] = i;
+    N.resize(n, 3);
+    for (int i = 0; i < n; ++i) {
+      int c = cvt_index[i];
+      for (Eigen::Index q = 0; q < knn_fit.cols() && c < 0; ++q) c = cvt_index[knn_fit(i, q)];
+      N.row(i) = NC.row(std::max(c, 0));  // (every voxel of the fit neighbourhood's size holds a CVT point)
+    }
+  }
+  stage_done("cloud normals");
+  // Fit neighbourhood of cloud point c: c and its fit_k nearest points whose oriented normal
+  // agrees with c's (the other side of a thin part is left out), unless too few remain.
+  auto fit_neighbourhood = [&](int c) {
+    std::vector<int> nb = {c};
+    const Eigen::Vector3d nc = N.row(c);
+    for (Eigen::Index q = 0; q < knn_fit.cols(); ++q)
+      if (N.row(knn_fit(c, q)).dot(nc) > 0) nb.push_back(knn_fit(c, q));
+    if (static_cast<int>(nb.size()) < std::min(12, fit_k / 2)) {
+      nb.assign(1, c);
+      for (Eigen::Index q = 0; q < knn_fit.cols(); ++q) nb.push_back(knn_fit(c, q));
+    }
+    return nb;
+  };
+  // The CVT points onto the fitted surface (each one projected onto the quadratic fitted to its
+  // neighbourhood of the whole cloud): on a noisy scan the Laplacian is then built on points as
+  // regular as a clean scan's, whose factor has less fill and whose cells are smoother.
+  if (options.smooth_cvt_points) {
+#pragma omp parallel for num_threads(resolve_threads(options.threads)) schedule(static)
+    for (int i = 0; i < nc; ++i) {
+      Eigen::Vector3d pos, nrm;
+      fit_and_project(P, fit_neighbourhood(sub[i]), PC.row(i).transpose(), NC.row(i).transpose(), pos, nrm);
+      if (pos.allFinite()) PC.row(i) = pos.transpose();
+    }
+  }
+  stage_done("smoothed cvt points");
   // Points with a neighbour of opposite normal (the other side of a thin part): where there are
   // some, the Laplacian leaves such neighbours out of each local triangulation, so that heat
   // (hence a cell) does not cross to the other side. Only where they are rare (thin parts: 4.5 %
@@ -655,16 +712,6 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   if (crossing_points > 0 && crossing_points <= 0.08 * nc) lopt.oriented_normals = &NC;
   PointLaplacian pl = point_laplacian(PC, lopt);
   stage_done("point laplacian");
-  // Neighbourhoods of the fitted surface: about one output edge length across (4 cells' worth of
-  // points), so that noise averages out instead of passing into the vertex positions; at least
-  // `neighbors`, at most 100 points.
-  const int fit_k = std::min(std::max(options.neighbors, static_cast<int>(std::lround(4.0 * n / options.sites))),
-                             std::min(100, n - 1));
-  const Eigen::MatrixXi knn_fit =
-      fit_k == options.neighbors && !subsampled ? knn_cvt : k_nearest_neighbors(P, fit_k, options.threads);
-  // Walks towards the nearest cloud point (polish) step along the first `neighbors` of them.
-  const Eigen::MatrixXi knn = knn_fit.leftCols(std::min<Eigen::Index>(knn_fit.cols(), options.neighbors));
-  stage_done("fit neighbourhoods");
   const Eigen::MatrixX3i& T = pl.triangles;
   Laplacian lap;
   Eigen::VectorXd metric_area;
@@ -682,23 +729,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   } else {
     lap = std::move(pl.laplacian);
   }
-  // Oriented normals of every cloud point: the CVT point's own, else that of the nearest CVT point
-  // among its fit neighbours (on the same side of a thin part as the point).
-  Eigen::MatrixX3d N;
-  if (!subsampled) {
-    N = NC;
-  } else {
-    std::vector<int> cvt_index(n, -1);
-    for (int i = 0; i < nc; ++i) cvt_index[sub[i]] = i;
-    N.resize(n, 3);
-    for (int i = 0; i < n; ++i) {
-      int c = cvt_index[i];
-      for (Eigen::Index q = 0; q < knn_fit.cols() && c < 0; ++q) c = cvt_index[knn_fit(i, q)];
-      N.row(i) = NC.row(std::max(c, 0));  // (every voxel of the fit neighbourhood's size holds a CVT point)
-    }
-  }
   res.laplacian_seconds = since(t0);
-  stage_done("cloud normals");
   report("laplacian", 1);
 
   // 3. Heat CVT on the points.
@@ -749,19 +780,6 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
       if (v < nc && label[v] < 0) label[v] = D.face_cell[r];
     }
 
-  // Fit neighbourhood of cloud point c: c and its fit_k nearest points whose oriented normal
-  // agrees with c's (the other side of a thin part is left out), unless too few remain.
-  auto fit_neighbourhood = [&](int c) {
-    std::vector<int> nb = {c};
-    const Eigen::Vector3d nc = N.row(c);
-    for (Eigen::Index q = 0; q < knn_fit.cols(); ++q)
-      if (N.row(knn_fit(c, q)).dot(nc) > 0) nb.push_back(knn_fit(c, q));
-    if (static_cast<int>(nb.size()) < std::min(12, fit_k / 2)) {
-      nb.assign(1, c);
-      for (Eigen::Index q = 0; q < knn_fit.cols(); ++q) nb.push_back(knn_fit(c, q));
-    }
-    return nb;
-  };
   // 5. Site positions on the fitted surface, fitted normals.
   Eigen::MatrixX3d S(ns, 3), SN(ns, 3);
 #pragma omp parallel for num_threads(resolve_threads(options.threads)) schedule(static)

@@ -72,6 +72,10 @@ struct ReconstructionOptions {
   /// acceptance clouds at 3,000 sites: 30k CVT points, each iteration ~40 % cheaper, every issue-4
   /// target still met; at 8 the elephant's noisy cloud gained a handle).
   double cvt_points_per_site = 10.0;
+  /// Project the CVT points onto the surface fitted to the whole cloud (the fit of the site
+  /// positions) before the Laplacian is built: noise of the scan does not reach the Laplacian,
+  /// whose factor and localized solves are then as cheap as on a clean scan. Default true.
+  bool smooth_cvt_points = true;
 };
 
 /// Progress of a reconstruction: a stage name and a fraction in [0, 1].

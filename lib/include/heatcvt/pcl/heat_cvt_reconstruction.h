@@ -62,8 +62,9 @@ class HeatCVTReconstruction : public pcl::SurfaceReconstruction<PointT> {
   using pcl::SurfaceReconstruction<PointT>::initCompute;
   using pcl::SurfaceReconstruction<PointT>::deinitCompute;
 
-  /// Defaults are those of ReconstructionOptions (= `cloud2mesh --help`): 3000 sites,
-  /// 30 iterations, k = 30, t = 1·h̄², anisotropy 0, all threads, seed 1.
+  /// Defaults are those of ReconstructionOptions (= `cloud2mesh --help`): 3000 sites, CVT on
+  /// ~10 points per site, 40 surface-Lloyd + 6 heat Lloyd iterations, k = 30, t = 1·h̄²,
+  /// anisotropy 0, all threads, seed 1.
   HeatCVTReconstruction() = default;
   ~HeatCVTReconstruction() override = default;
 
@@ -72,7 +73,8 @@ class HeatCVTReconstruction : public pcl::SurfaceReconstruction<PointT> {
   void setNumberOfSites(int sites) { options_.sites = sites; }
   int getNumberOfSites() const { return options_.sites; }
 
-  /// Maximum number of Lloyd iterations (≥ 0). Default 30.
+  /// Maximum number of heat Lloyd iterations (≥ 0), after the surface Lloyd
+  /// (ReconstructionOptions::surface_lloyd_iterations). Default 6.
   void setMaximumIterations(int iterations) { options_.iterations = iterations; }
   int getMaximumIterations() const { return options_.iterations; }
 
@@ -94,7 +96,7 @@ class HeatCVTReconstruction : public pcl::SurfaceReconstruction<PointT> {
   void setNumberOfThreads(int threads) { options_.threads = threads; }
   int getNumberOfThreads() const { return options_.threads; }
 
-  /// Seed of the random initial sites (std::mt19937). Default 1.
+  /// Seed of the initial sites (std::mt19937: first farthest-point site, or the random sites). Default 1.
   void setSeed(std::uint32_t seed) { options_.seed = seed; }
   std::uint32_t getSeed() const { return options_.seed; }
 
