@@ -680,13 +680,20 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   };
   // The CVT points onto the fitted surface (each one projected onto the quadratic fitted to its
   // neighbourhood of the whole cloud): on a noisy scan the Laplacian is then built on points as
-  // regular as a clean scan's, whose factor has less fill and whose cells are smoother.
+  // regular as a clean scan's, whose factor has less fill and whose cells are smoother. A point
+  // whose projection lies farther than its mean distance to its 6 nearest CVT points stays put:
+  // there the fit is not to be trusted (tips of thin parts; smoothing every point of the bunny's
+  // ears left a Hausdorff distance of 0.035 of the diagonal, against 0.018 without smoothing).
   if (options.smooth_cvt_points) {
+    const Eigen::MatrixX3d raw = PC;
 #pragma omp parallel for num_threads(resolve_threads(options.threads)) schedule(static)
     for (int i = 0; i < nc; ++i) {
       Eigen::Vector3d pos, nrm;
-      fit_and_project(P, fit_neighbourhood(sub[i]), PC.row(i).transpose(), NC.row(i).transpose(), pos, nrm);
-      if (pos.allFinite()) PC.row(i) = pos.transpose();
+      fit_and_project(P, fit_neighbourhood(sub[i]), raw.row(i).transpose(), NC.row(i).transpose(), pos, nrm);
+      double spacing = 0;
+      const int near = std::min<int>(6, static_cast<int>(knn_cvt.cols()));
+      for (int q = 0; q < near; ++q) spacing += (raw.row(knn_cvt(i, q)) - raw.row(i)).norm() / near;
+      if (pos.allFinite() && (pos - raw.row(i).transpose()).norm() <= spacing) PC.row(i) = pos.transpose();
     }
   }
   stage_done("smoothed cvt points");
