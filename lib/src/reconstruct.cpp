@@ -1193,7 +1193,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   // cannot have a smallest angle above 30 degrees, and no flip can remove them): the vertex and
   // its three triangles are replaced by the triangle of its ring, when the ring vertices keep
   // valence >= 3, that triangle is new and it faces the same way as the three it replaces.
-  auto remove_valence3 = [&]() {
+  auto remove_valence3 = [&](const std::vector<char>* only = nullptr) {
     int removed = 0;
     for (int pass = 0; pass < 3; ++pass) {
       std::vector<std::vector<int>> vf(ns);
@@ -1207,7 +1207,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
       std::vector<char> drop(F.size(), 0), touched(ns, 0);
       std::vector<std::array<int, 3>> added;
       for (int v = 0; v < ns; ++v) {
-        if (vf[v].size() != 3 || touched[v]) continue;
+        if (vf[v].size() != 3 || touched[v] || (only && !(*only)[v])) continue;
         // Ring order: for each face (v, x, y) in rotation, x -> y.
         std::map<int, int> next;
         for (int id : vf[v]) {
@@ -1518,6 +1518,24 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     }
   }
 
+  // The collapses can leave interior vertices of valence 3 in slivers (< 25°; no flip removes
+  // them): those are removed once more, undone if that makes the mesh self-intersect.
+  if (options.relaxation_iterations > 0) {
+    const std::vector<std::array<int, 3>> F_before = F;
+    const int flips_before = res.flipped_edges;
+    std::vector<char> in_sliver(ns, 0);
+    for (const auto& f : F)
+      if (tri_min_angle(S, f[0], f[1], f[2]) < 25.0 * M_PI / 180.0)
+        for (int v : f) in_sliver[v] = 1;
+    if (remove_valence3(&in_sliver) > 0) {
+      res.flipped_edges += improve_by_flips(S, F, 5, false, &in_sliver);
+      if (self_intersections() > 0) {
+        F = F_before;
+        res.flipped_edges = flips_before;
+        rebuild_edges();
+      }
+    }
+  }
   stage_done("sliver collapse");
 
   // Slivers still left have a long edge (a filled hole at a thin tip spans several cell widths):
