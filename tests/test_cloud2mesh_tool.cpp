@@ -180,6 +180,9 @@ TEST(Cloud2MeshTool, NonsenseOptions) {
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--anisotropy -1"), {"--anisotropy"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--threads -1"), {"--threads"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--relaxation 2"), {"--relaxation"}, dir, 1);
+  expect_clean_failure(test::run_tool("cloud2mesh", base + "--surface-lloyd -1"), {"--surface-lloyd"}, dir, 1);
+  expect_clean_failure(test::run_tool("cloud2mesh", base + "--points-per-site 2"), {"--points-per-site"}, dir, 1);
+  expect_clean_failure(test::run_tool("cloud2mesh", base + "--points-per-site nan"), {"--points-per-site"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--bogus"), {"bogus"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", dir.path("s.xyz") + " -o " + dir.path("o.xyz")), {"o.xyz"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", dir.path("s.xyz") + " -o " + dir.path("missing/o.ply")),
