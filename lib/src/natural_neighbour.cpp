@@ -15,6 +15,7 @@
 #include "heatcvt/closest_point.h"
 #include "heatcvt/errors.h"
 #include "heatcvt/laplacian.h"
+#include "heatcvt/mesh.h"
 #include "heatcvt/parallel.h"
 
 namespace heatcvt {
@@ -266,6 +267,25 @@ struct NaturalNeighbourCoordinates::Impl {
   }
 };
 
+namespace {
+// Heat cannot spread over a connected component whose faces all have zero area (needles,
+// collinear corners): its vertices have no mass, so neither M − tL nor the biharmonic system of
+// the propagation is definite there. Such input is rejected up front.
+void require_positive_component_areas(const Eigen::MatrixX3i& F, int num_vertices, const Laplacian& lap) {
+  Eigen::VectorXi comp;
+  const int nc = connected_components(num_vertices, F, comp);
+  std::vector<char> degenerate(F.rows(), 0), conducts(nc, 0);
+  for (int f : lap.degenerate_faces) degenerate[f] = 1;
+  for (int f = 0; f < F.rows(); ++f)
+    if (!degenerate[f]) conducts[comp[F(f, 0)]] = 1;
+  for (int c = 0; c < nc; ++c)
+    if (!conducts[c])
+      throw InvalidInputError(nc == 1 ? std::string("the mesh has zero area (every face is degenerate)")
+                                      : "connected component " + std::to_string(c) +
+                                            " of the mesh has zero area (every face of it is degenerate)");
+}
+}  // namespace
+
 NaturalNeighbourCoordinates::NaturalNeighbourCoordinates(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
                                                          const std::vector<SurfacePoint>& sites,
                                                          const NaturalNeighbourOptions& options)
@@ -292,6 +312,7 @@ NaturalNeighbourCoordinates::NaturalNeighbourCoordinates(const Eigen::MatrixX3d&
   const int nv = static_cast<int>(V.rows()), nf = static_cast<int>(F.rows()), ns = m.ns();
 
   m.lap = cotan_laplacian(V, F);
+  require_positive_component_areas(F, static_cast<int>(V.rows()), m.lap);
   HeatSolverOptions so;
   so.time_coefficient = options.time_coefficient;
   so.threads = m.threads;
@@ -555,7 +576,9 @@ std::vector<std::vector<std::pair<int, double>>> NaturalNeighbourCoordinates::pr
   const int nfree = static_cast<int>(free_vertices.size());
   if (nfree > 0) {
     // Biharmonic propagation: minimise xᵀ L M⁻¹ L x with x fixed at the samples.
-    const Eigen::VectorXd minv = m.lap.M.cwiseInverse();
+    // Vertices without mass (only degenerate faces around them) get no weight in the energy
+    // instead of an infinite one.
+    const Eigen::VectorXd minv = m.lap.M.unaryExpr([](double x) { return x > 0 ? 1.0 / x : 0.0; });
     const Eigen::SparseMatrix<double> ML = minv.asDiagonal() * m.lap.L;
     const Eigen::SparseMatrix<double> Q = m.lap.L * ML;
     std::vector<Eigen::Triplet<double>> tff, tfc;
