@@ -268,18 +268,20 @@ struct NaturalNeighbourCoordinates::Impl {
 };
 
 namespace {
-// Heat cannot spread over a connected component whose faces all have zero area (needles,
-// collinear corners): its vertices have no mass, so neither M − tL nor the biharmonic system of
-// the propagation is definite there. Such input is rejected up front.
-void require_positive_component_areas(const Eigen::MatrixX3i& F, int num_vertices, const Laplacian& lap) {
+// Heat cannot spread over a connected component whose faces all have (numerically) zero area
+// (needles, collinear corners): its vertices have no mass, so neither M − tL nor the biharmonic
+// system of the propagation is definite there. Such input is rejected up front. Areas are
+// compared with the squared bounding-box diagonal, so the test does not depend on the units.
+void require_positive_component_areas(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F) {
+  constexpr double zero_area = 1e-12;  // relative to the squared bounding-box diagonal
   Eigen::VectorXi comp;
-  const int nc = connected_components(num_vertices, F, comp);
-  std::vector<char> degenerate(F.rows(), 0), conducts(nc, 0);
-  for (int f : lap.degenerate_faces) degenerate[f] = 1;
-  for (int f = 0; f < F.rows(); ++f)
-    if (!degenerate[f]) conducts[comp[F(f, 0)]] = 1;
+  const int nc = connected_components(static_cast<int>(V.rows()), F, comp);
+  const Eigen::VectorXd area = face_areas(V, F);
+  const double diag = (V.colwise().maxCoeff() - V.colwise().minCoeff()).norm();
+  std::vector<double> comp_area(nc, 0.0);
+  for (int f = 0; f < F.rows(); ++f) comp_area[comp[F(f, 0)]] += area[f];
   for (int c = 0; c < nc; ++c)
-    if (!conducts[c])
+    if (!(comp_area[c] > zero_area * diag * diag))
       throw InvalidInputError(nc == 1 ? std::string("the mesh has zero area (every face is degenerate)")
                                       : "connected component " + std::to_string(c) +
                                             " of the mesh has zero area (every face of it is degenerate)");
@@ -311,8 +313,8 @@ NaturalNeighbourCoordinates::NaturalNeighbourCoordinates(const Eigen::MatrixX3d&
   m.threads = resolve_threads(options.threads);
   const int nv = static_cast<int>(V.rows()), nf = static_cast<int>(F.rows()), ns = m.ns();
 
+  require_positive_component_areas(V, F);
   m.lap = cotan_laplacian(V, F);
-  require_positive_component_areas(F, static_cast<int>(V.rows()), m.lap);
   HeatSolverOptions so;
   so.time_coefficient = options.time_coefficient;
   so.threads = m.threads;

@@ -38,8 +38,8 @@ class SolverError : public Error {
 /// a message stays one harmless line whatever the file holds.
 std::string quote_excerpt(std::string_view text, std::size_t max_chars = 40);
 
-/// The message of an error raised inside the library, with a leading internal function name
-/// ("some_function: ...", an identifier containing '_' followed by ": ") removed, for a tool to
+/// The message of an error raised inside the library, with a leading internal function or class
+/// name ("some_function: ...", "SomeClass: ...") removed, for a tool to
 /// prefix with the file or option at fault.
 std::string without_function_prefix(const std::string& message);
 
