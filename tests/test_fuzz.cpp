@@ -243,7 +243,7 @@ void check_reader(const Seed& seed, const std::string& path, int case_no) {
   } catch (const Error& e) {
     const std::string what = e.what();
     EXPECT_EQ(what.rfind(path + ": ", 0), 0u) << where << ": " << what;
-    EXPECT_TRUE(one_clean_line(what)) << where << ": control bytes in the message";
+    EXPECT_TRUE(one_clean_line(what)) << where << ": control bytes in: " << quote_excerpt(what, 300);
   } catch (const std::exception& e) {
     ADD_FAILURE() << where << ": not a heatcvt::Error: " << e.what();
   }

@@ -381,6 +381,12 @@ PolygonSoup read_ply(const std::string& path, const std::string& data, MeshReadR
     auto hdr = [&](const std::string& problem) {
       return IOError(path + ": PLY header line " + std::to_string(lines.line_no()) + ": " + problem);
     };
+    // Element and property names appear in later messages: no control bytes in them.
+    auto require_printable_name = [&](std::string_view name) {
+      for (char c : name)
+        if (!std::isprint(static_cast<unsigned char>(c))) throw hdr("unprintable name " + quote(name));
+      return std::string(name);
+    };
     if (key == "end_header") {
       header_done = true;
       break;
@@ -393,6 +399,7 @@ PolygonSoup read_ply(const std::string& path, const std::string& data, MeshReadR
       continue;
     } else if (key == "element") {
       long long count = -1;
+      if (tok.size() >= 2) require_printable_name(tok[1]);
       if (tok.size() < 3 || !parse_int(tok[2], count) || count < 0 || count > kMaxCount)
         throw hdr("malformed element line");
       elements.push_back({std::string(tok[1]), count, {}});
@@ -405,11 +412,11 @@ PolygonSoup read_ply(const std::string& path, const std::string& data, MeshReadR
         if (!ply_type_from_name(tok[2], p.count_type) || !ply_is_integer(p.count_type))
           throw hdr("bad list count type " + quote(tok[2]));
         if (!ply_type_from_name(tok[3], p.type)) throw hdr("unknown property type " + quote(tok[3]));
-        p.name = std::string(tok[4]);
+        p.name = require_printable_name(tok[4]);
       } else {
         if (tok.size() < 3) throw hdr("malformed property line");
         if (!ply_type_from_name(tok[1], p.type)) throw hdr("unknown property type " + quote(tok[1]));
-        p.name = std::string(tok[2]);
+        p.name = require_printable_name(tok[2]);
       }
       elements.back().props.push_back(p);
     } else {
