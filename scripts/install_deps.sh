@@ -3,7 +3,7 @@
 set -euo pipefail
 packages=(build-essential cmake pkg-config
           libeigen3-dev libsuitesparse-dev libcgal-dev libpcl-dev libflann-dev
-          libgtest-dev libcli11-dev libtbb-dev
+          libgtest-dev libcli11-dev libtbb-dev nlohmann-json3-dev
           libopenblas0-pthread)  # optimised BLAS: CHOLMOD's supernodal factorisation is ~3-4x faster than with the reference BLAS
 missing=()
 for p in "${packages[@]}"; do

@@ -86,8 +86,8 @@ TEST(Cloud2MeshTool, SphereCloudClosedGenus0WithReportAndSameSeedSameOutput) {
   for (Eigen::Index i = 0; i < m.V.rows(); ++i) EXPECT_NEAR(m.V.row(i).norm(), 1.0, 5e-3);
   const std::string json = slurp(dir.path("r.json"));
   for (const char* key : {"\"points_in_file\": 6000", "\"vertices\": 400", "\"laplacian_s\"", "\"factor_s\"",
-                          "\"per_iteration_s\"", "\"min_angle_deg\"", "\"mean_min_angle_deg\"", "\"no_self_intersections\": \"pass\"",
-                          "\"valid\": true"})
+                          "\"per_iteration_s\"", "\"phi_min_deg\"", "\"phi_mean_deg\"", "\"name\": \"no_self_intersections\"",
+                          "\"all_checks_passed\": true"})
     EXPECT_NE(json.find(key), std::string::npos) << key << " not in:\n" << json;
   // Same seed: byte-identical output (also with another thread count); another seed differs.
   auto r2 = test::run_tool("cloud2mesh", dir.path("s.xyz") + " -n 400 -o " + dir.path("b.ply") + " --threads 1 -q");
@@ -114,7 +114,7 @@ TEST(Cloud2MeshTool, EverySharedCloudSmallSiteCount) {
   for (const auto& f : files) {
     const std::string out = dir.path(std::filesystem::path(f).stem().string() + ".ply");
     auto r = test::run_tool("cloud2mesh", "'" + f + "' -n 200 -i 5 -k 12 -o '" + out + "' -q --threads 2");
-    if (r.exit_code == 0) {
+    if (r.exit_code == 0 || r.exit_code == 3) {  // 3: written, but some check failed
       ++ok;
       TriangleMesh m = read_mesh(out);
       ValidationOptions vo;
@@ -132,7 +132,7 @@ TEST(Cloud2MeshTool, EverySharedCloudSmallSiteCount) {
     } else {
       ++failed;
       std::printf("[ %s ] error: %s", std::filesystem::path(f).filename().c_str(), r.err.c_str());
-      EXPECT_EQ(r.exit_code, 1) << f;  // 1 = clean error (a crash would be a signal / other code)
+      EXPECT_TRUE(r.exit_code == 1 || r.exit_code == 2) << f;  // clean error (a crash would be a signal / other code)
       const auto lines = error_lines(r.err);
       EXPECT_EQ(lines.size(), 1u) << f << ": " << r.err;
       EXPECT_FALSE(std::filesystem::exists(out)) << f;

@@ -3,12 +3,14 @@
 #include <CLI/CLI.hpp>
 
 #include <chrono>
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <string>
 
 #include "cli_common.h"
+#include "heatcvt/atomic_file.h"
 #include "heatcvt/cloud_io.h"
 #include "heatcvt/errors.h"
 #include "heatcvt/heat_solver.h"
@@ -29,16 +31,32 @@ int main(int argc, char** argv) {
   app.add_option("-o,--output", out_path, "output mesh (.ply .obj .off .stl)")->required();
   app.add_option("-n,--sites", opt.sites, "number of output vertices (CVT sites)")->capture_default_str();
   app.add_option("-i,--iterations", opt.iterations, "maximum heat Lloyd iterations (after the surface Lloyd; use 30 with --surface-lloyd 0)")->capture_default_str();
-  app.add_option("-k,--neighbours,--neighbors", opt.neighbors, "k nearest neighbours of the point Laplacian")
+  app.add_option("-k,--neighbours,--neighbors", opt.neighbors,
+                 "k nearest neighbours of the point Laplacian, in [" + std::to_string(ReconstructionOptions::min_neighbors) +
+                     ", " + std::to_string(ReconstructionOptions::max_neighbors) + "]")
       ->capture_default_str();
   app.add_option("--anisotropy", opt.anisotropy, "lambda of the anisotropic lift (p, lambda n); 0 = isotropic")
       ->capture_default_str();
   app.add_flag("--denoise", opt.denoise, "statistical outlier removal before reconstruction");
+  app.add_option("--denoise-k", opt.denoise_neighbors, "with --denoise: neighbours of the outlier statistics")
+      ->capture_default_str();
+  app.add_option("--denoise-stddev", opt.denoise_stddev,
+                 "with --denoise: points farther than mean + this many standard deviations are outliers")
+      ->capture_default_str();
   app.add_option("--voxel", opt.voxel_size, "voxel-grid downsampling size in input units; 0 = off")
       ->capture_default_str();
   app.add_option("--t-coef", opt.time_coefficient, "time step t = C * (mean edge length)^2")->capture_default_str();
   app.add_option("--seed", opt.seed, "seed of the initial sites")->capture_default_str();
   app.add_option("--relaxation", opt.lloyd_relaxation, "Lloyd over-relaxation factor in [1, 2); 1 = plain Lloyd")
+      ->capture_default_str();
+  app.add_option("--tolerance", opt.lloyd_tolerance,
+                 "stop the heat Lloyd iterations when no site moves more than TOL * sqrt(area / sites); 0 = run all")
+      ->capture_default_str();
+  app.add_option("--max-hole-edges", opt.max_hole_edges,
+                 "fill boundary loops of up to this many edges (longer ones under the conditions of reconstruct.h)")
+      ->capture_default_str();
+  app.add_option("--polish-iterations", opt.relaxation_iterations,
+                 "final polish: tangential relaxation + edge flip iterations; 0 = the plain dual")
       ->capture_default_str();
   app.add_flag("--fast-start", opt.farthest_point_start,
                "with --surface-lloyd 0: farthest-point initial sites relaxed on the point graph instead of seeded "
@@ -56,21 +74,15 @@ int main(int argc, char** argv) {
   app.add_option("--threads", opt.threads, "worker threads (0 = all cores)")->capture_default_str();
   app.add_option("--report", report_path, "write a JSON report");
   app.add_flag("-q,--quiet", quiet, "no progress and no summary");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    // One clear line (CLI11 would add a "Run with --help" line).
-    std::cerr << "cloud2mesh: error: " << e.what() << " (see cloud2mesh --help)" << std::endl;
-    return 2;
-  }
+  if (const int status = cli::parse_command_line(app, argc, argv, "cloud2mesh"); status >= 0) return status;
 
   return cli::run_tool("cloud2mesh", [&]() -> int {
     // Option checks before any work (reconstruct_surface checks them again).
     if (opt.sites < 4) throw InvalidInputError("-n must be at least 4 (got " + std::to_string(opt.sites) + ")");
     if (opt.iterations < 0) throw InvalidInputError("-i must be >= 0");
-    if (opt.neighbors < 6 || opt.neighbors > 200) throw InvalidInputError("-k must be between 6 and 200");
+    if (opt.neighbors < ReconstructionOptions::min_neighbors || opt.neighbors > ReconstructionOptions::max_neighbors)
+      throw InvalidInputError("-k must be between " + std::to_string(ReconstructionOptions::min_neighbors) + " and " +
+                              std::to_string(ReconstructionOptions::max_neighbors));
     if (!(opt.anisotropy >= 0) || !std::isfinite(opt.anisotropy)) throw InvalidInputError("--anisotropy must be >= 0");
     if (!(opt.voxel_size >= 0) || !std::isfinite(opt.voxel_size)) throw InvalidInputError("--voxel must be >= 0");
     if (!(opt.time_coefficient > 0) || !std::isfinite(opt.time_coefficient))
@@ -80,8 +92,15 @@ int main(int argc, char** argv) {
     if (!(opt.cvt_points_per_site == 0 || opt.cvt_points_per_site >= 3) || !std::isfinite(opt.cvt_points_per_site))
       throw InvalidInputError("--points-per-site must be 0 (every point) or at least 3");
     if (!(opt.lloyd_relaxation >= 1 && opt.lloyd_relaxation < 2)) throw InvalidInputError("--relaxation must be in [1, 2)");
+    if (!(opt.lloyd_tolerance >= 0) || !std::isfinite(opt.lloyd_tolerance)) throw InvalidInputError("--tolerance must be >= 0");
+    if (opt.max_hole_edges < 0) throw InvalidInputError("--max-hole-edges must be >= 0");
+    if (opt.relaxation_iterations < 0) throw InvalidInputError("--polish-iterations must be >= 0");
+    if (opt.denoise_neighbors < 2) throw InvalidInputError("--denoise-k must be >= 2");
+    if (!(opt.denoise_stddev > 0) || !std::isfinite(opt.denoise_stddev))
+      throw InvalidInputError("--denoise-stddev must be a positive number");
     cli::check_output_path(out_path, {".ply", ".obj", ".off", ".stl"});
     cli::check_output_path(report_path, {".json"});
+    cli::check_distinct_outputs({{"-o", out_path}, {"--report", report_path}});
 
     const auto t_start = Clock::now();
     CloudReadReport rr;
@@ -92,12 +111,21 @@ int main(int argc, char** argv) {
     if (opt.sites > cloud.P.rows())
       throw InvalidInputError(cloud_path + ": -n " + std::to_string(opt.sites) + " exceeds the " +
                               std::to_string(cloud.P.rows()) + " usable points");
+    if (opt.voxel_size > 0) {
+      // PCL's voxel grid indexes at most 2^31 voxels; a smaller voxel would silently do nothing.
+      const Eigen::RowVector3d extent = cloud.P.colwise().maxCoeff() - cloud.P.colwise().minCoeff();
+      double voxels = 1;
+      for (int k = 0; k < 3; ++k) voxels *= std::floor(extent[k] / opt.voxel_size) + 1;
+      if (!(voxels <= static_cast<double>(INT_MAX)))
+        throw InvalidInputError("--voxel " + format_double(opt.voxel_size) + ": too small for " + cloud_path +
+                                " (more than 2^31 voxels over its bounding box)");
+    }
 
     ReconstructionResult res;
     {
       cli::Progress bar("reconstructing", 1000, quiet);
       // Stages weighted by their typical share of the time.
-      res = reconstruct_surface(cloud.P, opt, [&](const std::string& stage, double f) {
+      res = cli::on_file(cloud_path, [&] { return reconstruct_surface(cloud.P, opt, [&](const std::string& stage, double f) {
         double done = 0;
         if (stage == "preprocess") done = 0;
         else if (stage == "laplacian") done = 0.02 + 0.08 * f;
@@ -105,44 +133,55 @@ int main(int argc, char** argv) {
         else if (stage == "mesh") done = 0.90 + 0.05 * f;
         else done = 0.95 + 0.05 * f;
         bar.update(static_cast<long>(1000 * done));
-      });
+      }); });
       bar.finish();
     }
-    write_mesh(out_path, res.mesh.V, res.mesh.F);
     const double total_s = cli::seconds_since(t_start);
     const auto& val = res.validation;
     double iteration_sum = 0;
     for (double t : res.iteration_seconds) iteration_sum += t;
     const double per_iter = res.iterations > 0 ? iteration_sum / res.iterations : 0.0;
 
-    if (!report_path.empty()) {
-      cli::JsonObject checks;
-      for (const auto& c : val.checks)
-        checks.add(c.name, c.ran ? (c.passed ? std::string("pass") : "fail: " + c.detail) : std::string("not run"));
-      cli::JsonObject timings;
-      timings.add("laplacian_s", res.laplacian_seconds).add("factor_s", res.factor_seconds)
-          .add("cvt_s", res.cvt_seconds).add("per_iteration_s", per_iter).add("reconstruct_s", res.total_seconds)
-          .add("total_s", total_s);
-      timings.add("blas", heatcvt::blas_description());
-      cli::JsonObject stages;
-      for (const auto& [name, seconds] : res.stage_seconds) stages.add(name, seconds);
-      timings.add_object("stages", stages);
-      cli::JsonObject j;
-      j.add("input", cloud_path).add("output", out_path).add("format", rr.format)
-          .add("points_in_file", rr.points_in_file).add("non_finite_dropped", rr.non_finite_dropped)
-          .add("duplicates_merged", rr.duplicates_merged).add("points_denoised", res.points_denoised)
-          .add("points_voxel_removed", res.points_voxel_removed).add("points_used", res.points_used)
-          .add("sites", opt.sites).add("iterations", res.iterations).add("neighbors", opt.neighbors)
-          .add("anisotropy", opt.anisotropy).add("seed", static_cast<long>(opt.seed))
-          .add("vertices", static_cast<long>(res.mesh.V.rows())).add("faces", static_cast<long>(res.mesh.F.rows()))
-          .add("unused_sites", res.unused_sites).add("candidate_triangles", res.candidate_triangles)
-          .add("rejected_triangles", res.rejected_triangles).add("removed_triangles", res.removed_triangles)
-          .add("holes_filled", res.holes_filled).add("boundary_loops", val.boundary_loops)
-          .add("components", val.components).add("genus", val.genus)
-          .add("self_intersecting_pairs", val.self_intersecting_pairs)
-          .add("min_angle_deg", res.min_angle_deg).add("mean_min_angle_deg", res.mean_min_angle_deg)
-          .add("valid", val.ok()).add_object("checks", checks).add_object("timings", timings);
-      cli::write_json(report_path, j);
+    const std::vector<cli::CheckRecord> checks = cli::check_records(val);
+    cli::Json j = cli::report_head("cloud2mesh", cloud_path, {out_path, report_path});
+    j["format"] = rr.format;
+    j["points_in_file"] = rr.points_in_file;
+    j["non_finite_dropped"] = rr.non_finite_dropped;
+    j["duplicates_merged"] = rr.duplicates_merged;
+    j["points_denoised"] = res.points_denoised;
+    j["points_voxel_removed"] = res.points_voxel_removed;
+    j["points_used"] = res.points_used;
+    j["sites"] = opt.sites;
+    j["iterations"] = res.iterations;
+    j["neighbors"] = opt.neighbors;
+    j["anisotropy"] = opt.anisotropy;
+    j["seed"] = opt.seed;
+    j["vertices"] = res.mesh.V.rows();
+    j["faces"] = res.mesh.F.rows();
+    j["unused_sites"] = res.unused_sites;
+    j["candidate_triangles"] = res.candidate_triangles;
+    j["rejected_triangles"] = res.rejected_triangles;
+    j["removed_triangles"] = res.removed_triangles;
+    j["holes_filled"] = res.holes_filled;
+    j["boundary_loops"] = val.boundary_loops;
+    j["components"] = val.components;
+    j["genus"] = val.genus;
+    j["self_intersecting_pairs"] = val.self_intersecting_pairs;
+    j["phi_min_deg"] = res.min_angle_deg;
+    j["phi_mean_deg"] = res.mean_min_angle_deg;
+    j["blas"] = heatcvt::blas_description();
+    j["laplacian_s"] = res.laplacian_seconds;
+    j["factor_s"] = res.factor_seconds;
+    j["cvt_s"] = res.cvt_seconds;
+    j["per_iteration_s"] = per_iter;
+    j["reconstruct_s"] = res.total_seconds;
+    j["total_s"] = total_s;
+    const int status = cli::finish_report(j, res.stage_seconds, checks);
+    {
+      OutputTransaction outputs;  // all outputs or none (atomic_file.h)
+      write_mesh(out_path, res.mesh.V, res.mesh.F);
+      if (!report_path.empty()) cli::write_json(report_path, j);
+      outputs.commit();
     }
     if (!quiet) {
       std::printf("cloud2mesh: %s -> %s\n", cloud_path.c_str(), out_path.c_str());
@@ -160,10 +199,11 @@ int main(int argc, char** argv) {
                   static_cast<long>(res.mesh.V.rows()), static_cast<long>(res.mesh.F.rows()), val.components,
                   val.boundary_loops, val.genus, res.holes_filled, res.unused_sites);
       std::printf("  quality: phi_min %.2f deg, phi_m %.2f deg\n", res.min_angle_deg, res.mean_min_angle_deg);
-      for (const auto& c : val.checks)
-        std::printf("  %s %s: %s\n", !c.ran ? "SKIP" : (c.passed ? "PASS" : "FAIL"), c.name.c_str(), c.detail.c_str());
+      cli::print_checks(checks);
       std::printf("  wrote %s%s\n", out_path.c_str(), report_path.empty() ? "" : (", " + report_path).c_str());
     }
-    return 0;
+    if (status != cli::exit_ok && !quiet)
+      std::cerr << "warning: the reconstruction failed some checks (exit status 3)" << std::endl;
+    return status;
   });
 }

@@ -13,26 +13,22 @@
 
 #include "cell_colors.h"
 #include "cli_common.h"
+#include "heatcvt/atomic_file.h"
 #include "heatcvt/centroid.h"
 #include "heatcvt/closest_point.h"
 #include "heatcvt/errors.h"
 #include "heatcvt/heat_solver.h"
 #include "heatcvt/laplacian.h"
 #include "heatcvt/mesh_io.h"
+#include "heatcvt/normalize.h"
 #include "heatcvt/voronoi.h"
 #include "report_json.h"
+#include "sites.h"
 
 using namespace heatcvt;
 using Clock = std::chrono::steady_clock;
 
 namespace {
-
-Eigen::MatrixX3d read_sites_file(const std::string& path) {
-  const auto rows = cli::read_number_rows(path, 3, "sites");
-  Eigen::MatrixX3d P(rows.size(), 3);
-  for (size_t i = 0; i < rows.size(); ++i) P.row(i) << rows[i][0], rows[i][1], rows[i][2];
-  return P;
-}
 
 std::vector<int> random_vertices(int num_vertices, int count, unsigned seed) {
   std::vector<int> all(num_vertices);
@@ -73,11 +69,7 @@ int main(int argc, char** argv) {
   app.add_option("--report", report_path, "write a JSON report");
   app.add_option("--threads", threads, "worker threads (0 = all cores)")->capture_default_str();
   app.add_flag("-q,--quiet", quiet, "no progress output on stderr");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
+  if (const int status = cli::parse_command_line(app, argc, argv, "heatvoronoi"); status >= 0) return status;
 
   return cli::run_tool("heatvoronoi", [&]() -> int {
     if (!(t_coef > 0) || !std::isfinite(t_coef)) throw InvalidInputError("--t-coef must be a positive number");
@@ -87,6 +79,8 @@ int main(int argc, char** argv) {
     cli::check_output_path(edges_path, {".obj"});
     cli::check_output_path(centroids_path, {".xyz", ".txt"});
     cli::check_output_path(report_path, {".json"});
+    cli::check_distinct_outputs({{"-o", cells_path}, {"--edges", edges_path}, {"--centroids", centroids_path},
+                                 {"--report", report_path}});
     auto log = [&](const std::string& s) {
       if (!quiet) std::cerr << s << std::endl;
     };
@@ -94,12 +88,15 @@ int main(int argc, char** argv) {
     MeshReadReport read_report;
     TriangleMesh mesh = read_mesh(mesh_path, &read_report);
     validate_mesh(mesh.V, mesh.F, mesh_path);
+    // Everything below runs on the mesh in its unit bounding-box frame (normalize.h): the
+    // result does not depend on the units; positions are restored on output.
+    const NormalizationFrame frame = cli::on_file(mesh_path, [&] { return normalize_positions(mesh.V); });
     const int nv = static_cast<int>(mesh.V.rows());
     log("read " + mesh_path + ": " + std::to_string(nv) + " vertices, " + std::to_string(mesh.F.rows()) + " faces");
 
     std::vector<SurfacePoint> sites;
     if (!sites_file.empty()) {
-      sites = closest_surface_points(mesh.V, mesh.F, read_sites_file(sites_file));
+      sites = cli::read_snapped_sites(sites_file, mesh.V, mesh.F, frame);
     } else {
       if (num_sites < 1) throw InvalidInputError("--sites must be at least 1");
       if (num_sites > nv)
@@ -109,91 +106,116 @@ int main(int argc, char** argv) {
     }
     const int n = static_cast<int>(sites.size());
 
-    auto t0 = Clock::now();
-    Laplacian lap = cotan_laplacian(mesh.V, mesh.F);
-    if (!lap.degenerate_faces.empty())
-      log("warning: " + std::to_string(lap.degenerate_faces.size()) + " degenerate faces in " + mesh_path +
-          " carry no heat conduction");
-    HeatSolverOptions sopt;
-    sopt.time_coefficient = t_coef;
-    sopt.threads = threads;
-    HeatSolver solver(lap, sopt);
-    const double factor_s = cli::seconds_since(t0);
-    log("factored M - tL (t = " + std::to_string(solver.time_step()) + ") in " + std::to_string(factor_s) + " s");
+    double factor_s = 0, solve_s = 0, tess_s = 0, centroid_s = 0, time_step = 0;
+    long degenerate_faces = 0;
+    VoronoiDiagram diagram;
+    std::vector<SurfacePoint> centroids;
+    cli::on_file(mesh_path, [&] {
+      auto t0 = Clock::now();
+      Laplacian lap = cotan_laplacian(mesh.V, mesh.F);
+      degenerate_faces = static_cast<long>(lap.degenerate_faces.size());
+      if (degenerate_faces > 0)
+        log("warning: " + std::to_string(degenerate_faces) + " degenerate faces in " + mesh_path +
+            " carry no heat conduction");
+      HeatSolverOptions sopt;
+      sopt.time_coefficient = t_coef;
+      sopt.threads = threads;
+      HeatSolver solver(lap, sopt);
+      factor_s = cli::seconds_since(t0);
+      time_step = solver.time_step();
+      log("factored M - tL (t = " + std::to_string(time_step * frame.scale * frame.scale) + ") in " +
+          std::to_string(factor_s) + " s");
 
-    // One point-source diffusion per generator (eq. 8), in chunks so progress can be shown.
-    t0 = Clock::now();
-    Eigen::MatrixXd U(nv, n);
-    {
-      cli::Progress progress("diffusing", n, quiet);
-      const int chunk = 64;
-      for (int c0 = 0; c0 < n; c0 += chunk) {
-        const int width = std::min(chunk, n - c0);
-        Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(nv, width);
-        for (int j = 0; j < width; ++j)
-          for (int k = 0; k < 3; ++k) rhs(mesh.F(sites[c0 + j].face, k), j) += sites[c0 + j].bary[k];
-        U.middleCols(c0, width) = solver.solve(rhs);
-        progress.update(c0 + width);
+      // One point-source diffusion per generator (eq. 8), in chunks so progress can be shown.
+      t0 = Clock::now();
+      Eigen::MatrixXd U(nv, n);
+      {
+        cli::Progress progress("diffusing", n, quiet);
+        const int chunk = 64;
+        for (int c0 = 0; c0 < n; c0 += chunk) {
+          const int width = std::min(chunk, n - c0);
+          Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(nv, width);
+          for (int j = 0; j < width; ++j)
+            for (int k = 0; k < 3; ++k) rhs(mesh.F(sites[c0 + j].face, k), j) += sites[c0 + j].bary[k];
+          U.middleCols(c0, width) = solver.solve(rhs);
+          progress.update(c0 + width);
+        }
+        progress.finish();
       }
-      progress.finish();
-    }
-    const double solve_s = cli::seconds_since(t0);
+      solve_s = cli::seconds_since(t0);
 
-    t0 = Clock::now();
-    VoronoiOptions vopt;
-    vopt.threads = threads;
-    VoronoiDiagram diagram = tessellate(mesh.V, mesh.F, heat_field_from_dense(U, vopt.keep_sites_per_vertex), vopt);
-    U.resize(0, 0);
-    const double tess_s = cli::seconds_since(t0);
+      t0 = Clock::now();
+      VoronoiOptions vopt;
+      vopt.threads = threads;
+      diagram = tessellate(mesh.V, mesh.F, heat_field_from_dense(U, vopt.keep_sites_per_vertex), vopt);
+      U.resize(0, 0);
+      tess_s = cli::seconds_since(t0);
+
+      if (!centroids_path.empty()) {
+        t0 = Clock::now();
+        CentroidOptions copt;
+        copt.steps = centroid_steps;
+        copt.threads = threads;
+        centroids = heat_centroids(mesh.V, mesh.F, solver, diagram, copt);
+        centroid_s = cli::seconds_since(t0);
+      }
+    });
     for (int comp : diagram.unreached_components)
       log("warning: connected component " + std::to_string(comp) + " of " + mesh_path +
           " has no generator and gets no cell");
 
-    double centroid_s = 0;
-    std::vector<SurfacePoint> centroids;
-    if (!centroids_path.empty()) {
-      t0 = Clock::now();
-      CentroidOptions copt;
-      copt.steps = centroid_steps;
-      copt.threads = threads;
-      centroids = heat_centroids(mesh.V, mesh.F, solver, diagram, copt);
-      centroid_s = cli::seconds_since(t0);
-    }
+    // Checks of the result (exit status 3 when one fails, cli_common.h).
+    const Eigen::VectorXd areas = diagram.cell_area * (frame.scale * frame.scale);
+    int empty_cells = 0;
+    for (Eigen::Index i = 0; i < areas.size(); ++i) empty_cells += areas[i] > 0 ? 0 : 1;
+    const std::vector<cli::CheckRecord> checks = {
+        {"every_component_has_a_site", diagram.unreached_components.empty(), true,
+         diagram.unreached_components.empty()
+             ? "ok"
+             : std::to_string(diagram.unreached_components.size()) + " connected components without a generator"},
+        {"no_empty_cells", empty_cells == 0, true,
+         empty_cells == 0 ? "ok" : std::to_string(empty_cells) + " cells with zero area"}};
+    Eigen::MatrixX3d refined_V = diagram.V;
+    restore_frame(refined_V, frame);
 
-    // Outputs (each atomic: temporary file + rename).
-    MeshAttributes attr;
-    attr.face_int = diagram.face_cell;
-    attr.face_color = cli::cell_colors(diagram.face_cell);
-    write_mesh(cells_path, diagram.V, diagram.F, attr);
-    if (!edges_path.empty()) {
-      std::vector<std::vector<int>> lines;
-      for (const auto& e : diagram.edges) lines.push_back(e.polyline);
-      write_polylines_obj(edges_path, diagram.V, lines);
-    }
-    if (!centroids_path.empty()) {
-      Eigen::MatrixX3d C(centroids.size(), 3);
-      for (size_t i = 0; i < centroids.size(); ++i) C.row(i) = position(mesh.V, mesh.F, centroids[i]).transpose();
-      write_points_xyz(centroids_path, C);
-    }
-
-    const Eigen::VectorXd& areas = diagram.cell_area;
+    // Outputs: written together, all or none (atomic_file.h).
     const double total_s = cli::seconds_since(t_start);
-    if (!report_path.empty()) {
-      cli::JsonObject timings;
-      timings.add("factor_s", factor_s).add("solves_s", solve_s).add("tessellation_s", tess_s)
-          .add("centroids_s", centroid_s).add("total_s", total_s);
-      cli::JsonObject report;
-      report.add("input", mesh_path).add("vertices", nv).add("faces", static_cast<long>(mesh.F.rows()))
-          .add("time_step", solver.time_step()).add("cells", n)
-          .add("cell_area_min", areas.minCoeff()).add("cell_area_mean", areas.mean())
-          .add("cell_area_max", areas.maxCoeff()).add("refined_vertices", static_cast<long>(diagram.V.rows()))
-          .add("refined_faces", static_cast<long>(diagram.F.rows()))
-          .add("voronoi_vertices", static_cast<long>(diagram.voronoi_vertices.size()))
-          .add("voronoi_edges", static_cast<long>(diagram.edges.size()))
-          .add("unreached_components", static_cast<long>(diagram.unreached_components.size()))
-          .add("degenerate_faces", static_cast<long>(lap.degenerate_faces.size()))
-          .add_object("timings", timings);
-      cli::write_json(report_path, report);
+    cli::Json report = cli::report_head("heatvoronoi", mesh_path, {cells_path, edges_path, centroids_path, report_path});
+    report["vertices"] = nv;
+    report["faces"] = mesh.F.rows();
+    report["time_step"] = time_step * frame.scale * frame.scale;
+    report["cells"] = n;
+    report["cell_area_min"] = areas.minCoeff();
+    report["cell_area_mean"] = areas.mean();
+    report["cell_area_max"] = areas.maxCoeff();
+    report["refined_vertices"] = diagram.V.rows();
+    report["refined_faces"] = diagram.F.rows();
+    report["voronoi_vertices"] = diagram.voronoi_vertices.size();
+    report["voronoi_edges"] = diagram.edges.size();
+    report["unreached_components"] = diagram.unreached_components.size();
+    report["degenerate_faces"] = degenerate_faces;
+    report["total_s"] = total_s;
+    const int status = cli::finish_report(
+        report, {{"factor", factor_s}, {"solves", solve_s}, {"tessellation", tess_s}, {"centroids", centroid_s}}, checks);
+    {
+      OutputTransaction outputs;
+      MeshAttributes attr;
+      attr.face_int = diagram.face_cell;
+      attr.face_color = cli::cell_colors(diagram.face_cell);
+      write_mesh(cells_path, refined_V, diagram.F, attr);
+      if (!edges_path.empty()) {
+        std::vector<std::vector<int>> lines;
+        for (const auto& e : diagram.edges) lines.push_back(e.polyline);
+        write_polylines_obj(edges_path, refined_V, lines);
+      }
+      if (!centroids_path.empty()) {
+        Eigen::MatrixX3d C(centroids.size(), 3);
+        for (size_t i = 0; i < centroids.size(); ++i) C.row(i) = position(mesh.V, mesh.F, centroids[i]).transpose();
+        restore_frame(C, frame);
+        write_points_xyz(centroids_path, C);
+      }
+      if (!report_path.empty()) cli::write_json(report_path, report);
+      outputs.commit();
     }
     if (!quiet) {
       std::printf("heatvoronoi: %d cells on %d vertices / %ld faces -> %ld refined faces, %zu Voronoi vertices\n", n, nv,
@@ -204,7 +226,9 @@ int main(int argc, char** argv) {
       std::printf("  wrote %s%s%s%s\n", cells_path.c_str(), edges_path.empty() ? "" : (", " + edges_path).c_str(),
                   centroids_path.empty() ? "" : (", " + centroids_path).c_str(),
                   report_path.empty() ? "" : (", " + report_path).c_str());
+      cli::print_checks(checks);
     }
-    return 0;
+    if (status != cli::exit_ok) log("warning: the diagram failed some checks (exit status 3)");
+    return status;
   });
 }

@@ -12,17 +12,31 @@
 
 #include "cell_colors.h"
 #include "cli_common.h"
+#include "heatcvt/atomic_file.h"
 #include "heatcvt/cvt.h"
 #include "heatcvt/dual_mesh.h"
 #include "heatcvt/errors.h"
 #include "heatcvt/heat_solver.h"
 #include "heatcvt/laplacian.h"
 #include "heatcvt/mesh_io.h"
+#include "heatcvt/normalize.h"
 #include "heatcvt/validate.h"
 #include "report_json.h"
 
 using namespace heatcvt;
 using Clock = std::chrono::steady_clock;
+
+namespace {
+// The checks of a dual without triangles: validate_triangle_mesh needs faces, so one failed check.
+ValidationReport empty_mesh_report() {
+  ValidationReport report;
+  MeshCheck check;
+  check.name = "has_triangles";
+  check.detail = "the dual triangulation has no triangles (too few sites for the surface)";
+  report.checks.push_back(check);
+  return report;
+}
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"meshcvt: remesh a triangle mesh by an intrinsic centroidal Voronoi tessellation with heat "
@@ -87,19 +101,7 @@ int main(int argc, char** argv) {
                "the paper's configuration for every option not given: random start, plain Lloyd, 100 iterations, "
                "no quality evaluation or target, no splitting");
   app.add_flag("-q,--quiet", quiet, "no progress and no report on the terminal");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::CallForAllHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::string what = e.what();
-    for (char& c : what)
-      if (c == '\n') c = ' ';
-    std::cerr << "meshcvt: error: " << what << " (see --help)" << std::endl;
-    return 1;
-  }
+  if (const int status = cli::parse_command_line(app, argc, argv, "meshcvt"); status >= 0) return status;
 
   if (paper) {
     auto given = [&](const char* name) { return app.count(name) > 0; };
@@ -114,7 +116,7 @@ int main(int argc, char** argv) {
     if (!given("--no-split")) no_split = !paper_cvt.split_nonmanifold_cells;
     cvt = paper_cvt;
   }
-  const int rc = cli::run_tool("meshcvt", [&]() -> int {
+  return cli::run_tool("meshcvt", [&]() -> int {
     if (!(relaxation >= 1 && relaxation < 2)) throw InvalidInputError("--relaxation must be in [1, 2)");
     if (graph_lloyd < 0) throw InvalidInputError("--graph-lloyd must be >= 0");
     if (surface_lloyd < 0) throw InvalidInputError("--surface-lloyd must be >= 0");
@@ -132,12 +134,16 @@ int main(int argc, char** argv) {
     cli::check_output_path(out_path, {".obj", ".ply", ".off"});
     cli::check_output_path(cells_path, {".ply"});
     cli::check_output_path(report_path, {".json"});
+    cli::check_distinct_outputs({{"-o", out_path}, {"--cells", cells_path}, {"--report", report_path}});
     auto log = [&](const std::string& s) {
       if (!quiet) std::cerr << s << std::endl;
     };
     const auto t_start = Clock::now();
     TriangleMesh mesh = read_mesh(mesh_path);
     validate_mesh(mesh.V, mesh.F, mesh_path);
+    // The CVT runs on the mesh in its unit bounding-box frame (normalize.h): the result does not
+    // depend on the units; the outputs are written back in the input's coordinates.
+    const NormalizationFrame frame = cli::on_file(mesh_path, [&] { return normalize_positions(mesh.V); });
     const int nv = static_cast<int>(mesh.V.rows());
     if (sites > nv)
       throw InvalidInputError("--sites " + std::to_string(sites) + " exceeds the " + std::to_string(nv) +
@@ -164,8 +170,9 @@ int main(int argc, char** argv) {
 
     auto t0 = Clock::now();
     Eigen::VectorXd metric;
-    Laplacian lap = anisotropy > 0 ? anisotropic_laplacian(mesh.V, mesh.F, anisotropy, &metric)
-                                   : cotan_laplacian(mesh.V, mesh.F);
+    Laplacian lap = cli::on_file(mesh_path, [&] {
+      return anisotropy > 0 ? anisotropic_laplacian(mesh.V, mesh.F, anisotropy, &metric) : cotan_laplacian(mesh.V, mesh.F);
+    });
     const double laplacian_s = cli::seconds_since(t0);
     if (!lap.degenerate_faces.empty())
       log("warning: " + std::to_string(lap.degenerate_faces.size()) + " degenerate faces in " + mesh_path +
@@ -186,12 +193,14 @@ int main(int argc, char** argv) {
     cvt.surface_lloyd_iterations = surface_lloyd;
     cvt.split_nonmanifold_cells = !no_split;
     cli::Progress progress("lloyd", iterations, quiet);
-    CvtResult r = centroidal_voronoi(mesh.V, mesh.F, lap, cvt, {},
-                                     [&](const CvtIterationStats& s) {
-                                       progress.update(s.iteration);
-                                       return true;
-                                     },
-                                     metric);
+    CvtResult r = cli::on_file(mesh_path, [&] {
+      return centroidal_voronoi(mesh.V, mesh.F, lap, cvt, {},
+                                [&](const CvtIterationStats& s) {
+                                  progress.update(s.iteration);
+                                  return true;
+                                },
+                                metric);
+    });
     progress.finish();
     for (int comp : r.diagram.unreached_components)
       log("warning: connected component " + std::to_string(comp) + " of " + mesh_path +
@@ -202,16 +211,12 @@ int main(int argc, char** argv) {
     vopt.require_closed = topo.boundary_edges == 0;
     vopt.expected_genus = input_genus;
     vopt.allow_non_orientable = input_non_orientable;
-    const ValidationReport checks = validate_triangle_mesh(r.dual.V, r.dual.F, vopt);
+    // A dual without triangles (e.g. -n 1) fails the checks instead of raising an error.
+    const ValidationReport checks = r.dual.F.rows() > 0 ? validate_triangle_mesh(r.dual.V, r.dual.F, vopt)
+                                                        : empty_mesh_report();
     const TriangleQuality q = triangle_quality(r.dual.V, r.dual.F);
-
-    write_mesh(out_path, r.dual.V, r.dual.F);
-    if (!cells_path.empty()) {
-      MeshAttributes attr;
-      attr.face_int = r.diagram.face_cell;
-      attr.face_color = cli::cell_colors(r.diagram.face_cell);
-      write_mesh(cells_path, r.diagram.V, r.diagram.F, attr);
-    }
+    restore_frame(r.dual.V, frame);
+    restore_frame(r.diagram.V, frame);
 
     const int done = static_cast<int>(r.iterations.size());
     double iter_s = 0;
@@ -220,37 +225,55 @@ int main(int argc, char** argv) {
     const double total_s = cli::seconds_since(t_start);
     int revived = 0;
     for (const auto& s : r.iterations) revived += s.revived_sites;
-    if (!report_path.empty()) {
-      cli::JsonObject rep;
-      rep.add("input", mesh_path).add("vertices", nv).add("faces", static_cast<long>(mesh.F.rows()))
-          .add("input_genus", input_genus).add("sites", static_cast<int>(r.sites.size()))
-          .add("anisotropy", anisotropy).add("seed", static_cast<long>(seed)).add("iterations", done)
-          .add("converged", r.converged).add("reached_quality_target", r.reached_quality).add("laplacian_s", laplacian_s).add("factor_s", r.factor_seconds)
-          .add("blas", heatcvt::blas_description()).add("factor_memory_bytes", static_cast<long>(r.factor_bytes)).add("time_per_iteration_s", per_iter)
-          .add("total_s", total_s).add("cell_area_variance", r.final_area_variance)
-          .add("revived_sites", revived).add("inserted_sites", r.inserted_sites)
-          .add("graph_lloyd_iterations", r.graph_lloyd_iterations).add("surface_lloyd_iterations", r.surface_lloyd_iterations).add("triangles", q.triangles).add("phi_min_deg", q.min_angle_deg)
-          .add("phi_mean_deg", q.mean_min_angle_deg).add("share_below_30", q.below_30_fraction)
-          .add("split_voronoi_vertices", r.dual.split_vertices)
-          .add("duplicate_triangles", r.dual.duplicate_triangles)
-          .add("flipped_triangles", r.dual.flipped_against_input)
-          .add("unused_sites", static_cast<long>(r.dual.unused_sites.size()));
-      std::vector<double> moves, times;
-      for (const auto& s : r.iterations) moves.push_back(s.max_move), times.push_back(s.seconds);
-      rep.add("max_move_per_iteration", moves).add("seconds_per_iteration", times);
-      std::vector<cli::JsonObject> items;
-      for (const auto& c : checks.checks) {
-        cli::JsonObject o;
-        o.add("name", c.name).add("passed", c.passed).add("ran", c.ran).add("detail", c.detail);
-        items.push_back(o);
+    const std::vector<cli::CheckRecord> check_list = cli::check_records(checks);
+    cli::Json rep = cli::report_head("meshcvt", mesh_path, {out_path, cells_path, report_path});
+    rep["vertices"] = nv;
+    rep["faces"] = mesh.F.rows();
+    rep["input_genus"] = input_genus;
+    rep["sites"] = r.sites.size();
+    rep["anisotropy"] = anisotropy;
+    rep["seed"] = seed;
+    rep["iterations"] = done;
+    rep["converged"] = r.converged;
+    rep["reached_quality_target"] = r.reached_quality;
+    rep["blas"] = heatcvt::blas_description();
+    rep["factor_memory_bytes"] = r.factor_bytes;
+    rep["time_per_iteration_s"] = per_iter;
+    rep["total_s"] = total_s;
+    rep["cell_area_variance"] = r.final_area_variance;
+    rep["revived_sites"] = revived;
+    rep["inserted_sites"] = r.inserted_sites;
+    rep["graph_lloyd_iterations"] = r.graph_lloyd_iterations;
+    rep["surface_lloyd_iterations"] = r.surface_lloyd_iterations;
+    rep["triangles"] = q.triangles;
+    rep["phi_min_deg"] = q.min_angle_deg;
+    rep["phi_mean_deg"] = q.mean_min_angle_deg;
+    rep["share_below_30"] = q.below_30_fraction;
+    rep["split_voronoi_vertices"] = r.dual.split_vertices;
+    rep["duplicate_triangles"] = r.dual.duplicate_triangles;
+    rep["flipped_triangles"] = r.dual.flipped_against_input;
+    rep["unused_sites"] = r.dual.unused_sites.size();
+    std::vector<double> moves, times;
+    for (const auto& s : r.iterations) moves.push_back(s.max_move), times.push_back(s.seconds);
+    rep["max_move_per_iteration"] = moves;
+    rep["seconds_per_iteration"] = times;
+    rep["dual_topology"] = {{"vertices", checks.vertices}, {"edges", checks.edges}, {"faces", checks.faces},
+                            {"components", checks.components}, {"boundary_loops", checks.boundary_loops},
+                            {"euler_characteristic", checks.euler_characteristic}, {"genus", checks.genus},
+                            {"orientable", checks.orientable}, {"crosscaps", checks.crosscaps}};
+    const int status = cli::finish_report(
+        rep, {{"laplacian", laplacian_s}, {"factor", r.factor_seconds}, {"iterations", iter_s}}, check_list);
+    {
+      OutputTransaction outputs;  // all outputs or none (atomic_file.h)
+      write_mesh(out_path, r.dual.V, r.dual.F);
+      if (!cells_path.empty()) {
+        MeshAttributes attr;
+        attr.face_int = r.diagram.face_cell;
+        attr.face_color = cli::cell_colors(r.diagram.face_cell);
+        write_mesh(cells_path, r.diagram.V, r.diagram.F, attr);
       }
-      cli::JsonObject topo_json;
-      topo_json.add("vertices", checks.vertices).add("edges", checks.edges).add("faces", checks.faces)
-          .add("components", checks.components).add("boundary_loops", checks.boundary_loops)
-          .add("euler_characteristic", checks.euler_characteristic).add("genus", checks.genus)
-          .add("orientable", checks.orientable).add("crosscaps", checks.crosscaps);
-      rep.add_array("checks", items).add_object("dual_topology", topo_json).add("all_checks_passed", checks.ok());
-      cli::write_json(report_path, rep);
+      if (!report_path.empty()) cli::write_json(report_path, rep);
+      outputs.commit();
     }
     if (!quiet) {
       std::printf("meshcvt: %s (%d vertices) -> %s (%d vertices, %d triangles)\n", mesh_path.c_str(), nv,
@@ -264,11 +287,10 @@ int main(int argc, char** argv) {
       if (r.inserted_sites)
         std::printf("  %d sites added to cells too big for thin parts (%d requested)\n", r.inserted_sites, sites);
       std::printf("  checks (CGAL):\n");
-      for (const auto& c : checks.checks)
-        std::printf("    %s %-24s %s\n", c.ran ? (c.passed ? "PASS" : "FAIL") : "SKIP", c.name.c_str(), c.detail.c_str());
+      cli::print_checks(check_list);
     }
-    if (!checks.ok()) log("warning: the dual triangulation failed some checks (see above); try more sites or iterations");
-    return 0;
+    if (status != cli::exit_ok)
+      log("warning: the dual triangulation failed some checks (exit status 3); try more sites or iterations");
+    return status;
   });
-  return rc == 0 ? 0 : 1;
 }

@@ -16,6 +16,9 @@
 #include "heatcvt/errors.h"
 #include "heatcvt/mesh_io.h"
 #include "heatcvt/natural_neighbour.h"
+#include "heatcvt/normalize.h"
+#include "report_json.h"
+#include "sites.h"
 
 using namespace heatcvt;
 using Clock = std::chrono::steady_clock;
@@ -61,7 +64,7 @@ int main(int argc, char** argv) {
   CLI::App app{"nncoords: natural-neighbour coordinates by area stealing on heat Voronoi cells "
                "(Herholz et al. 2017, §7.2): interpolate site values or export skinning weights"};
   NaturalNeighbourOptions defaults;
-  std::string mesh_path, sites_path, values_path, out_path, weights_path;
+  std::string mesh_path, sites_path, values_path, out_path, weights_path, report_path;
   double t_coef = defaults.time_coefficient, snap = 1e-3;
   int threads = defaults.threads, samples = defaults.samples;
   bool quiet = false, exact = false;
@@ -81,14 +84,13 @@ int main(int argc, char** argv) {
   app.add_option("--snap-tolerance", snap, "sites farther than this fraction of the bounding-box diagonal from the surface are an error")
       ->capture_default_str();
   app.add_option("--threads", threads, "worker threads (0 = all cores)")->capture_default_str();
+  app.add_option("--report", report_path, "write a JSON report");
   app.add_flag("-q,--quiet", quiet, "no progress output on stderr");
-  try {
-    app.parse(argc, argv);
+  app.callback([&]() {
     if (values_path.empty() && weights_path.empty())
       throw CLI::RequiredError("one of --values VALUES -o OUT.ply or --weights WEIGHTS.txt");
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
+  });
+  if (const int status = cli::parse_command_line(app, argc, argv, "nncoords"); status >= 0) return status;
 
   return cli::run_tool("nncoords", [&]() -> int {
     if (!(t_coef > 0) || !std::isfinite(t_coef)) throw InvalidInputError("--t-coef must be a positive number");
@@ -97,6 +99,8 @@ int main(int argc, char** argv) {
     if (!(snap > 0) || !std::isfinite(snap)) throw InvalidInputError("--snap-tolerance must be a positive number");
     cli::check_output_path(out_path, {".ply"});
     cli::check_output_path(weights_path, {".txt"});
+    cli::check_output_path(report_path, {".json"});
+    cli::check_distinct_outputs({{"-o", out_path}, {"--weights", weights_path}, {"--report", report_path}});
     auto log = [&](const std::string& s) {
       if (!quiet) std::cerr << s << std::endl;
     };
@@ -106,27 +110,14 @@ int main(int argc, char** argv) {
     const int nv = static_cast<int>(mesh.V.rows());
     log("read " + mesh_path + ": " + std::to_string(nv) + " vertices, " + std::to_string(mesh.F.rows()) + " faces");
 
+    // Everything below runs on the mesh in its unit bounding-box frame (normalize.h); the
+    // coordinates do not depend on the units, and the output keeps the input's positions.
+    TriangleMesh unit = mesh;
+    const NormalizationFrame frame = cli::on_file(mesh_path, [&] { return normalize_positions(unit.V); });
     // sites: snapped to the surface; off-surface and duplicate sites are errors
-    const auto site_rows = cli::read_number_rows(sites_path, 3, "sites");
-    const int ns = static_cast<int>(site_rows.size());
+    const std::vector<SurfacePoint> sites = cli::read_snapped_sites(sites_path, unit.V, unit.F, frame, snap);
+    const int ns = static_cast<int>(sites.size());
     if (ns < 2) throw InvalidInputError(sites_path + ": " + std::to_string(ns) + " site given, at least 2 are needed");
-    Eigen::MatrixX3d P(ns, 3);
-    for (int i = 0; i < ns; ++i) P.row(i) << site_rows[i][0], site_rows[i][1], site_rows[i][2];
-    const std::vector<SurfacePoint> sites = closest_surface_points(mesh.V, mesh.F, P);
-    const double diag = (mesh.V.colwise().maxCoeff() - mesh.V.colwise().minCoeff()).norm();
-    Eigen::MatrixX3d S(ns, 3);
-    for (int i = 0; i < ns; ++i) {
-      S.row(i) = position(mesh.V, mesh.F, sites[i]).transpose();
-      const double d = (S.row(i) - P.row(i)).norm();
-      if (d > snap * diag)
-        throw InvalidInputError(sites_path + ": site " + std::to_string(i + 1) + " is off the surface (distance " +
-                                format_double(d) + " > " + format_double(snap * diag) + " = --snap-tolerance x diagonal)");
-    }
-    for (int i = 0; i < ns; ++i)
-      for (int j = 0; j < i; ++j)
-        if ((S.row(i) - S.row(j)).norm() <= 1e-9 * diag)
-          throw InvalidInputError(sites_path + ": sites " + std::to_string(j + 1) + " and " + std::to_string(i + 1) +
-                                  " are duplicates (same point on the surface)");
     Eigen::MatrixXd values;
     if (!values_path.empty()) {
       const auto rows = cli::read_number_rows(values_path, 0, "values");
@@ -143,9 +134,16 @@ int main(int argc, char** argv) {
     opt.time_coefficient = t_coef;
     opt.threads = threads;
     opt.samples = samples;
-    NaturalNeighbourCoordinates nn(mesh.V, mesh.F, sites, opt);
+    NaturalNeighbourCoordinates nn =
+        cli::on_file(mesh_path, [&] { return NaturalNeighbourCoordinates(unit.V, unit.F, sites, opt); });
     const double setup_s = cli::seconds_since(t0);
-    log("factored M - tL (t = " + format_double(nn.solver().time_step()) + "), " + std::to_string(ns) +
+    // Coordinates are undefined on a component without sites (its rows would be empty).
+    if (!nn.diagram().unreached_components.empty())
+      throw InvalidInputError(sites_path + ": connected component " +
+                              std::to_string(nn.diagram().unreached_components.front()) + " of " + mesh_path +
+                              " has no site (natural-neighbour coordinates are undefined there; give every component "
+                              "a site)");
+    log("factored M - tL (t = " + format_double(nn.solver().time_step() * frame.scale * frame.scale) + "), " + std::to_string(ns) +
         " diffusions and the tessellation in " + std::to_string(setup_s) + " s");
 
     t0 = Clock::now();
@@ -155,22 +153,59 @@ int main(int argc, char** argv) {
       // progress in per mille of the work (the total is only known once the work has started)
       cli::Progress bar(exact ? "exact coordinates" : "coordinates", 1000, quiet);
       auto report = [&](long done, long total) { bar.update(total > 0 ? 1000 * done / total : 0); };
-      W = exact ? nn.vertex_weights_direct(report) : nn.vertex_weights(report, &exact_vertices);
+      W = cli::on_file(mesh_path, [&] {
+        return exact ? nn.vertex_weights_direct(report) : nn.vertex_weights(report, &exact_vertices);
+      });
       bar.finish();
     }
     if (exact) exact_vertices.resize(nv);
     const double coords_s = cli::seconds_since(t0);
 
-    std::string colour_note;
-    if (!values_path.empty()) {
-      const Eigen::MatrixXd X = interpolate_site_values(W, values);
-      const bool colour = values.cols() == 3 && values.minCoeff() >= 0 && values.maxCoeff() <= 1;
-      colour_note = colour ? " (as colour)" : "";
-      write_values_ply(out_path, mesh, X, colour);
-    } else {
-      write_weights(weights_path, W);
+    // Checks of the result (exit status 3 when one fails, cli_common.h): rows are partitions of unity.
+    constexpr double sum_tolerance = 1e-9;
+    long empty_rows = 0, bad_sums = 0, negative = 0;
+    for (int v = 0; v < W.rows(); ++v) {
+      double sum = 0;
+      for (VertexWeights::InnerIterator it(W, v); it; ++it) {
+        sum += it.value();
+        negative += it.value() < 0 ? 1 : 0;
+      }
+      if (W.row(v).nonZeros() == 0) ++empty_rows;
+      else if (!(std::abs(sum - 1) <= sum_tolerance)) ++bad_sums;
     }
+    const std::vector<cli::CheckRecord> checks = {
+        {"every_vertex_weighted", empty_rows == 0, true,
+         empty_rows == 0 ? "ok" : std::to_string(empty_rows) + " vertices without weights"},
+        {"weights_sum_to_one", bad_sums == 0, true,
+         bad_sums == 0 ? "ok" : std::to_string(bad_sums) + " vertices whose weights do not sum to 1"},
+        {"weights_non_negative", negative == 0, true,
+         negative == 0 ? "ok" : std::to_string(negative) + " negative weights"}};
     const double total_s = cli::seconds_since(t_start);
+    cli::Json rep = cli::report_head("nncoords", mesh_path, {out_path, weights_path, report_path});
+    rep["sites_file"] = sites_path;
+    rep["vertices"] = nv;
+    rep["faces"] = mesh.F.rows();
+    rep["sites"] = ns;
+    rep["exact"] = exact;
+    rep["exact_vertices"] = exact_vertices.size();
+    rep["nonzero_weights"] = W.nonZeros();
+    rep["total_s"] = total_s;
+    const int status = cli::finish_report(rep, {{"setup", setup_s}, {"coordinates", coords_s}}, checks);
+
+    std::string colour_note;
+    {
+      OutputTransaction outputs;  // all outputs or none (atomic_file.h)
+      if (!values_path.empty()) {
+        const Eigen::MatrixXd X = interpolate_site_values(W, values);
+        const bool colour = values.cols() == 3 && values.minCoeff() >= 0 && values.maxCoeff() <= 1;
+        colour_note = colour ? " (as colour)" : "";
+        write_values_ply(out_path, mesh, X, colour);
+      } else {
+        write_weights(weights_path, W);
+      }
+      if (!report_path.empty()) cli::write_json(report_path, rep);
+      outputs.commit();
+    }
     if (!quiet) {
       long nonzeros = W.nonZeros();
       std::printf("nncoords: %d sites on %d vertices / %ld faces: %.2f non-zero weights per vertex on average\n", ns, nv,
@@ -180,7 +215,9 @@ int main(int argc, char** argv) {
       std::printf("  time: setup %.3f s, coordinates %.3f s (%.3f ms / vertex), total %.3f s\n", setup_s, coords_s,
                   1e3 * coords_s / nv, total_s);
       std::printf("  wrote %s%s\n", (values_path.empty() ? weights_path : out_path).c_str(), colour_note.c_str());
+      cli::print_checks(checks);
     }
-    return 0;
+    if (status != cli::exit_ok) log("warning: the coordinates failed some checks (exit status 3)");
+    return status;
   });
 }

@@ -86,7 +86,7 @@ PointCloud read_xyz(const std::string& path, CloudReadReport& rep) {
       const std::string_view tok = line.substr(i, j - i);
       double v = 0;
       if (!parse_double(tok, v))
-        fail(path, "line " + std::to_string(line_no) + ": malformed number '" + std::string(tok.substr(0, 40)) + "'");
+        fail(path, "line " + std::to_string(line_no) + ": malformed number " + quote_excerpt(tok));
       if (cols < 6) vals[cols] = v;
       ++cols;
       i = j;
@@ -118,6 +118,41 @@ PointCloud read_xyz(const std::string& path, CloudReadReport& rep) {
 // ------------------------------------------------------------------------------------------
 // PCD
 
+// Checks every line of an ASCII PCD body (PCL's reader accepts non-numeric tokens and short
+// lines silently): the first `points` non-blank lines must hold exactly `values_per_point`
+// numbers each ("nan" allowed, as PCL writes it). `line_no` is the number of header lines.
+void check_ascii_pcd_body(const std::string& path, std::istream& in, long long points, long long values_per_point,
+                          int line_no) {
+  std::string line;
+  long long seen = 0;
+  while (seen < points && std::getline(in, line)) {
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    long long cols = 0;
+    size_t i = 0;
+    while (true) {
+      while (i < line.size() && is_space(line[i])) ++i;
+      if (i >= line.size()) break;
+      size_t j = i;
+      while (j < line.size() && !is_space(line[j])) ++j;
+      const std::string_view tok(line.data() + i, j - i);
+      double v = 0;
+      if (!parse_double(tok, v))
+        fail(path, "line " + std::to_string(line_no) + ": malformed number " + quote_excerpt(tok) +
+                       (tok.find(',') != std::string_view::npos ? " (decimal commas are not allowed)" : ""));
+      ++cols;
+      i = j;
+    }
+    if (cols == 0) continue;
+    if (cols != values_per_point)
+      fail(path, "line " + std::to_string(line_no) + ": " + std::to_string(cols) + " values, the header announces " +
+                     std::to_string(values_per_point) + " per point");
+    ++seen;
+  }
+  if (seen < points)
+    fail(path, "truncated: header announces " + std::to_string(points) + " points, file holds " + std::to_string(seen));
+}
+
 // Checks the PCD header and the data size before handing the file to PCL, so that corrupt or
 // truncated files give a clear error rather than relying on PCL's own checks.
 void precheck_pcd(const std::string& path, std::string& data_kind, long long& header_points) {
@@ -127,6 +162,7 @@ void precheck_pcd(const std::string& path, std::string& data_kind, long long& he
   long long width = -1, height = 1, points = -1, point_step = 0;
   std::vector<long long> sizes, counts;
   size_t nfields = 0;
+  std::vector<std::string> field_names;
   bool have_data = false;
   int lines = 0;
   while (std::getline(in, line)) {
@@ -138,14 +174,20 @@ void precheck_pcd(const std::string& path, std::string& data_kind, long long& he
     if (key.empty() || key[0] == '#') continue;
     if (key == "FIELDS" || key == "COLUMNS") {
       std::string f;
-      while (ls >> f) ++nfields;
+      while (ls >> f) {
+        // A repeated name (two 'x' fields) would silently read one of them for both.
+        if (std::find(field_names.begin(), field_names.end(), f) != field_names.end())
+          fail(path, "malformed PCD header: the field " + quote_excerpt(f) + " is listed twice");
+        field_names.push_back(f);
+        ++nfields;
+      }
     } else if (key == "SIZE" || key == "COUNT") {
       auto& dst = key == "SIZE" ? sizes : counts;
       std::string t;
       while (ls >> t) {
         long long v = 0;
         const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
-        if (r.ec != std::errc() || v <= 0 || v > 1 << 20) fail(path, "malformed PCD " + key + " entry '" + t + "'");
+        if (r.ec != std::errc() || v <= 0 || v > 1 << 20) fail(path, "malformed PCD " + key + " entry " + quote_excerpt(t));
         dst.push_back(v);
       }
     } else if (key == "WIDTH" || key == "HEIGHT" || key == "POINTS") {
@@ -153,14 +195,14 @@ void precheck_pcd(const std::string& path, std::string& data_kind, long long& he
       ls >> t;
       long long v = -1;
       const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
-      if (r.ec != std::errc() || v < 0 || v > 2000000000LL) fail(path, "malformed PCD " + key + " '" + t + "'");
+      if (r.ec != std::errc() || v < 0 || v > 2000000000LL) fail(path, "malformed PCD " + key + " " + quote_excerpt(t));
       (key == "WIDTH" ? width : key == "HEIGHT" ? height : points) = v;
     } else if (key == "DATA") {
       ls >> data_kind;
       have_data = true;
       break;
     } else if (key != "VERSION" && key != "TYPE" && key != "VIEWPOINT") {
-      fail(path, "not a PCD file (unexpected header line '" + line.substr(0, 40) + "')");
+      fail(path, "not a PCD file (unexpected header line " + quote_excerpt(line) + ")");
     }
   }
   if (!have_data) fail(path, "not a PCD file or truncated header (no DATA line)");
@@ -191,8 +233,11 @@ void precheck_pcd(const std::string& path, std::string& data_kind, long long& he
     if (points * 2 * static_cast<long long>(nfields) > body + 1)
       fail(path, "truncated: header announces " + std::to_string(points) + " points but only " + std::to_string(body) +
                      " bytes follow");
+    long long values_per_point = 0;
+    for (size_t k = 0; k < nfields; ++k) values_per_point += counts.empty() ? 1 : counts[k];
+    check_ascii_pcd_body(path, in, points, values_per_point, lines);
   } else {
-    fail(path, "unknown PCD DATA type '" + data_kind + "'");
+    fail(path, "unknown PCD DATA type " + quote_excerpt(data_kind));
   }
 }
 
@@ -353,10 +398,10 @@ PointCloud read_cloud(const std::string& path, CloudReadReport* report) {
   CloudReadReport local;
   CloudReadReport& rep = report ? *report : local;
   rep = CloudReadReport();
+  require_readable_file(path);  // before the extension: a directory is not "an unknown format"
   const std::string ext = lower(fs::path(path).extension().string());
   if (ext != ".pcd" && ext != ".ply" && ext != ".xyz" && ext != ".pwn" && ext != ".txt")
-    fail(path, "unknown point-cloud format '" + ext + "' (expected .pcd, .ply, .xyz, .pwn or .txt)");
-  require_readable_file(path);
+    fail(path, "unknown point-cloud format " + quote_excerpt(ext) + " (expected .pcd, .ply, .xyz, .pwn or .txt)");
   PointCloud cloud;
   if (ext == ".pcd") cloud = read_pcd(path, rep);
   else if (ext == ".ply") cloud = read_ply_cloud(path, rep);
@@ -368,30 +413,7 @@ PointCloud read_cloud(const std::string& path, CloudReadReport* report) {
   return cloud;
 }
 
-CloudFrame bounding_box_frame(const Eigen::MatrixX3d& P) {
-  if (P.rows() == 0) throw InvalidInputError("bounding_box_frame: empty point set");
-  if (!P.allFinite()) throw InvalidInputError("bounding_box_frame: non-finite coordinates");
-  const Eigen::RowVector3d lo = P.colwise().minCoeff(), hi = P.colwise().maxCoeff();
-  CloudFrame frame;
-  frame.centre = (0.5 * (lo + hi)).transpose();
-  const double diag = (hi - lo).norm();
-  frame.scale = diag > 0 ? diag : 1.0;
-  return frame;
-}
-
-void apply_frame(Eigen::MatrixX3d& V, const CloudFrame& frame) {
-  V = (V.rowwise() - frame.centre.transpose()) / frame.scale;
-}
-
-void restore_frame(Eigen::MatrixX3d& V, const CloudFrame& frame) {
-  V = (V * frame.scale).rowwise() + frame.centre.transpose();
-}
-
-CloudFrame normalize_cloud(PointCloud& cloud) {
-  const CloudFrame frame = bounding_box_frame(cloud.P);
-  apply_frame(cloud.P, frame);
-  return frame;
-}
+CloudFrame normalize_cloud(PointCloud& cloud) { return normalize_positions(cloud.P); }
 
 void write_cloud_xyz(const std::string& path, const PointCloud& cloud) {
   write_points_xyz(path, cloud.P, cloud.has_normals() ? cloud.N : Eigen::MatrixX3d());

@@ -41,10 +41,14 @@ std::string lower(std::string s) {
 
 std::string extension_of(const std::string& path) { return lower(fs::path(path).extension().string()); }
 
-std::string read_whole_file(const std::string& path) {
+void require_existing_file(const std::string& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) fail(path, "file does not exist");
   if (fs::is_directory(path, ec)) fail(path, "is a directory, not a file");
+}
+
+std::string read_whole_file(const std::string& path) {
+  require_existing_file(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, std::string("cannot open file: ") + std::strerror(errno));
   in.seekg(0, std::ios::end);
@@ -56,12 +60,7 @@ std::string read_whole_file(const std::string& path) {
   return data;
 }
 
-std::string quote(std::string_view s) {
-  std::string t(s.substr(0, 40));
-  for (auto& c : t)
-    if (!std::isprint(static_cast<unsigned char>(c))) c = '?';
-  return "'" + t + (s.size() > 40 ? "...'" : "'");
-}
+std::string quote(std::string_view s) { return quote_excerpt(s); }
 
 // Parses a whole token as a double; '+' prefix allowed. Returns false if not a number.
 bool parse_double(std::string_view tok, double& out) {
@@ -382,6 +381,12 @@ PolygonSoup read_ply(const std::string& path, const std::string& data, MeshReadR
     auto hdr = [&](const std::string& problem) {
       return IOError(path + ": PLY header line " + std::to_string(lines.line_no()) + ": " + problem);
     };
+    // Element and property names appear in later messages: no control bytes in them.
+    auto require_printable_name = [&](std::string_view name) {
+      for (char c : name)
+        if (!std::isprint(static_cast<unsigned char>(c))) throw hdr("unprintable name " + quote(name));
+      return std::string(name);
+    };
     if (key == "end_header") {
       header_done = true;
       break;
@@ -394,6 +399,7 @@ PolygonSoup read_ply(const std::string& path, const std::string& data, MeshReadR
       continue;
     } else if (key == "element") {
       long long count = -1;
+      if (tok.size() >= 2) require_printable_name(tok[1]);
       if (tok.size() < 3 || !parse_int(tok[2], count) || count < 0 || count > kMaxCount)
         throw hdr("malformed element line");
       elements.push_back({std::string(tok[1]), count, {}});
@@ -406,11 +412,11 @@ PolygonSoup read_ply(const std::string& path, const std::string& data, MeshReadR
         if (!ply_type_from_name(tok[2], p.count_type) || !ply_is_integer(p.count_type))
           throw hdr("bad list count type " + quote(tok[2]));
         if (!ply_type_from_name(tok[3], p.type)) throw hdr("unknown property type " + quote(tok[3]));
-        p.name = std::string(tok[4]);
+        p.name = require_printable_name(tok[4]);
       } else {
         if (tok.size() < 3) throw hdr("malformed property line");
         if (!ply_type_from_name(tok[1], p.type)) throw hdr("unknown property type " + quote(tok[1]));
-        p.name = std::string(tok[2]);
+        p.name = require_printable_name(tok[2]);
       }
       elements.back().props.push_back(p);
     } else {
@@ -481,8 +487,9 @@ PolygonSoup read_ply(const std::string& path, const std::string& data, MeshReadR
           continue;
         }
         const double cnt = body.read(p.count_type, context);
-        if (cnt < 0) fail(path, "negative list length in " + context());
-        if (cnt > static_cast<double>(body.remaining())) fail(path, "truncated: list longer than the remaining data in " + context());
+        if (!(cnt >= 0)) fail(path, "negative or invalid list length in " + context());
+        if (!(cnt <= static_cast<double>(body.remaining())))
+          fail(path, "truncated: list longer than the remaining data in " + context());
         const size_t n = static_cast<size_t>(cnt);
         if (!ascii && n * ply_size(p.type) > body.remaining())
           fail(path, "truncated: binary data ends in " + context());
@@ -490,7 +497,8 @@ PolygonSoup read_ply(const std::string& path, const std::string& data, MeshReadR
           poly.clear();
           for (size_t k = 0; k < n; ++k) {
             const double idx = body.read(p.type, context);
-            if (idx < 0 || idx >= static_cast<double>(std::max<long long>(num_vertices, 0)))
+            // Negated comparisons so that a NaN index (float-typed lists) is rejected too.
+            if (!(idx >= 0 && idx < static_cast<double>(std::max<long long>(num_vertices, 0))) || idx != std::floor(idx))
               fail(path, "face " + std::to_string(i) + ": vertex index " + format_double(idx) + " out of range (" +
                              std::to_string(std::max<long long>(num_vertices, 0)) + " vertices)");
             poly.push_back(static_cast<int>(idx));
@@ -668,6 +676,7 @@ PolygonSoup read_polygon_soup(const std::string& path, MeshReadReport* report) {
   MeshReadReport local;
   MeshReadReport& rep = report ? *report : local;
   rep = MeshReadReport();
+  require_existing_file(path);  // before the extension: a directory is not "an unknown format"
   const std::string ext = extension_of(path);
   if (ext != ".obj" && ext != ".off" && ext != ".ply" && ext != ".stl")
     fail(path, "unknown mesh format '" + ext + "' (expected .obj, .off, .ply or .stl)");

@@ -15,6 +15,7 @@
 #include "heatcvt/closest_point.h"
 #include "heatcvt/errors.h"
 #include "heatcvt/laplacian.h"
+#include "heatcvt/mesh.h"
 #include "heatcvt/parallel.h"
 
 namespace heatcvt {
@@ -266,6 +267,27 @@ struct NaturalNeighbourCoordinates::Impl {
   }
 };
 
+namespace {
+// Heat cannot spread over a connected component whose faces all have (numerically) zero area
+// (needles, collinear corners): its vertices have no mass, so neither M − tL nor the biharmonic
+// system of the propagation is definite there. Such input is rejected up front. Areas are
+// compared with the squared bounding-box diagonal, so the test does not depend on the units.
+void require_positive_component_areas(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F) {
+  constexpr double zero_area = 1e-12;  // relative to the squared bounding-box diagonal
+  Eigen::VectorXi comp;
+  const int nc = connected_components(static_cast<int>(V.rows()), F, comp);
+  const Eigen::VectorXd area = face_areas(V, F);
+  const double diag = (V.colwise().maxCoeff() - V.colwise().minCoeff()).norm();
+  std::vector<double> comp_area(nc, 0.0);
+  for (int f = 0; f < F.rows(); ++f) comp_area[comp[F(f, 0)]] += area[f];
+  for (int c = 0; c < nc; ++c)
+    if (!(comp_area[c] > zero_area * diag * diag))
+      throw InvalidInputError(nc == 1 ? std::string("the mesh has zero area (every face is degenerate)")
+                                      : "connected component " + std::to_string(c) +
+                                            " of the mesh has zero area (every face of it is degenerate)");
+}
+}  // namespace
+
 NaturalNeighbourCoordinates::NaturalNeighbourCoordinates(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
                                                          const std::vector<SurfacePoint>& sites,
                                                          const NaturalNeighbourOptions& options)
@@ -291,6 +313,7 @@ NaturalNeighbourCoordinates::NaturalNeighbourCoordinates(const Eigen::MatrixX3d&
   m.threads = resolve_threads(options.threads);
   const int nv = static_cast<int>(V.rows()), nf = static_cast<int>(F.rows()), ns = m.ns();
 
+  require_positive_component_areas(V, F);
   m.lap = cotan_laplacian(V, F);
   HeatSolverOptions so;
   so.time_coefficient = options.time_coefficient;
@@ -555,7 +578,9 @@ std::vector<std::vector<std::pair<int, double>>> NaturalNeighbourCoordinates::pr
   const int nfree = static_cast<int>(free_vertices.size());
   if (nfree > 0) {
     // Biharmonic propagation: minimise xᵀ L M⁻¹ L x with x fixed at the samples.
-    const Eigen::VectorXd minv = m.lap.M.cwiseInverse();
+    // Vertices without mass (only degenerate faces around them) get no weight in the energy
+    // instead of an infinite one.
+    const Eigen::VectorXd minv = m.lap.M.unaryExpr([](double x) { return x > 0 ? 1.0 / x : 0.0; });
     const Eigen::SparseMatrix<double> ML = minv.asDiagonal() * m.lap.L;
     const Eigen::SparseMatrix<double> Q = m.lap.L * ML;
     std::vector<Eigen::Triplet<double>> tff, tfc;

@@ -47,7 +47,9 @@ void check_options(const ReconstructionOptions& o) {
   auto bad = [](const std::string& m) { throw InvalidInputError("reconstruct_surface: " + m); };
   if (o.sites < 4) bad("sites = " + std::to_string(o.sites) + " (need at least 4)");
   if (o.iterations < 0) bad("iterations = " + std::to_string(o.iterations) + " (must be >= 0)");
-  if (o.neighbors < 6) bad("neighbors = " + std::to_string(o.neighbors) + " (need at least 6)");
+  if (o.neighbors < o.min_neighbors || o.neighbors > o.max_neighbors)
+    bad("neighbors = " + std::to_string(o.neighbors) + " (must be in [" + std::to_string(o.min_neighbors) + ", " +
+        std::to_string(o.max_neighbors) + "])");
   if (!(o.anisotropy >= 0) || !std::isfinite(o.anisotropy)) bad("anisotropy must be a finite number >= 0");
   if (!(o.voxel_size >= 0) || !std::isfinite(o.voxel_size)) bad("voxel_size must be a finite number >= 0");
   if (!(o.time_coefficient > 0) || !std::isfinite(o.time_coefficient)) bad("time_coefficient must be > 0");

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "heatcvt/atomic_file.h"
 #include "heatcvt/errors.h"
 #include <exception>
 #include <iostream>
@@ -48,15 +49,71 @@ void Progress::finish() {
   else std::fprintf(stderr, "%s: done, %ld in %.1fs\n", label_.c_str(), total_, elapsed);
 }
 
+std::string exit_status_help() {
+  return "Exit status: 0 = outputs written and every check of the result passed; 1 = the computation "
+         "failed; 2 = command-line misuse, a bad option value, an unusable input file or output path, or a "
+         "failed write; 3 = outputs written, but the result failed some of its checks (listed on stdout and in "
+         "--report). Nothing is written unless the status is 0 or 3.\n";
+}
+
+int parse_command_line(CLI::App& app, int argc, char** argv, const std::string& tool) {
+  app.footer(exit_status_help());
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::string what = e.what();
+    for (char& c : what)
+      if (c == '\n' || c == '\r') c = ' ';
+    std::cerr << tool << ": error: " << what << " (see " << tool << " --help)" << std::endl;
+    return exit_bad_input;
+  }
+  return -1;
+}
+
 int run_tool(const std::string& tool, const std::function<int()>& body) {
+  remove_temporary_files_on_signals();
+  auto report = [&](const std::string& what) {
+    std::string line = what;
+    for (char& c : line)
+      if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';  // one line, no terminal escapes
+    std::cerr << tool << ": error: " << line << std::endl;
+  };
   try {
     return body();
+  } catch (const InvalidInputError& e) {
+    report(e.what());
+    return exit_bad_input;
+  } catch (const IOError& e) {
+    report(e.what());
+    return exit_bad_input;
+  } catch (const std::bad_alloc&) {
+    report("out of memory");
+    return exit_failure;
   } catch (const std::exception& e) {
-    std::cerr << tool << ": error: " << e.what() << std::endl;
-    return 1;
+    report(e.what());
+    return exit_failure;
   } catch (...) {
-    std::cerr << tool << ": error: unknown failure" << std::endl;
-    return 1;
+    report("unknown failure");
+    return exit_failure;
+  }
+}
+
+void check_distinct_outputs(const std::vector<std::pair<std::string, std::string>>& outputs) {
+  std::vector<std::pair<std::string, std::string>> seen;  // (resolved path, option)
+  for (const auto& [option, path] : outputs) {
+    if (path.empty()) continue;
+    const std::string resolved = resolve_output_path(path);
+    for (const auto& [other, other_option] : seen)
+      if (other == resolved)
+        throw InvalidInputError(path + ": given to both " + other_option + " and " + option +
+                                " (outputs must be distinct files)");
+    seen.emplace_back(resolved, option);
   }
 }
 
@@ -85,6 +142,8 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 }
 
 std::vector<std::vector<double>> read_number_rows(const std::string& path, int columns, const std::string& what) {
+  if (std::filesystem::is_directory(path)) throw IOError(path + ": is a directory, not a " + what + " file");
+  if (!std::filesystem::exists(path)) throw IOError(path + ": the " + what + " file does not exist");
   std::ifstream in(path);
   if (!in) throw IOError(path + ": cannot open the " + what + " file");
   std::vector<std::vector<double>> rows;
@@ -104,7 +163,7 @@ std::vector<std::vector<double>> read_number_rows(const std::string& path, int c
         if (used != tok.size()) throw std::invalid_argument(tok);
         row.push_back(x);
       } catch (const std::exception&) {
-        throw IOError(path + ": line " + std::to_string(line_no) + ": '" + tok + "' is not a number");
+        throw IOError(path + ": line " + std::to_string(line_no) + ": " + quote_excerpt(tok) + " is not a number");
       }
     }
     const int want = columns > 0 ? columns : (rows.empty() ? static_cast<int>(row.size()) : static_cast<int>(rows[0].size()));

@@ -1,12 +1,34 @@
 #pragma once
-// Shared glue for the command-line tools: progress reporting on stderr, atomic output
-// files, and the uniform "one clear error line, non-zero exit" behaviour.
+// Shared glue for the command-line tools: command-line parsing, exit statuses, progress
+// reporting on stderr, output checks, and the uniform "one clear error line" behaviour.
+#include <CLI/CLI.hpp>
+
 #include <chrono>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "heatcvt/errors.h"
+
 namespace heatcvt::cli {
+
+/// Exit statuses shared by every tool (listed by --help and in the README's tools section).
+enum ExitStatus : int {
+  exit_ok = 0,              ///< every output written, every check of the result passed
+  exit_failure = 1,         ///< the computation failed (e.g. a factorisation); nothing written
+  exit_bad_input = 2,       ///< command-line misuse, a bad option value, an unusable input file or
+                            ///< output path, or a failed write; nothing written
+  exit_checks_failed = 3,   ///< every output written, but the result failed some of its checks
+};
+
+/// The text of the exit statuses, appended to every tool's --help.
+std::string exit_status_help();
+
+/// Parses the command line. Returns -1 when the tool should go on; otherwise the exit status
+/// to return: 0 after --help (printed on stdout), exit_bad_input after a parse error, which is
+/// printed as the single line "<tool>: error: <problem> (see <tool> --help)" on stderr.
+int parse_command_line(CLI::App& app, int argc, char** argv, const std::string& tool);
 
 /// Progress on stderr: a bar with ETA when stderr is a terminal, a line every few seconds
 /// otherwise, nothing when quiet.
@@ -23,19 +45,49 @@ class Progress {
   bool finished_ = false;
 };
 
-/// Runs the body of a tool: catches every exception, prints "<tool>: error: <message>" as one
-/// line on stderr and returns 1 (2 for command-line errors from CLI11).
+/// Runs the body of a tool: removes temporary output files on SIGINT/SIGTERM (atomic_file.h),
+/// catches every exception, prints "<tool>: error: <message>" as one line on stderr (control
+/// bytes replaced) and returns exit_bad_input for InvalidInputError / IOError, exit_failure
+/// otherwise. The body's own return value is passed through.
 int run_tool(const std::string& tool, const std::function<int()>& body);
+
+/// Runs `work` (a library call on the content of `path`) and rethrows any heatcvt::Error of the
+/// same class with the message "<path>: <problem>", the library's internal function name
+/// removed, so that the error line names the file at fault.
+template <typename Work>
+auto on_file(const std::string& path, Work&& work) -> decltype(work()) {
+  auto context = [&](const Error& e) {
+    const std::string what = e.what();
+    return what.rfind(path + ": ", 0) == 0 ? what : path + ": " + without_function_prefix(what);
+  };
+  try {
+    return work();
+  } catch (const InvalidInputError& e) {
+    throw InvalidInputError(context(e));
+  } catch (const IOError& e) {
+    throw IOError(context(e));
+  } catch (const SolverError& e) {
+    throw SolverError(context(e));
+  } catch (const Error& e) {
+    throw Error(context(e));
+  }
+}
 
 /// Fails fast, before any work, when an output could not be written: its directory is missing
 /// or not writable, or (when `extensions` is non-empty, e.g. {".ply", ".obj"}) its extension is
 /// not one of them. Throws heatcvt::InvalidInputError "<path>: <problem>". Empty paths pass.
 void check_output_path(const std::string& path, const std::vector<std::string>& extensions = {});
 
+/// Fails fast when two outputs name the same file (after following symbolic links): `outputs`
+/// are (option, path) pairs, empty paths are skipped.
+/// Throws InvalidInputError "<path>: given to both <option> and <option> ...".
+void check_distinct_outputs(const std::vector<std::pair<std::string, std::string>>& outputs);
+
 /// Rows of whitespace-separated numbers from a text file ('#' comments and blank lines skipped),
 /// every row with `columns` values (0 = as many as the first row). Throws heatcvt::IOError or
-/// InvalidInputError "<path>: line N ..." for an unreadable file, a token that is not a number, a
-/// short or long row, a NaN/inf value, or a file without rows ("no <what> in the file").
+/// InvalidInputError "<path>: line N ..." for an unreadable file or a directory, a token that is
+/// not a number, a short or long row, a NaN/inf value, or a file without rows ("no <what> in
+/// the file").
 std::vector<std::vector<double>> read_number_rows(const std::string& path, int columns, const std::string& what);
 
 /// Seconds elapsed since `start`.

@@ -1,93 +1,65 @@
 #include "report_json.h"
 
-#include <cmath>
 #include <cstdio>
 #include <ostream>
 
+#include "cli_common.h"
 #include "heatcvt/atomic_file.h"
 
 namespace heatcvt::cli {
 
-namespace {
-std::string quote(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          char buf[8];
-          std::snprintf(buf, sizeof buf, "\\u%04x", c);
-          out += buf;
-        } else {
-          out += c;
-        }
-    }
+std::vector<CheckRecord> check_records(const ValidationReport& report) {
+  std::vector<CheckRecord> out;
+  for (const auto& c : report.checks) out.push_back({c.name, c.passed, c.ran, c.detail});
+  return out;
+}
+
+bool all_passed(const std::vector<CheckRecord>& checks) {
+  for (const auto& c : checks)
+    if (!c.ran || !c.passed) return false;
+  return true;
+}
+
+void print_checks(const std::vector<CheckRecord>& checks) {
+  for (const auto& c : checks)
+    std::printf("  %s %s: %s\n", !c.ran ? "SKIP" : (c.passed ? "PASS" : "FAIL"), c.name.c_str(), c.detail.c_str());
+}
+
+Json report_head(const std::string& tool, const std::string& input, const std::vector<std::string>& outputs) {
+  Json j;
+  j["tool"] = tool;
+  j["input"] = input;
+  j["outputs"] = Json::array();
+  for (const auto& o : outputs)
+    if (!o.empty()) j["outputs"].push_back(o);
+  return j;
+}
+
+int finish_report(Json& report, const std::vector<std::pair<std::string, double>>& stages,
+                  const std::vector<CheckRecord>& checks) {
+  Json st = Json::array();
+  for (const auto& [name, seconds] : stages) st.push_back({{"name", name}, {"seconds", seconds}});
+  Json ch = Json::array();
+  for (const auto& c : checks) {
+    Json r;
+    r["name"] = c.name;
+    r["passed"] = c.ran ? Json(c.passed) : Json(nullptr);
+    r["detail"] = c.ran ? c.detail : "not run: " + c.detail;
+    ch.push_back(std::move(r));
   }
-  return out + "\"";
-}
-std::string number(double v) { return std::isfinite(v) ? format_double(v) : "null"; }
-}  // namespace
-
-JsonObject& JsonObject::add(const std::string& key, double value) {
-  entries_.emplace_back(key, number(value));
-  return *this;
-}
-JsonObject& JsonObject::add(const std::string& key, long value) {
-  entries_.emplace_back(key, std::to_string(value));
-  return *this;
-}
-JsonObject& JsonObject::add(const std::string& key, bool value) {
-  entries_.emplace_back(key, value ? "true" : "false");
-  return *this;
-}
-JsonObject& JsonObject::add(const std::string& key, const std::string& value) {
-  entries_.emplace_back(key, quote(value));
-  return *this;
-}
-JsonObject& JsonObject::add(const std::string& key, const std::vector<double>& values) {
-  std::string s = "[";
-  for (size_t i = 0; i < values.size(); ++i) s += (i ? ", " : "") + number(values[i]);
-  entries_.emplace_back(key, s + "]");
-  return *this;
-}
-JsonObject& JsonObject::add_object(const std::string& key, const JsonObject& object) {
-  entries_.emplace_back(key, "\x01" + object.str());  // marker: nested, re-indented in str()
-  return *this;
-}
-JsonObject& JsonObject::add_array(const std::string& key, const std::vector<JsonObject>& objects) {
-  std::string s = "[";
-  for (size_t i = 0; i < objects.size(); ++i) s += (i ? ", " : "") + objects[i].str();
-  entries_.emplace_back(key, s + "]");
-  return *this;
+  const int status = all_passed(checks) ? exit_ok : exit_checks_failed;
+  report["stages"] = std::move(st);
+  report["checks"] = std::move(ch);
+  report["all_checks_passed"] = status == exit_ok;
+  report["exit_status"] = status;
+  return status;
 }
 
-std::string JsonObject::str(int indent) const {
-  const std::string pad(indent + 2, ' '), end_pad(indent, ' ');
-  std::string out = "{\n";
-  for (size_t i = 0; i < entries_.size(); ++i) {
-    const auto& [k, v] = entries_[i];
-    std::string value = v;
-    if (!value.empty() && value[0] == '\x01') {
-      // nested object: indent its lines
-      value = value.substr(1);
-      std::string shifted;
-      for (char c : value) {
-        shifted += c;
-        if (c == '\n') shifted += pad;
-      }
-      value = shifted;
-    }
-    out += pad + quote(k) + ": " + value + (i + 1 < entries_.size() ? ",\n" : "\n");
-  }
-  return out + end_pad + "}";
-}
-
-void write_json(const std::string& path, const JsonObject& object) {
-  write_atomically(path, [&](std::ostream& os) { os << object.str() << "\n"; });
+void write_json(const std::string& path, const Json& report) {
+  // Invalid UTF-8 in strings (e.g. a file name) is replaced instead of throwing.
+  write_atomically(path, [&](std::ostream& os) {
+    os << report.dump(2, ' ', false, Json::error_handler_t::replace) << "\n";
+  });
 }
 
 }  // namespace heatcvt::cli

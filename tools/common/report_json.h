@@ -1,30 +1,46 @@
 #pragma once
-// A tiny ordered JSON object writer for the tools' --report files (no dependency needed).
+// The JSON --report of every tool, one schema (nlohmann-json, insertion-ordered keys):
+//   "tool", "input", "outputs": [paths], tool-specific figures (angles as "phi_min_deg",
+//   "phi_mean_deg"; times in seconds with the suffix "_s"), "stages": [{"name", "seconds"}],
+//   "checks": [{"name", "passed", "detail"}] ("passed": null for a check that could not run),
+//   "all_checks_passed", "exit_status" (see cli_common.h).
+#include <nlohmann/json.hpp>
+
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "heatcvt/validate.h"
+
 namespace heatcvt::cli {
 
-/// Ordered JSON object. Values are stored pre-serialised; nested objects via add_object.
-class JsonObject {
- public:
-  JsonObject& add(const std::string& key, double value);
-  JsonObject& add(const std::string& key, long value);
-  JsonObject& add(const std::string& key, int value) { return add(key, static_cast<long>(value)); }
-  JsonObject& add(const std::string& key, bool value);
-  JsonObject& add(const std::string& key, const std::string& value);
-  JsonObject& add(const std::string& key, const char* value) { return add(key, std::string(value)); }
-  JsonObject& add(const std::string& key, const std::vector<double>& values);
-  JsonObject& add_object(const std::string& key, const JsonObject& object);
-  JsonObject& add_array(const std::string& key, const std::vector<JsonObject>& objects);
-  std::string str(int indent = 0) const;
+using Json = nlohmann::ordered_json;
 
- private:
-  std::vector<std::pair<std::string, std::string>> entries_;
+/// One entry of the "checks" list.
+struct CheckRecord {
+  std::string name;
+  bool passed = false;
+  bool ran = true;
+  std::string detail;
 };
 
-/// Writes the object to `path` atomically (temporary file + rename).
-void write_json(const std::string& path, const JsonObject& object);
+/// The checks of a ValidationReport as records.
+std::vector<CheckRecord> check_records(const ValidationReport& report);
+
+/// True when every record ran and passed.
+bool all_passed(const std::vector<CheckRecord>& checks);
+
+/// Prints the checks on stdout, one "  PASS|FAIL|SKIP name: detail" line each.
+void print_checks(const std::vector<CheckRecord>& checks);
+
+/// A report with the common head: "tool", "input", "outputs" (non-empty paths only).
+Json report_head(const std::string& tool, const std::string& input, const std::vector<std::string>& outputs);
+
+/// Adds the common tail: "stages", "checks", "all_checks_passed", "exit_status"; returns the status.
+int finish_report(Json& report, const std::vector<std::pair<std::string, double>>& stages,
+                  const std::vector<CheckRecord>& checks);
+
+/// Writes the report to `path` (with the run's other outputs, see atomic_file.h).
+void write_json(const std::string& path, const Json& report);
 
 }  // namespace heatcvt::cli

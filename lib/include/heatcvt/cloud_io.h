@@ -2,9 +2,11 @@
 /// \file cloud_io.h
 /// Reading point clouds (PCD via PCL, PLY, XYZ/PWN/TXT text) into double-precision arrays, the
 /// standard clean-up (non-finite points dropped, exact duplicates merged) and the recentring /
-/// rescaling frame used before any computation on clouds with large coordinate offsets.
+/// rescaling of normalize.h applied to a cloud.
 #include <Eigen/Core>
 #include <string>
+
+#include "heatcvt/normalize.h"
 
 namespace heatcvt {
 
@@ -47,26 +49,13 @@ PointCloud read_cloud(const std::string& path, CloudReadReport* report = nullptr
 /// Counts are added to `report` if given.
 void clean_cloud(PointCloud& cloud, CloudReadReport* report = nullptr);
 
-/// Similarity frame: normalized = (original − centre) / scale.
-struct CloudFrame {
-  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-  double scale = 1.0;
-};
+/// The frame of normalize.h under the name used by the cloud functions.
+using CloudFrame = NormalizationFrame;
 
-/// Frame of a point set: centre = bounding-box centre, scale = bounding-box diagonal
-/// (1 if the diagonal is zero). \throw InvalidInputError for an empty or non-finite point set.
-CloudFrame bounding_box_frame(const Eigen::MatrixX3d& P);
-
-/// Moves the cloud into its bounding_box_frame (bbox centred at the origin, bbox diagonal 1) and
-/// returns the frame. Normals are unchanged (a similarity with positive scale keeps directions).
+/// Moves the cloud into its bounding_box_frame (normalize.h: bbox centred at the origin, bbox
+/// diagonal 1) and returns the frame. Normals are unchanged (a similarity with positive scale
+/// keeps directions).
 CloudFrame normalize_cloud(PointCloud& cloud);
-
-/// Applies the frame: V ← (V − centre) / scale (rows are points).
-void apply_frame(Eigen::MatrixX3d& V, const CloudFrame& frame);
-
-/// Undoes the frame: V ← V · scale + centre, e.g. to write a mesh built on a normalized cloud
-/// back in the original coordinates.
-void restore_frame(Eigen::MatrixX3d& V, const CloudFrame& frame);
 
 /// Writes "x y z [nx ny nz]" lines (normals if present), atomically. \throw IOError on failure.
 void write_cloud_xyz(const std::string& path, const PointCloud& cloud);

@@ -4,6 +4,7 @@
 /// was wrong (and, for files, which file); tools print it as one line and exit non-zero.
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace heatcvt {
 
@@ -30,5 +31,16 @@ class SolverError : public Error {
  public:
   using Error::Error;
 };
+
+/// Quotes an excerpt of file content for an error message: at most `max_chars` characters of
+/// `text` between single quotes ("..." appended when cut), every byte that is not printable ASCII
+/// (control bytes such as ESC, BEL, CR, form feed, and non-ASCII bytes) replaced by '?', so that
+/// a message stays one harmless line whatever the file holds.
+std::string quote_excerpt(std::string_view text, std::size_t max_chars = 40);
+
+/// The message of an error raised inside the library, with a leading internal function or class
+/// name ("some_function: ...", "SomeClass: ...") removed, for a tool to
+/// prefix with the file or option at fault.
+std::string without_function_prefix(const std::string& message);
 
 }  // namespace heatcvt

@@ -29,6 +29,7 @@
 #include "heatcvt/localized_solve.h"
 #include "heatcvt/mesh.h"
 #include "heatcvt/mesh_io.h"
+#include "heatcvt/normalize.h"
 #include "heatcvt/normals.h"
 #include "heatcvt/parallel.h"
 #include "heatcvt/point_laplacian.h"
@@ -139,9 +140,11 @@ struct RemeshResult {
 /// \throw InvalidInputError (invalid mesh, sites < 1 or > #V, iterations < 0, λ < 0, ...); SolverError.
 inline RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options = {}) {
   validate_mesh(mesh.V, mesh.F, "mesh");
+  TriangleMesh unit = mesh;  // computed in the unit bounding-box frame (normalize.h), as meshcvt does
+  const NormalizationFrame frame = normalize_positions(unit.V);
   Eigen::VectorXd metric;
-  const Laplacian laplacian = options.anisotropy > 0 ? anisotropic_laplacian(mesh.V, mesh.F, options.anisotropy, &metric)
-                                                     : cotan_laplacian(mesh.V, mesh.F);
+  const Laplacian laplacian = options.anisotropy > 0 ? anisotropic_laplacian(unit.V, unit.F, options.anisotropy, &metric)
+                                                     : cotan_laplacian(unit.V, unit.F);
   CvtOptions cvt;
   cvt.sites = options.sites;
   cvt.iterations = options.iterations;
@@ -150,12 +153,13 @@ inline RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& op
   cvt.threads = options.threads;
   cvt.time_coefficient = options.time_coefficient;
   cvt.initialization = options.initialization;
-  CvtResult r = centroidal_voronoi(mesh.V, mesh.F, laplacian, cvt, {}, {}, metric);
+  CvtResult r = centroidal_voronoi(unit.V, unit.F, laplacian, cvt, {}, {}, metric);
   RemeshResult out;
   out.mesh.V = r.dual.V;
   out.mesh.F = r.dual.F;
   out.sites = std::move(r.sites);
   out.quality = triangle_quality(out.mesh.V, out.mesh.F);
+  restore_frame(out.mesh.V, frame);
   out.iterations = static_cast<int>(r.iterations.size());
   out.converged = r.converged;
   return out;

@@ -23,7 +23,9 @@ struct ReconstructionOptions {
   /// surface Lloyd (`surface_lloyd_iterations`). With `surface_lloyd_iterations` = 0 use the
   /// paper's 30 from its random start.
   int iterations = 6;
-  int neighbors = 30;             ///< k of the kNN neighbourhoods of the point Laplacian. Default 30.
+  int neighbors = 30;             ///< k of the kNN neighbourhoods of the point Laplacian, in [min_neighbors, max_neighbors]. Default 30.
+  static constexpr int min_neighbors = 6;    ///< smallest valid `neighbors`
+  static constexpr int max_neighbors = 200;  ///< largest valid `neighbors`
   double anisotropy = 0.0;        ///< λ of the anisotropic lift (paper §7.1); 0 = isotropic. Default 0.
   bool denoise = false;           ///< statistical outlier removal before everything. Default false.
   double voxel_size = 0.0;        ///< voxel-grid downsampling (input units); 0 = off. Default 0.

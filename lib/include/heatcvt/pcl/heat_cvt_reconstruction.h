@@ -78,7 +78,8 @@ class HeatCVTReconstruction : public pcl::SurfaceReconstruction<PointT> {
   void setMaximumIterations(int iterations) { options_.iterations = iterations; }
   int getMaximumIterations() const { return options_.iterations; }
 
-  /// k of the kNN neighbourhoods of the point Laplacian (≥ 3). Default 30.
+  /// k of the kNN neighbourhoods of the point Laplacian, in [ReconstructionOptions::min_neighbors,
+  /// ReconstructionOptions::max_neighbors] = [6, 200]. Default 30.
   void setKSearch(int k) { options_.neighbors = k; }
   int getKSearch() const { return options_.neighbors; }
 
