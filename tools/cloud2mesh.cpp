@@ -15,7 +15,10 @@
 #include "heatcvt/errors.h"
 #include "heatcvt/heat_solver.h"
 #include "heatcvt/mesh_io.h"
+#include "heatcvt/mesh.h"
 #include "heatcvt/reconstruct.h"
+#include "heatcvt/scan_merge.h"
+#include "heatcvt/vertex_attributes.h"
 #include "report_json.h"
 
 using namespace heatcvt;
@@ -25,9 +28,18 @@ int main(int argc, char** argv) {
   CLI::App app{"cloud2mesh: reconstruct a triangle mesh from a point cloud with a heat-diffusion centroidal "
                "Voronoi tessellation of the points (Herholz et al. 2017, §7-8)"};
   ReconstructionOptions opt;
-  std::string cloud_path, out_path, report_path;
-  bool quiet = false;
-  app.add_option("CLOUD", cloud_path, "input point cloud (.pcd .ply .xyz .pwn .txt)")->required();
+  std::vector<std::string> cloud_paths, pose_paths;
+  std::string conf_path, out_path, report_path;
+  bool quiet = false, write_normals = false;
+  app.add_option("CLOUD", cloud_paths,
+                 "input point clouds (.pcd .ply .xyz .pwn .txt); several scans are merged into one surface");
+  app.add_option("--pose", pose_paths,
+                 "rigid pose of an input (a 4x4 or 3x4 matrix file), applied before merging; give one per CLOUD, "
+                 "in the same order");
+  app.add_option("--conf", conf_path,
+                 "Stanford-style .conf listing scans with a translation and quaternion each (bmesh FILE tx ty tz qx qy "
+                 "qz qw), instead of CLOUD");
+  app.add_flag("--normals", write_normals, "write per-vertex normals (outward on closed pieces) with the mesh");
   app.add_option("-o,--output", out_path, "output mesh (.ply .obj .off .stl)")->required();
   app.add_option("-n,--sites", opt.sites, "number of output vertices (CVT sites)")->capture_default_str();
   app.add_option("-i,--iterations", opt.iterations, "maximum heat Lloyd iterations (after the surface Lloyd; use 30 with --surface-lloyd 0)")->capture_default_str();
@@ -98,13 +110,24 @@ int main(int argc, char** argv) {
     if (opt.denoise_neighbors < 2) throw InvalidInputError("--denoise-k must be >= 2");
     if (!(opt.denoise_stddev > 0) || !std::isfinite(opt.denoise_stddev))
       throw InvalidInputError("--denoise-stddev must be a positive number");
+    if (cloud_paths.empty() == conf_path.empty())
+      throw InvalidInputError("give the input clouds either as CLOUD arguments or with --conf, not both");
+    if (!pose_paths.empty() && pose_paths.size() != cloud_paths.size())
+      throw InvalidInputError("--pose: " + std::to_string(pose_paths.size()) + " poses for " +
+                              std::to_string(cloud_paths.size()) + " clouds (give one per CLOUD, in order)");
     cli::check_output_path(out_path, {".ply", ".obj", ".off", ".stl"});
     cli::check_output_path(report_path, {".json"});
     cli::check_distinct_outputs({{"-o", out_path}, {"--report", report_path}});
 
     const auto t_start = Clock::now();
+    std::vector<ScanInput> scans;
+    if (!conf_path.empty()) scans = read_stanford_conf(conf_path);
+    for (size_t i = 0; i < cloud_paths.size(); ++i)
+      scans.push_back({cloud_paths[i], pose_paths.empty() ? Eigen::Isometry3d::Identity() : read_pose_file(pose_paths[i])});
+    const std::string cloud_path = scans.size() == 1 ? scans[0].path : !conf_path.empty() ? conf_path
+                                   : scans[0].path + " (+" + std::to_string(scans.size() - 1) + " more)";
     CloudReadReport rr;
-    PointCloud cloud = read_cloud(cloud_path, &rr);
+    PointCloud cloud = read_scans(scans, &rr);
     if (!quiet)
       std::cerr << "read " << cloud_path << ": " << rr.points_in_file << " points, " << rr.non_finite_dropped
                 << " non-finite dropped, " << rr.duplicates_merged << " duplicates merged" << std::endl;
@@ -142,9 +165,19 @@ int main(int argc, char** argv) {
     for (double t : res.iteration_seconds) iteration_sum += t;
     const double per_iter = res.iterations > 0 ? iteration_sum / res.iterations : 0.0;
 
+    // Colour (when every input point has one) and, on request, normals of the output vertices.
+    MeshAttributes attributes;
+    if (cloud.has_colours()) {
+      ColourTransferOptions copt;
+      copt.threads = opt.threads;
+      attributes.vertex_color = transfer_colours(cloud.P, cloud.C, res.mesh.V, copt);
+    }
+    if (write_normals) attributes.vertex_normal = vertex_normals(res.mesh.V, res.mesh.F);
     const std::vector<cli::CheckRecord> checks = cli::check_records(val);
     cli::Json j = cli::report_head("cloud2mesh", cloud_path, {out_path, report_path});
     j["format"] = rr.format;
+    j["inputs"] = static_cast<long>(scans.size());
+    j["colours"] = cloud.has_colours();
     j["points_in_file"] = rr.points_in_file;
     j["non_finite_dropped"] = rr.non_finite_dropped;
     j["duplicates_merged"] = rr.duplicates_merged;
@@ -179,7 +212,7 @@ int main(int argc, char** argv) {
     const int status = cli::finish_report(j, res.stage_seconds, checks);
     {
       OutputTransaction outputs;  // all outputs or none (atomic_file.h)
-      write_mesh(out_path, res.mesh.V, res.mesh.F);
+      write_mesh(out_path, res.mesh.V, res.mesh.F, attributes);
       if (!report_path.empty()) cli::write_json(report_path, j);
       outputs.commit();
     }

@@ -271,6 +271,45 @@ size_t field_size(uint8_t datatype) {
   }
 }
 
+// Colour of a PCD point: PCL packs it into one 4-byte field, `rgb` (declared float) or `rgba`
+// (declared uint32), whose bytes read as a little-endian uint32 are 0xAARRGGBB; some writers use
+// separate r, g, b fields (uint8 in 0..255, or float in [0,1]).
+void read_pcd_colours(const std::string& path, const pcl::PCLPointCloud2& blob, PointCloud& cloud) {
+  const pcl::PCLPointField* packed = nullptr;
+  const pcl::PCLPointField* sep[3] = {nullptr, nullptr, nullptr};
+  for (const auto& field : blob.fields) {
+    if (field.name == "rgb" || field.name == "rgba") packed = &field;
+    if (field.name == "r") sep[0] = &field;
+    if (field.name == "g") sep[1] = &field;
+    if (field.name == "b") sep[2] = &field;
+  }
+  const Eigen::Index n = cloud.P.rows();
+  if (packed) {
+    if (field_size(packed->datatype) != 4 || packed->offset + 4 > blob.point_step)
+      fail(path, "PCD field '" + packed->name + "' is not a packed 4-byte colour");
+    cloud.C.resize(n, 3);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const uint8_t* p = blob.data.data() + static_cast<size_t>(i) * blob.point_step + packed->offset;
+      // Bytes in file order: blue, green, red, alpha.
+      for (int k = 0; k < 3; ++k) cloud.C(i, k) = p[2 - k] / 255.0;
+    }
+    return;
+  }
+  if (!(sep[0] && sep[1] && sep[2])) return;
+  for (const auto* field : sep)
+    if (field_size(field->datatype) == 0 || field->offset + field_size(field->datatype) > blob.point_step)
+      fail(path, "PCD colour field '" + field->name + "' has an unsupported type or lies outside the point");
+  const bool integer = sep[0]->datatype != pcl::PCLPointField::FLOAT32 && sep[0]->datatype != pcl::PCLPointField::FLOAT64;
+  cloud.C.resize(n, 3);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const uint8_t* base = blob.data.data() + static_cast<size_t>(i) * blob.point_step;
+    for (int k = 0; k < 3; ++k) {
+      const double v = load_field(base + sep[k]->offset, sep[k]->datatype);
+      cloud.C(i, k) = std::clamp(integer ? v / 255.0 : v, 0.0, 1.0);
+    }
+  }
+}
+
 PointCloud read_pcd(const std::string& path, CloudReadReport& rep) {
   std::string kind;
   long long header_points = 0;
@@ -314,6 +353,7 @@ PointCloud read_pcd(const std::string& path, CloudReadReport& rep) {
     if (normals)
       for (int k = 0; k < 3; ++k) cloud.N(i, k) = load_field(base + f[k + 3]->offset, f[k + 3]->datatype);
   }
+  read_pcd_colours(path, blob, cloud);
   rep.format = "pcd-" + kind;
   rep.points_in_file = n;
   rep.width = static_cast<int>(blob.width);
@@ -330,6 +370,7 @@ PointCloud read_ply_cloud(const std::string& path, CloudReadReport& rep) {
   PointCloud cloud;
   cloud.P = std::move(soup.V);
   cloud.N = std::move(soup.N);
+  cloud.C = std::move(soup.C);
   rep.format = mrep.format;
   rep.points_in_file = cloud.P.rows();
   rep.width = static_cast<int>(cloud.P.rows());
@@ -345,6 +386,8 @@ void clean_cloud(PointCloud& cloud, CloudReadReport* report) {
   const Eigen::Index n = cloud.P.rows();
   const bool normals = cloud.N.rows() == n && n > 0;
   if (!normals) cloud.N.resize(0, 3);
+  const bool colours = cloud.C.rows() == n && n > 0;
+  if (!colours) cloud.C.resize(0, 3);
   std::vector<Eigen::Index> order;
   order.reserve(static_cast<size_t>(n));
   for (Eigen::Index i = 0; i < n; ++i) {
@@ -372,10 +415,12 @@ void clean_cloud(PointCloud& cloud, CloudReadReport* report) {
     if (m != i) {
       cloud.P.row(m) = cloud.P.row(i);
       if (normals) cloud.N.row(m) = cloud.N.row(i);
+      if (colours) cloud.C.row(m) = cloud.C.row(i);
     }
     ++m;
   }
   cloud.P.conservativeResize(m, 3);
+  if (colours) cloud.C.conservativeResize(m, 3);
   if (normals) {
     cloud.N.conservativeResize(m, 3);
     bool any_nonzero = false;
@@ -392,6 +437,7 @@ void clean_cloud(PointCloud& cloud, CloudReadReport* report) {
     }
   }
   rep.has_normals = cloud.has_normals();
+  rep.has_colours = cloud.has_colours();
 }
 
 PointCloud read_cloud(const std::string& path, CloudReadReport* report) {

@@ -447,19 +447,27 @@ PolygonSoup read_ply(const std::string& path, const std::string& data, MeshReadR
                      std::to_string(body.remaining()) + " bytes of data remain");
     const bool is_vertex = el.name == "vertex" && !have_vertices;
     const bool is_face = el.name == "face";
-    int col[6] = {-1, -1, -1, -1, -1, -1};
+    int col[9] = {-1, -1, -1, -1, -1, -1, -1, -1, -1};
+    double colour_scale = 1.0;  // uchar/ushort colours are scaled to [0,1]; float colours are taken as [0,1]
     int face_list = -1;
     if (is_vertex) {
-      static const char* names[6] = {"x", "y", "z", "nx", "ny", "nz"};
-      for (int k = 0; k < 6; ++k)
+      // Colour properties: "red green blue" (most writers) or "diffuse_red ..." (Stanford, MeshLab).
+      static const char* names[9] = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue"};
+      for (int k = 0; k < 9; ++k)
         for (size_t j = 0; j < el.props.size(); ++j)
-          if (!el.props[j].is_list && el.props[j].name == names[k]) col[k] = static_cast<int>(j);
+          if (!el.props[j].is_list && (el.props[j].name == names[k] || (k >= 6 && el.props[j].name == std::string("diffuse_") + names[k])))
+            col[k] = static_cast<int>(j);
       if (col[0] < 0 || col[1] < 0 || col[2] < 0) fail(path, "PLY vertex element lacks x, y or z");
       have_vertices = true;
       soup.V.resize(el.count, 3);
       if (col[3] >= 0 && col[4] >= 0 && col[5] >= 0) {
         soup.N.resize(el.count, 3);
         rep.has_vertex_normals = true;
+      }
+      if (col[6] >= 0 && col[7] >= 0 && col[8] >= 0) {
+        soup.C.resize(el.count, 3);
+        const PlyType t = el.props[static_cast<size_t>(col[6])].type;
+        if (ply_is_integer(t)) colour_scale = ply_size(t) >= 2 ? 1.0 / 65535.0 : 1.0 / 255.0;
       }
     }
     if (is_face) {
@@ -478,10 +486,11 @@ PolygonSoup read_ply(const std::string& path, const std::string& data, MeshReadR
         if (!p.is_list) {
           const double v = body.read(p.type, context);
           if (is_vertex) {
-            for (int k = 0; k < 6; ++k)
+            for (int k = 0; k < 9; ++k)
               if (col[k] == static_cast<int>(j)) {
                 if (k < 3) soup.V(i, k) = v;
-                else if (soup.N.rows() > 0) soup.N(i, k - 3) = v;
+                else if (k < 6 && soup.N.rows() > 0) soup.N(i, k - 3) = v;
+                else if (k >= 6 && soup.C.rows() > 0) soup.C(i, k - 6) = std::clamp(v * colour_scale, 0.0, 1.0);
               }
           }
           continue;
@@ -777,6 +786,9 @@ void check_mesh_for_writing(const std::string& path, const Eigen::MatrixX3d& V, 
   if (attr.vertex_color.rows() > 0 && attr.vertex_color.rows() != V.rows())
     throw InvalidInputError(path + ": cannot write, vertex_color has " + std::to_string(attr.vertex_color.rows()) +
                             " rows for " + std::to_string(V.rows()) + " vertices");
+  if (attr.vertex_normal.rows() > 0 && attr.vertex_normal.rows() != V.rows())
+    throw InvalidInputError(path + ": cannot write, vertex_normal has " + std::to_string(attr.vertex_normal.rows()) +
+                            " rows for " + std::to_string(V.rows()) + " vertices");
 }
 
 unsigned char to_byte(double c) {
@@ -804,11 +816,13 @@ class BinaryWriter {
 void write_ply(std::ostream& out, const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const MeshAttributes& attr,
                PlyEncoding enc) {
   const bool vcol = attr.vertex_color.rows() > 0, fcol = attr.face_color.rows() > 0, fint = attr.face_int.size() > 0;
+  const bool vnor = attr.vertex_normal.rows() > 0;
   std::ostringstream h;
   h << "ply\nformat "
     << (enc == PlyEncoding::ascii ? "ascii" : enc == PlyEncoding::binary_big_endian ? "binary_big_endian" : "binary_little_endian")
     << " 1.0\ncomment written by heatcvt\nelement vertex " << V.rows()
     << "\nproperty double x\nproperty double y\nproperty double z\n";
+  if (vnor) h << "property float nx\nproperty float ny\nproperty float nz\n";
   if (vcol) h << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
   h << "element face " << F.rows() << "\nproperty list uchar int vertex_indices\n";
   if (fint) h << "property int " << attr.face_int_name << "\n";
@@ -819,6 +833,8 @@ void write_ply(std::ostream& out, const Eigen::MatrixX3d& V, const Eigen::Matrix
     std::string s;
     for (Eigen::Index i = 0; i < V.rows(); ++i) {
       s = format_double(V(i, 0)) + " " + format_double(V(i, 1)) + " " + format_double(V(i, 2));
+      if (vnor)
+        for (int k = 0; k < 3; ++k) s += " " + format_double(static_cast<float>(attr.vertex_normal(i, k)));
       if (vcol)
         for (int k = 0; k < 3; ++k) s += " " + std::to_string(to_byte(attr.vertex_color(i, k)));
       out << s << '\n';
@@ -835,6 +851,8 @@ void write_ply(std::ostream& out, const Eigen::MatrixX3d& V, const Eigen::Matrix
   BinaryWriter w(enc == PlyEncoding::binary_big_endian);
   for (Eigen::Index i = 0; i < V.rows(); ++i) {
     for (int k = 0; k < 3; ++k) w.put<double>(V(i, k));
+    if (vnor)
+      for (int k = 0; k < 3; ++k) w.put<float>(static_cast<float>(attr.vertex_normal(i, k)));
     if (vcol)
       for (int k = 0; k < 3; ++k) w.put<unsigned char>(to_byte(attr.vertex_color(i, k)));
   }
@@ -856,7 +874,18 @@ void write_obj(std::ostream& out, const Eigen::MatrixX3d& V, const Eigen::Matrix
       for (int k = 0; k < 3; ++k) out << ' ' << format_double(attr.vertex_color(i, k));
     out << '\n';
   }
-  for (Eigen::Index f = 0; f < F.rows(); ++f) out << "f " << F(f, 0) + 1 << ' ' << F(f, 1) + 1 << ' ' << F(f, 2) + 1 << '\n';
+  const bool vnor = attr.vertex_normal.rows() > 0;
+  for (Eigen::Index i = 0; vnor && i < V.rows(); ++i)
+    out << "vn " << format_double(attr.vertex_normal(i, 0)) << ' ' << format_double(attr.vertex_normal(i, 1)) << ' '
+        << format_double(attr.vertex_normal(i, 2)) << '\n';
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    out << 'f';
+    for (int k = 0; k < 3; ++k) {
+      out << ' ' << F(f, k) + 1;
+      if (vnor) out << "//" << F(f, k) + 1;
+    }
+    out << '\n';
+  }
 }
 
 void write_off(std::ostream& out, const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const MeshAttributes& attr) {

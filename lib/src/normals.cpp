@@ -29,29 +29,31 @@ void check_cloud(const Eigen::MatrixX3d& P, int k, int min_k, const char* what) 
                               " has a NaN or infinite coordinate");
 }
 
-}  // namespace
-
-Eigen::MatrixXi k_nearest_neighbors(const Eigen::MatrixX3d& P, int k, int threads) {
-  check_cloud(P, k, 1, "k_nearest_neighbors");
-  const int n = static_cast<int>(P.rows());
-  // Exact kNN with FLANN: a single kd-tree (KDTreeSingleIndex) searched exhaustively
-  // (checks = unlimited, eps = 0), squared L2 distances in double precision. Each row of results
-  // is then re-sorted by (distance, index) so that ties are ordered deterministically.
-  std::vector<double> data(static_cast<size_t>(n) * 3);
-  for (int i = 0; i < n; ++i)
+std::vector<double> row_major(const Eigen::MatrixX3d& P) {
+  std::vector<double> data(static_cast<size_t>(P.rows()) * 3);
+  for (Eigen::Index i = 0; i < P.rows(); ++i)
     for (int c = 0; c < 3; ++c) data[static_cast<size_t>(i) * 3 + c] = P(i, c);
-  const flann::Matrix<double> dataset(data.data(), n, 3);
+  return data;
+}
+
+// Exact kNN with FLANN: a single kd-tree (KDTreeSingleIndex) over P searched exhaustively
+// (checks = unlimited, eps = 0), squared L2 distances in double precision, for every row of Q.
+// Each row of results is then re-sorted by (distance, index) so that ties are ordered
+// deterministically. Returns #Q × kq indices, row-major.
+std::vector<int> flann_knn(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& Q, int kq, int threads) {
+  std::vector<double> data = row_major(P), query = row_major(Q);
+  const flann::Matrix<double> dataset(data.data(), static_cast<size_t>(P.rows()), 3);
+  const flann::Matrix<double> queries(query.data(), static_cast<size_t>(Q.rows()), 3);
   flann::Index<flann::L2<double>> index(dataset, flann::KDTreeSingleIndexParams(10));
   index.buildIndex();
-
-  const int kq = std::min(k + 1, n);  // the point itself is (normally) its own nearest neighbour
+  const int n = static_cast<int>(Q.rows());
   std::vector<int> idx(static_cast<size_t>(n) * kq, -1);
   std::vector<double> dist(static_cast<size_t>(n) * kq, 0.0);
-  flann::Matrix<int> indices(idx.data(), n, kq);
-  flann::Matrix<double> dists(dist.data(), n, kq);
+  flann::Matrix<int> indices(idx.data(), static_cast<size_t>(n), static_cast<size_t>(kq));
+  flann::Matrix<double> dists(dist.data(), static_cast<size_t>(n), static_cast<size_t>(kq));
   flann::SearchParams params(flann::FLANN_CHECKS_UNLIMITED, 0.0f, true);
   params.cores = resolve_threads(threads);
-  index.knnSearch(dataset, indices, dists, static_cast<size_t>(kq), params);
+  if (n > 0) index.knnSearch(queries, indices, dists, static_cast<size_t>(kq), params);
 #pragma omp parallel for num_threads(resolve_threads(threads)) schedule(static)
   for (int i = 0; i < n; ++i) {
     std::vector<std::pair<double, int>> row(kq);
@@ -60,6 +62,29 @@ Eigen::MatrixXi k_nearest_neighbors(const Eigen::MatrixX3d& P, int k, int thread
     std::sort(row.begin(), row.end());
     for (int q = 0; q < kq; ++q) idx[static_cast<size_t>(i) * kq + q] = row[q].second;
   }
+  return idx;
+}
+
+}  // namespace
+
+Eigen::MatrixXi nearest_neighbors_of(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& Q, int k, int threads) {
+  if (k < 1) throw InvalidInputError("nearest_neighbors_of: k = " + std::to_string(k) + " is too small (need k >= 1)");
+  if (P.rows() < k)
+    throw InvalidInputError("nearest_neighbors_of: the cloud has " + std::to_string(P.rows()) + " points, need at least k = " +
+                            std::to_string(k));
+  if (!P.allFinite() || !Q.allFinite()) throw InvalidInputError("nearest_neighbors_of: a NaN or infinite coordinate");
+  const std::vector<int> idx = flann_knn(P, Q, k, threads);
+  Eigen::MatrixXi out(Q.rows(), k);
+  for (Eigen::Index i = 0; i < Q.rows(); ++i)
+    for (int c = 0; c < k; ++c) out(i, c) = idx[static_cast<size_t>(i) * k + c];
+  return out;
+}
+
+Eigen::MatrixXi k_nearest_neighbors(const Eigen::MatrixX3d& P, int k, int threads) {
+  check_cloud(P, k, 1, "k_nearest_neighbors");
+  const int n = static_cast<int>(P.rows());
+  const int kq = std::min(k + 1, n);  // the point itself is (normally) its own nearest neighbour
+  const std::vector<int> idx = flann_knn(P, P, kq, threads);
 
   Eigen::MatrixXi out(n, k);
   for (int i = 0; i < n; ++i) {

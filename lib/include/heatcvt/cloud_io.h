@@ -13,10 +13,13 @@ namespace heatcvt {
 /// A point cloud as plain arrays.
 ///   P  #P by 3 positions
 ///   N  #P by 3 normals (not necessarily unit, not necessarily oriented) or empty (0 rows) if none
+///   C  #P by 3 colours (red, green, blue in [0,1]) or empty (0 rows) if none
 struct PointCloud {
   Eigen::MatrixX3d P;
   Eigen::MatrixX3d N;
+  Eigen::MatrixX3d C;
   bool has_normals() const { return N.rows() > 0 && N.rows() == P.rows(); }
+  bool has_colours() const { return C.rows() > 0 && C.rows() == P.rows(); }
 };
 
 /// What read_cloud saw and changed.
@@ -27,6 +30,7 @@ struct CloudReadReport {
   long non_finite_dropped = 0;  ///< points with a NaN/inf coordinate
   long duplicates_merged = 0;   ///< exact positional duplicates removed (first occurrence kept)
   bool has_normals = false;     ///< the result has normals
+  bool has_colours = false;     ///< the result has colours
   bool normals_all_zero = false;///< the file had normal columns but every normal was zero: treated as absent
   long invalid_normals_zeroed = 0; ///< finite points whose normal was NaN/inf; normal set to zero
 };

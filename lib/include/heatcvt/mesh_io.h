@@ -50,6 +50,7 @@ TriangleMesh read_mesh(const std::string& path, MeshReadReport* report = nullptr
 struct PolygonSoup {
   Eigen::MatrixX3d V;
   Eigen::MatrixX3d N;                  ///< #V by 3 or empty
+  Eigen::MatrixX3d C;                  ///< #V by 3 vertex colours in [0,1] or empty (PLY red/green/blue)
   std::vector<int> polygon_start{0};
   std::vector<int> polygon_index;
   int num_polygons() const { return static_cast<int>(polygon_start.size()) - 1; }
@@ -65,6 +66,7 @@ struct MeshAttributes {
   std::string face_int_name = "cell";  ///< PLY property name of face_int
   Eigen::MatrixX3d face_color;         ///< #F by 3 in [0,1] or empty; PLY (uchar red/green/blue), OFF
   Eigen::MatrixX3d vertex_color;       ///< #V by 3 in [0,1] or empty; PLY (uchar), OBJ ("v x y z r g b")
+  Eigen::MatrixX3d vertex_normal;      ///< #V by 3 or empty; PLY (float nx ny nz), OBJ ("vn" lines, "f a//a ...")
 };
 
 /// Encoding used by write_mesh for .ply files.

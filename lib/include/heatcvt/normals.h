@@ -15,6 +15,12 @@ namespace heatcvt {
 /// \throw InvalidInputError if k < 1, #P < k + 1, or a coordinate is NaN / infinite.
 Eigen::MatrixXi k_nearest_neighbors(const Eigen::MatrixX3d& P, int k, int threads = 0);
 
+/// Exact k nearest points of P to every query point (kd-tree over P, exact search in double
+/// precision). Returns #Q by k indices into P, row i sorted by increasing distance to Q.row(i)
+/// (ties by index); a point of P equal to Q.row(i) is included. Deterministic for any `threads`.
+/// \throw InvalidInputError if k < 1, #P < k, or a coordinate of P or Q is NaN / infinite.
+Eigen::MatrixXi nearest_neighbors_of(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& Q, int k, int threads = 0);
+
 /// PCA normal of every point: the eigenvector of the smallest eigenvalue of the covariance of
 /// the point and its k nearest neighbours. Unit length, UNORIENTED (sign arbitrary but
 /// deterministic).

@@ -1,0 +1,346 @@
+// Scans as users bring them: per-point colour read from every cloud format and carried to the
+// reconstructed vertices, normals written on request, and several scans with rigid poses merged
+// into one surface (scan_merge.h, vertex_attributes.h, cloud2mesh).
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "heatcvt/cloud_io.h"
+#include "heatcvt/errors.h"
+#include "heatcvt/mesh_io.h"
+#include "heatcvt/normals.h"
+#include "heatcvt/reconstruct.h"
+#include "heatcvt/scan_merge.h"
+#include "heatcvt/vertex_attributes.h"
+#include "test_support.h"
+
+using namespace heatcvt;
+
+namespace {
+
+void write_binary(const std::string& path, const std::string& header, const std::string& body) {
+  std::ofstream out(path, std::ios::binary);
+  out << header;
+  out.write(body.data(), static_cast<std::streamsize>(body.size()));
+}
+
+template <typename T>
+void put(std::string& s, T v) {
+  s.append(reinterpret_cast<const char*>(&v), sizeof(T));
+}
+
+// Mean over vertices and channels of |colour(v) − colour of the input point nearest to v|.
+double mean_colour_error(const PointCloud& cloud, const Eigen::MatrixX3d& V, const Eigen::MatrixX3d& colours) {
+  const Eigen::MatrixXi nn = nearest_neighbors_of(cloud.P, V, 1);
+  double sum = 0;
+  for (Eigen::Index v = 0; v < V.rows(); ++v) sum += (colours.row(v) - cloud.C.row(nn(v, 0))).cwiseAbs().sum();
+  return sum / (3.0 * static_cast<double>(V.rows()));
+}
+
+Eigen::Isometry3d some_pose(double angle, const Eigen::Vector3d& axis, const Eigen::Vector3d& t) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
+  pose.translation() = t;
+  return pose;
+}
+
+std::string matrix_text(const Eigen::Isometry3d& pose) {
+  std::ostringstream s;
+  s.precision(17);
+  const Eigen::Matrix4d m = pose.matrix();
+  for (int r = 0; r < 4; ++r) s << m(r, 0) << ' ' << m(r, 1) << ' ' << m(r, 2) << ' ' << m(r, 3) << '\n';
+  return s.str();
+}
+
+}  // namespace
+
+TEST(CloudColour, PcdPackedRgbFloatAndRgbaUint) {
+  test::ScratchDir dir("colour_pcd");
+  // PCL packs colour into 4 bytes read as a little-endian uint32 0xAARRGGBB.
+  const std::uint32_t packed[2] = {0xff102030u, 0x00ff8000u};
+  for (const char* type : {"F", "U"}) {
+    std::string body;
+    for (int i = 0; i < 2; ++i) {
+      put<float>(body, static_cast<float>(i));
+      put<float>(body, 0.f);
+      put<float>(body, 0.f);
+      put<std::uint32_t>(body, packed[i]);
+    }
+    const std::string field = std::string(type) == "F" ? "rgb" : "rgba";
+    const std::string header = "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z " + field + "\nSIZE 4 4 4 4\nTYPE F F F " + type +
+                               "\nCOUNT 1 1 1 1\nWIDTH 2\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA binary\n";
+    const std::string path = dir.path(field + ".pcd");
+    write_binary(path, header, body);
+    CloudReadReport rep;
+    const PointCloud c = read_cloud(path, &rep);
+    ASSERT_TRUE(c.has_colours()) << field;
+    EXPECT_TRUE(rep.has_colours);
+    EXPECT_NEAR(c.C(0, 0), 0x10 / 255.0, 1e-12);
+    EXPECT_NEAR(c.C(0, 1), 0x20 / 255.0, 1e-12);
+    EXPECT_NEAR(c.C(0, 2), 0x30 / 255.0, 1e-12);
+    EXPECT_NEAR(c.C(1, 0), 1.0, 1e-12);
+    EXPECT_NEAR(c.C(1, 1), 0x80 / 255.0, 1e-12);
+    EXPECT_NEAR(c.C(1, 2), 0.0, 1e-12);
+  }
+}
+
+TEST(CloudColour, PcdSeparateFieldsAndPlyUcharAndFloatColours) {
+  test::ScratchDir dir("colour_sep");
+  const std::string pcd = dir.path("sep.pcd");
+  test::write_text_file(pcd, "VERSION 0.7\nFIELDS x y z r g b\nSIZE 4 4 4 1 1 1\nTYPE F F F U U U\nCOUNT 1 1 1 1 1 1\n"
+                             "WIDTH 2\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n0 0 0 255 0 51\n1 0 0 0 102 0\n");
+  const PointCloud a = read_cloud(pcd);
+  ASSERT_TRUE(a.has_colours());
+  EXPECT_NEAR(a.C(0, 0), 1.0, 1e-12);
+  EXPECT_NEAR(a.C(0, 2), 0.2, 1e-12);
+  EXPECT_NEAR(a.C(1, 1), 0.4, 1e-12);
+
+  const std::string ply_u = dir.path("u.ply"), ply_f = dir.path("f.ply");
+  test::write_text_file(ply_u, "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+                               "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n"
+                               "0 0 0 255 0 51\n1 0 0 0 102 0\n");
+  test::write_text_file(ply_f, "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+                               "property float diffuse_red\nproperty float diffuse_green\nproperty float diffuse_blue\nend_header\n"
+                               "0 0 0 1 0 0.2\n1 0 0 0 0.4 0\n");
+  for (const std::string& path : {ply_u, ply_f}) {
+    const PointCloud c = read_cloud(path);
+    ASSERT_TRUE(c.has_colours()) << path;
+    EXPECT_NEAR(c.C(0, 0), 1.0, 1e-6) << path;
+    EXPECT_NEAR(c.C(0, 2), 0.2, 1e-6) << path;
+    EXPECT_NEAR(c.C(1, 1), 0.4, 1e-6) << path;
+  }
+  // A cloud without colour columns has none.
+  const std::string plain = dir.path("plain.xyz");
+  test::write_text_file(plain, "0 0 0\n1 0 0\n0 1 0\n");
+  EXPECT_FALSE(read_cloud(plain).has_colours());
+}
+
+TEST(CloudColour, CleanUpKeepsColoursWithTheirPoints) {
+  PointCloud c;
+  c.P.resize(4, 3);
+  c.P << 0, 0, 0, NAN, 0, 0, 1, 0, 0, 0, 0, 0;  // a NaN point and a duplicate of point 0
+  c.C.resize(4, 3);
+  c.C << 0.1, 0.1, 0.1, 0.2, 0.2, 0.2, 0.3, 0.3, 0.3, 0.4, 0.4, 0.4;
+  clean_cloud(c);
+  ASSERT_EQ(c.P.rows(), 2);
+  ASSERT_TRUE(c.has_colours());
+  EXPECT_DOUBLE_EQ(c.C(0, 0), 0.1);  // the first occurrence of the duplicate is kept
+  EXPECT_DOUBLE_EQ(c.P(1, 0), 1.0);
+  EXPECT_DOUBLE_EQ(c.C(1, 0), 0.3);
+}
+
+TEST(TransferColours, ExactAtPointsConstantStaysConstantAndScaleInvariant) {
+  // A 20×20 grid coloured red on x < 0.5 and blue elsewhere.
+  const int n = 20;
+  Eigen::MatrixX3d P(n * n, 3), C(n * n, 3);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      P.row(i * n + j) << i / (n - 1.0), j / (n - 1.0), 0;
+      C.row(i * n + j) = i < n / 2 ? Eigen::RowVector3d(1, 0, 0) : Eigen::RowVector3d(0, 0, 1);
+    }
+  const Eigen::MatrixX3d at_points = transfer_colours(P, C, P);
+  EXPECT_EQ((at_points - C).cwiseAbs().maxCoeff(), 0.0);
+  // Query points well inside each half, off the grid nodes.
+  Eigen::MatrixX3d Q(2, 3);
+  Q << 0.13, 0.41, 0.01, 0.87, 0.52, -0.01;
+  const Eigen::MatrixX3d q = transfer_colours(P, C, Q);
+  EXPECT_NEAR(q(0, 0), 1.0, 1e-12);
+  EXPECT_NEAR(q(1, 2), 1.0, 1e-12);
+  // Constant colour is reproduced anywhere; the result does not depend on the unit of length.
+  const Eigen::MatrixX3d grey = Eigen::MatrixX3d::Constant(n * n, 3, 0.5);
+  EXPECT_LT((transfer_colours(P, grey, Q).array() - 0.5).abs().maxCoeff(), 1e-12);
+  for (double s : {1e-9, 1e6}) {
+    const Eigen::MatrixX3d qs = transfer_colours(P * s, C, Q * s);
+    EXPECT_LT((qs - q).cwiseAbs().maxCoeff(), 1e-9) << s;
+  }
+  // Same result for any thread count.
+  ColourTransferOptions one;
+  one.threads = 1;
+  ColourTransferOptions two = one;
+  two.threads = 2;
+  EXPECT_EQ(transfer_colours(P, C, Q, one), transfer_colours(P, C, Q, two));
+}
+
+// The acceptance rule of the real-scans issue: a reconstruction of a coloured scan has per-vertex
+// colour within 10/255 (mean absolute difference) of the nearest input point's colour.
+TEST(TransferColours, RealColouredScansWithinTenLevelsOfTheNearestPoint) {
+  for (const char* name : {"clouds/pcl_milk_color.pcd", "clouds/open3d_cloud_bin_0.pcd", "clouds/open3d_cloud_bin_1.pcd"}) {
+    const PointCloud cloud = read_cloud(test::data_path(name));
+    ASSERT_TRUE(cloud.has_colours()) << name;
+    ReconstructionOptions opt;
+    opt.sites = 1000;
+    const ReconstructionResult r = reconstruct_surface(cloud.P, opt);
+    ASSERT_GT(r.mesh.V.rows(), 500) << name;
+    const Eigen::MatrixX3d colours = transfer_colours(cloud.P, cloud.C, r.mesh.V);
+    const double error = mean_colour_error(cloud, r.mesh.V, colours);
+    std::printf("%s: mean colour difference %.2f / 255\n", name, 255.0 * error);
+    EXPECT_LT(error, 10.0 / 255.0) << name;
+  }
+}
+
+TEST(MeshAttributesIo, NormalsAndColoursRoundTripThroughPlyAndObj) {
+  test::ScratchDir dir("attr_io");
+  const TriangleMesh m = test::icosphere(1);
+  MeshAttributes attr;
+  attr.vertex_normal = m.V.rowwise().normalized();
+  attr.vertex_color = (m.V.array() * 0.5 + 0.5).matrix();
+  for (const char* ext : {".ply", ".obj"}) {
+    const std::string path = dir.path(std::string("m") + ext);
+    write_mesh(path, m.V, m.F, attr);
+    MeshReadReport rep;
+    const PolygonSoup soup = read_polygon_soup(path, &rep);
+    EXPECT_TRUE(rep.has_vertex_normals) << ext;
+    ASSERT_EQ(soup.V.rows(), m.V.rows());
+    if (std::string(ext) == ".ply") {
+      ASSERT_EQ(soup.C.rows(), m.V.rows());
+      EXPECT_LT((soup.C - attr.vertex_color).cwiseAbs().maxCoeff(), 0.5 / 255.0 + 1e-12);
+      ASSERT_EQ(soup.N.rows(), m.V.rows());
+      EXPECT_LT((soup.N - attr.vertex_normal).cwiseAbs().maxCoeff(), 1e-6);
+    }
+  }
+  const std::string obj = [&] {
+    std::ifstream in(dir.path("m.obj"));
+    return std::string((std::istreambuf_iterator<char>(in)), {});
+  }();
+  EXPECT_NE(obj.find("\nvn "), std::string::npos);
+  EXPECT_NE(obj.find("//"), std::string::npos);
+}
+
+TEST(ScanPoses, PoseFilesRigidOnly) {
+  test::ScratchDir dir("poses");
+  const Eigen::Isometry3d pose = some_pose(0.7, {1, 2, 3}, {0.5, -1, 2});
+  const std::string good = dir.path("good.txt");
+  test::write_text_file(good, "# a pose\n" + matrix_text(pose));
+  EXPECT_LT((read_pose_file(good).matrix() - pose.matrix()).cwiseAbs().maxCoeff(), 1e-12);
+  // 3×4 form.
+  std::string three_by_four = matrix_text(pose);
+  three_by_four.resize(three_by_four.rfind('\n', three_by_four.size() - 2) + 1);
+  const std::string top = dir.path("top.txt");
+  test::write_text_file(top, three_by_four);
+  EXPECT_LT((read_pose_file(top).matrix() - pose.matrix()).cwiseAbs().maxCoeff(), 1e-12);
+
+  Eigen::Isometry3d scaled = pose;
+  scaled.linear() *= 2.0;
+  const std::string bad_scale = dir.path("scale.txt"), bad_nan = dir.path("nan.txt"), bad_row = dir.path("row.txt"),
+                    bad_count = dir.path("count.txt"), bad_word = dir.path("word.txt");
+  test::write_text_file(bad_scale, matrix_text(scaled));
+  test::write_text_file(bad_nan, "nan 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+  test::write_text_file(bad_row, "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 1 1\n");
+  test::write_text_file(bad_count, "1 0 0 0\n0 1 0 0\n");
+  test::write_text_file(bad_word, "1 0 0 0\n0 1 0 0\n0 0 one 0\n0 0 0 1\n");
+  EXPECT_THROW(read_pose_file(bad_scale), InvalidInputError);
+  EXPECT_THROW(read_pose_file(bad_nan), Error);
+  EXPECT_THROW(read_pose_file(bad_row), InvalidInputError);
+  EXPECT_THROW(read_pose_file(bad_count), IOError);
+  EXPECT_THROW(read_pose_file(bad_word), IOError);
+  EXPECT_THROW(read_pose_file(dir.path("missing.txt")), IOError);
+}
+
+TEST(ScanPoses, StanfordConfRelativeFilesAndErrors) {
+  test::ScratchDir dir("conf");
+  test::write_text_file(dir.path("a.xyz"), "0 0 0\n1 0 0\n0 1 0\n");
+  // 90° about z: quaternion (x, y, z, w) = (0, 0, sin 45°, cos 45°).
+  const double h = std::sqrt(0.5);
+  test::write_text_file(dir.path("scans.conf"),
+                        "camera 0 0 0 0 0 0 1\nbmesh a.xyz 1 2 3 0 0 " + std::to_string(h) + " " + std::to_string(h) + "\n");
+  const std::vector<ScanInput> scans = read_stanford_conf(dir.path("scans.conf"));
+  ASSERT_EQ(scans.size(), 1u);
+  const PointCloud c = read_scans(scans);
+  ASSERT_EQ(c.P.rows(), 3);
+  EXPECT_NEAR(c.P(1, 0), 1.0, 1e-5);  // (1,0,0) rotated to (0,1,0), then moved by (1,2,3)
+  EXPECT_NEAR(c.P(1, 1), 3.0, 1e-5);
+  EXPECT_NEAR(c.P(1, 2), 3.0, 1e-5);
+
+  test::write_text_file(dir.path("missing.conf"), "bmesh nowhere.ply 0 0 0 0 0 0 1\n");
+  test::write_text_file(dir.path("quat.conf"), "bmesh a.xyz 0 0 0 0 0 0 2\n");
+  test::write_text_file(dir.path("empty.conf"), "camera 0 0 0 0 0 0 1\n");
+  EXPECT_THROW(read_stanford_conf(dir.path("missing.conf")), IOError);
+  EXPECT_THROW(read_stanford_conf(dir.path("quat.conf")), InvalidInputError);
+  EXPECT_THROW(read_stanford_conf(dir.path("empty.conf")), IOError);
+}
+
+// A torus scanned from two sides, each view stored in its own frame with its pose, merged:
+// the reconstruction is as close to the torus as the one from the single complete cloud.
+TEST(ScanPoses, TwoViewsInTheirOwnFramesRecoverTheSingleViewResult) {
+  test::ScratchDir dir("views");
+  const TriangleMesh torus = test::torus(96, 48);
+  const Eigen::MatrixX3d all = sample_surface(torus.V, torus.F, 20000, 5);
+  const Eigen::Isometry3d poses[2] = {some_pose(0.9, {0, 1, 1}, {3, -2, 1}), some_pose(-2.1, {1, 0, 0.3}, {-40, 7, 0.5})};
+  std::vector<ScanInput> scans;
+  for (int v = 0; v < 2; ++v) {
+    // View v sees x > -0.3 (v = 0) or x < 0.3 (v = 1): an overlap band around x = 0.
+    std::vector<Eigen::Index> rows;
+    for (Eigen::Index i = 0; i < all.rows(); ++i)
+      if (v == 0 ? all(i, 0) > -0.3 : all(i, 0) < 0.3) rows.push_back(i);
+    Eigen::MatrixX3d local(static_cast<Eigen::Index>(rows.size()), 3);
+    for (size_t i = 0; i < rows.size(); ++i)
+      local.row(static_cast<Eigen::Index>(i)) = (poses[v].inverse() * Eigen::Vector3d(all.row(rows[i]))).transpose();
+    const std::string file = dir.path("view" + std::to_string(v) + ".xyz"), pose = dir.path("pose" + std::to_string(v) + ".txt");
+    write_points_xyz(file, local);
+    test::write_text_file(pose, matrix_text(poses[v]));
+    scans.push_back({file, read_pose_file(pose)});
+  }
+  const PointCloud merged = read_scans(scans);
+  EXPECT_GT(merged.P.rows(), all.rows());  // the overlap band is there twice
+  ReconstructionOptions opt;
+  opt.sites = 800;
+  const ReconstructionResult single = reconstruct_surface(all, opt);
+  const ReconstructionResult both = reconstruct_surface(merged.P, opt);
+  const double d_single = surface_distance(single.mesh.V, single.mesh.F, torus.V, torus.F).mean;
+  const double d_both = surface_distance(both.mesh.V, both.mesh.F, torus.V, torus.F).mean;
+  std::printf("mean distance to the torus: two views %.3g, single cloud %.3g\n", d_both, d_single);
+  EXPECT_LT(d_both, 1.1 * d_single);
+  EXPECT_EQ(both.validation.genus, 1);
+  EXPECT_EQ(both.validation.boundary_loops, 0);
+  EXPECT_EQ(both.validation.components, 1);
+}
+
+TEST(Cloud2MeshScans, ColourWrittenOnlyWhenTheInputHasItAndNormalsOnRequest) {
+  test::ScratchDir dir("c2m_colour");
+  const std::string out_c = dir.path("c.ply"), out_p = dir.path("p.ply");
+  const auto rc = test::run_tool("cloud2mesh", test::data_path("clouds/pcl_milk_color.pcd") + " -n 500 -q --normals -o " + out_c);
+  ASSERT_EQ(rc.exit_code, 0) << rc.err;
+  const auto rp = test::run_tool("cloud2mesh", test::data_path("clouds/pcl_milk.pcd") + " -n 500 -q -o " + out_p);
+  ASSERT_EQ(rp.exit_code, 0) << rp.err;
+  MeshReadReport rep_c, rep_p;
+  const PolygonSoup c = read_polygon_soup(out_c, &rep_c), p = read_polygon_soup(out_p, &rep_p);
+  EXPECT_EQ(c.C.rows(), c.V.rows());
+  EXPECT_TRUE(rep_c.has_vertex_normals);
+  EXPECT_EQ(p.C.rows(), 0);
+  EXPECT_FALSE(rep_p.has_vertex_normals);
+}
+
+TEST(Cloud2MeshScans, BadPosesGiveOneErrorLineAndNoOutput) {
+  test::ScratchDir dir("c2m_pose");
+  const std::string cloud = test::data_path("clouds/pcl_milk.pcd");
+  test::write_text_file(dir.path("scale.txt"), "2 0 0 0\n0 2 0 0\n0 0 2 0\n0 0 0 1\n");
+  test::write_text_file(dir.path("nan.txt"), "1 0 0 nan\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+  test::write_text_file(dir.path("missing.conf"), "bmesh not_there.pcd 0 0 0 0 0 0 1\n");
+  const struct {
+    std::string args, needle;
+  } cases[] = {
+      {cloud + " --pose " + dir.path("scale.txt"), "scale.txt"},
+      {cloud + " --pose " + dir.path("nan.txt"), "nan.txt"},
+      {"--conf " + dir.path("missing.conf"), "not_there.pcd"},
+      {cloud + " " + cloud + " --pose " + dir.path("scale.txt"), "--pose"},
+  };
+  for (const auto& c : cases) {
+    const std::string out = dir.path("out.ply");
+    const auto r = test::run_tool("cloud2mesh", c.args + " -n 300 -q -o " + out);
+    EXPECT_NE(r.exit_code, 0) << c.args;
+    EXPECT_EQ(r.err.rfind("cloud2mesh: error: ", 0), 0u) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find(c.needle), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(out)) << c.args;
+  }
+}
