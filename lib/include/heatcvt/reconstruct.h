@@ -11,10 +11,40 @@
 #include <utility>
 #include <vector>
 
+#include "heatcvt/cvt.h"
 #include "heatcvt/mesh.h"
+#include "heatcvt/mesher/projector.h"
+#include "heatcvt/mesher/surface_mesher.h"
 #include "heatcvt/validate.h"
 
 namespace heatcvt {
+
+/// Tuning of the cloud side of reconstruct_surface() (before the surface mesher), each with its
+/// documented default.
+struct CloudPreparationOptions {
+  /// k of the MST normal orientation (orient_normals_mst(); at most `neighbors`). Default 10.
+  int orientation_neighbors = 10;
+  /// Fit neighbourhoods hold about this many cells' worth of points (about one output edge
+  /// length across, so that noise averages out instead of passing into the vertex positions),
+  /// at least `neighbors` points. Default 4.
+  double fit_cells = 4.0;
+  int max_fit_neighbors = 100;  ///< upper bound of the fit neighbourhood size. Default 100.
+  /// A CVT point is smoothed onto the fitted surface only when that moves it by at most its mean
+  /// distance to this many nearest CVT points (tips of thin parts, where the fit is not to be
+  /// trusted, keep their points). Default 6.
+  int smoothing_spacing_neighbors = 6;
+  /// The point Laplacian leaves out neighbours of opposite oriented normal (the other side of a
+  /// thin part) only when at most this fraction of the CVT points has one: where they are common
+  /// the orientation itself is unreliable (cluttered scenes). Default 0.08.
+  double max_crossing_fraction = 0.08;
+  /// The voxel subset of the CVT points is used only when it has fewer than this fraction of the
+  /// points. Default 0.8.
+  double max_subset_fraction = 0.8;
+  /// Graph-Lloyd iterations of the farthest-point start (`farthest_point_start`). Default 20.
+  int graph_lloyd_iterations = 20;
+  /// Over-relaxation ω of the surface Lloyd start (CvtOptions::surface_lloyd_relaxation). Default 1.5.
+  double surface_lloyd_relaxation = 1.5;
+};
 
 /// Options of reconstruct_surface(). Every default is the one `cloud2mesh --help` shows.
 struct ReconstructionOptions {
@@ -76,7 +106,23 @@ struct ReconstructionOptions {
   /// positions) before the Laplacian is built: noise of the scan does not reach the Laplacian,
   /// whose factor and localized solves are then as cheap as on a clean scan. Default true.
   bool smooth_cvt_points = true;
+  /// Tuning of normals, fit neighbourhoods, CVT points and the CVT start.
+  CloudPreparationOptions cloud;
+  /// Tuning of the cloud's local surface fit (the projector of the mesher). Its fit_neighbors,
+  /// walk_neighbors and threads are set by reconstruct_surface() from `neighbors`, `sites`,
+  /// cloud.fit_cells / max_fit_neighbors and `threads`.
+  CloudFitOptions fit;
+  /// Tuning of the post-CVT stages (mesher/surface_mesher.h). mesher.holes.max_hole_edges,
+  /// mesher.polish.relaxation_iterations and mesher.threads are set by reconstruct_surface() from
+  /// `max_hole_edges`, `relaxation_iterations` and `threads` above.
+  SurfaceMesherOptions mesher;
 };
+
+/// The CVT options reconstruct_surface() runs centroidal_voronoi() with (sites, iterations,
+/// seed, threads, time coefficient, start: the surface Lloyd on farthest-point sites, or the
+/// graph-Lloyd farthest-point start, or the paper's random start; over-relaxation, tolerance;
+/// no dual). Benchmarks of the CVT on clouds call it to run the same CVT.
+CvtOptions reconstruction_cvt_options(const ReconstructionOptions& options);
 
 /// Progress of a reconstruction: a stage name and a fraction in [0, 1].
 using ReconstructionCallback = std::function<void(const std::string& stage, double fraction)>;
