@@ -25,6 +25,8 @@
 #include "heatcvt/mesher/valence3_removal.h"
 #include "heatcvt/mesher/working_mesh.h"
 #include "heatcvt/normals.h"
+#include "heatcvt/reconstruct.h"
+#include "heatcvt/errors.h"
 #include "heatcvt/shapes.h"
 #include "heatcvt/validate.h"
 #include "test_support.h"
@@ -651,6 +653,63 @@ TEST(Compaction, DropsUnusedVerticesInOrder) {
   ASSERT_EQ(m.V.rows(), 3);
   EXPECT_EQ(m.V.row(1), V.row(2));
   EXPECT_EQ(m.F.row(0), Eigen::RowVector3i(0, 1, 2));
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(ReconstructionDriver, CvtOptionsFollowTheStartOptions) {
+  ReconstructionOptions o;
+  o.sites = 1234;
+  o.iterations = 7;
+  o.seed = 5;
+  o.lloyd_relaxation = 1.3;
+  const CvtOptions surface = reconstruction_cvt_options(o);  // default: the surface-Lloyd start
+  EXPECT_EQ(surface.sites, 1234);
+  EXPECT_EQ(surface.iterations, 7);
+  EXPECT_EQ(surface.seed, 5u);
+  EXPECT_EQ(surface.relaxation, 1.3);
+  EXPECT_FALSE(surface.build_dual);
+  EXPECT_EQ(surface.initialization, CvtInitialization::farthest_point);
+  EXPECT_EQ(surface.surface_lloyd_iterations, o.surface_lloyd_iterations);
+  EXPECT_EQ(surface.surface_lloyd_relaxation, o.cloud.surface_lloyd_relaxation);
+  EXPECT_EQ(surface.voronoi_rings, surface.voronoi_rings_settled);
+  o.surface_lloyd_iterations = 0;
+  o.farthest_point_start = true;
+  const CvtOptions graph = reconstruction_cvt_options(o);
+  EXPECT_EQ(graph.initialization, CvtInitialization::farthest_point);
+  EXPECT_EQ(graph.graph_lloyd_iterations, o.cloud.graph_lloyd_iterations);
+  EXPECT_EQ(graph.surface_lloyd_iterations, 0);
+  o.farthest_point_start = false;
+  EXPECT_EQ(reconstruction_cvt_options(o).initialization, CvtInitialization::random);
+}
+
+TEST(ReconstructionDriver, RejectsBadStageOptions) {
+  const TriangleMesh s = test::icosphere(3);
+  ReconstructionOptions o;
+  o.sites = 50;
+  auto rejects = [&](const ReconstructionOptions& bad, const std::string& needle) {
+    try {
+      reconstruct_surface(s.V, bad);
+      ADD_FAILURE() << "no exception for " << needle;
+    } catch (const InvalidInputError& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  ReconstructionOptions a = o;
+  a.cloud.fit_cells = 0;
+  rejects(a, "fit_cells");
+  ReconstructionOptions b = o;
+  b.cloud.max_crossing_fraction = 1.5;
+  rejects(b, "max_crossing_fraction");
+  ReconstructionOptions c = o;
+  c.cloud.surface_lloyd_relaxation = 2;
+  rejects(c, "surface_lloyd_relaxation");
+  ReconstructionOptions d = o;
+  d.fit.min_quadratic_points = 3;
+  rejects(d, "min_quadratic_points");
+  ReconstructionOptions e = o;
+  e.mesher.min_piece_faces = -1;
+  rejects(e, "min_piece_faces");
 }
 
 }  // namespace

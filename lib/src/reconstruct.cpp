@@ -56,6 +56,19 @@ void check_options(const ReconstructionOptions& o) {
     bad("cvt_points_per_site must be 0 (every point) or at least 3");
   if (o.denoise && o.denoise_neighbors < 2) bad("denoise_neighbors must be >= 2");
   if (o.denoise && (!(o.denoise_stddev > 0) || !std::isfinite(o.denoise_stddev))) bad("denoise_stddev must be > 0");
+  const CloudPreparationOptions& c = o.cloud;
+  if (c.orientation_neighbors < 1 || c.max_fit_neighbors < 1 || c.smoothing_spacing_neighbors < 1)
+    bad("cloud.orientation_neighbors, max_fit_neighbors and smoothing_spacing_neighbors must be >= 1");
+  if (!(c.fit_cells > 0) || !std::isfinite(c.fit_cells)) bad("cloud.fit_cells must be a finite number > 0");
+  if (!(c.orientation_offset_penalty >= 0) || !std::isfinite(c.orientation_offset_penalty))
+    bad("cloud.orientation_offset_penalty must be a finite number >= 0");
+  if (!(c.max_crossing_fraction >= 0 && c.max_crossing_fraction <= 1)) bad("cloud.max_crossing_fraction must be in [0, 1]");
+  if (!(c.max_subset_fraction > 0 && c.max_subset_fraction <= 1)) bad("cloud.max_subset_fraction must be in (0, 1]");
+  if (c.graph_lloyd_iterations < 0) bad("cloud.graph_lloyd_iterations must be >= 0");
+  if (!(c.surface_lloyd_relaxation >= 1 && c.surface_lloyd_relaxation < 2)) bad("cloud.surface_lloyd_relaxation must be in [1, 2)");
+  if (o.fit.min_oriented_points < 1 || o.fit.min_quadratic_points < 6 || o.fit.max_walk_steps < 0)
+    bad("fit.min_oriented_points must be >= 1, fit.min_quadratic_points >= 6 (six coefficients), fit.max_walk_steps >= 0");
+  if (o.mesher.min_piece_faces < 0) bad("mesher.min_piece_faces must be >= 0");
 }
 
 pcl::PointCloud<pcl::PointXYZ>::Ptr to_pcl(const Eigen::MatrixX3d& P) {
@@ -391,7 +404,8 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   const auto t0 = Clock::now();
   cp.knn = k_nearest_neighbors(cp.PC, options.neighbors, options.threads);
   cp.NC = estimate_normals(cp.PC, cp.knn, options.threads);
-  orient_normals_mst(cp.PC, cp.NC, std::min(options.cloud.orientation_neighbors, options.neighbors), options.threads, 1.0);
+  orient_normals_mst(cp.PC, cp.NC, std::min(options.cloud.orientation_neighbors, options.neighbors), options.threads,
+                     options.cloud.orientation_offset_penalty);
   stage.done("normals");
   CloudFitOptions fopt = options.fit;
   fopt.fit_neighbors = std::min(std::max(options.neighbors, static_cast<int>(std::lround(options.cloud.fit_cells * n / options.sites))),

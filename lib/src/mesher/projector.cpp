@@ -91,8 +91,8 @@ void CloudSurfaceProjector::fit_and_project(const std::vector<int>& nb, const Ei
       z = coef[0];
       gx = coef[1];
       gy = coef[2];
-      // A height farther than two bandwidths from the query's own is an extrapolation: rejected.
-      ok = std::isfinite(z) && std::isfinite(gx) && std::isfinite(gy) && std::abs(z - xl.dot(n)) < 2 * radius;
+      ok = std::isfinite(z) && std::isfinite(gx) && std::isfinite(gy) &&
+           std::abs(z - xl.dot(n)) < options_.max_height_bandwidths * radius;
     }
   }
   if (!ok) {  // plane fallback: weighted mean height

@@ -39,6 +39,9 @@ struct CloudFitOptions {
   int min_quadratic_points = 10;
   /// Rank threshold of the column-pivoting QR of the quadratic fit. Default 1e-8.
   double rank_threshold = 1e-8;
+  /// The quadratic's height at the query is rejected (weighted mean height instead) when it is
+  /// farther than this many bandwidths from the query's own height: an extrapolation. Default 2.
+  double max_height_bandwidths = 2.0;
   /// Steps of project()'s greedy walk on the kNN graph. Default 1000.
   int max_walk_steps = 1000;
   int threads = 0;  ///< for the kNN search; 0 = all cores. Default 0.
