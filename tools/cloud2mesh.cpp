@@ -2,12 +2,14 @@
 // point Laplacian -> centroidal Voronoi tessellation -> dual triangulation on a fitted surface.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <climits>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include "cli_common.h"
 #include "heatcvt/atomic_file.h"
@@ -20,6 +22,28 @@
 
 using namespace heatcvt;
 using Clock = std::chrono::steady_clock;
+
+namespace {
+// Far outliers: when a few points set the bounding box (the normalisation frame) and the bulk of
+// the cloud spans less than `ratio` of it, the bulk collapses below the precision of the
+// normalised coordinates. The bulk is the 1 %-99 % quantile box per axis.
+void reject_far_outliers(const Eigen::MatrixX3d& P, const std::string& path) {
+  constexpr double ratio = 1e-6;
+  const Eigen::Index n = P.rows();
+  if (n < 100) return;
+  Eigen::RowVector3d bulk, full;
+  for (int k = 0; k < 3; ++k) {
+    std::vector<double> v(P.col(k).data(), P.col(k).data() + n);
+    std::sort(v.begin(), v.end());
+    bulk[k] = 0.5 * v[n - 1 - n / 100] - 0.5 * v[n / 100];
+    full[k] = 0.5 * v[n - 1] - 0.5 * v[0];
+  }
+  if (bulk.norm() < ratio * full.norm())
+    throw InvalidInputError(path + ": a few points lie far outside the others (98 % of the points span " +
+                            format_double(2 * bulk.norm()) + ", the bounding box " + format_double(2 * full.norm()) +
+                            "): remove these outliers");
+}
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"cloud2mesh: reconstruct a triangle mesh from a point cloud with a heat-diffusion centroidal "
@@ -108,6 +132,7 @@ int main(int argc, char** argv) {
     if (!quiet)
       std::cerr << "read " << cloud_path << ": " << rr.points_in_file << " points, " << rr.non_finite_dropped
                 << " non-finite dropped, " << rr.duplicates_merged << " duplicates merged" << std::endl;
+    reject_far_outliers(cloud.P, cloud_path);
     if (opt.sites > cloud.P.rows())
       throw InvalidInputError(cloud_path + ": -n " + std::to_string(opt.sites) + " exceeds the " +
                               std::to_string(cloud.P.rows()) + " usable points");
