@@ -43,6 +43,81 @@ void reject_far_outliers(const Eigen::MatrixX3d& P, const std::string& path) {
                             format_double(2 * bulk.norm()) + ", the bounding box " + format_double(2 * full.norm()) +
                             "): remove these outliers");
 }
+
+// Option checks before any work (the library checks them again), naming the option at fault.
+void check_options(const ReconstructionOptions& opt) {
+  if (opt.sites < 4) throw InvalidInputError("-n must be at least 4 (got " + std::to_string(opt.sites) + ")");
+  if (opt.iterations < 0) throw InvalidInputError("-i must be >= 0");
+  if (opt.neighbors < ReconstructionOptions::min_neighbors || opt.neighbors > ReconstructionOptions::max_neighbors)
+    throw InvalidInputError("-k must be between " + std::to_string(ReconstructionOptions::min_neighbors) + " and " +
+                            std::to_string(ReconstructionOptions::max_neighbors));
+  if (!(opt.anisotropy >= 0) || !std::isfinite(opt.anisotropy)) throw InvalidInputError("--anisotropy must be >= 0");
+  if (!(opt.voxel_size >= 0) || !std::isfinite(opt.voxel_size)) throw InvalidInputError("--voxel must be >= 0");
+  if (!(opt.time_coefficient > 0) || !std::isfinite(opt.time_coefficient))
+    throw InvalidInputError("--t-coef must be a positive number");
+  if (opt.threads < 0) throw InvalidInputError("--threads must be >= 0");
+  if (opt.surface_lloyd_iterations < 0) throw InvalidInputError("--surface-lloyd must be >= 0");
+  if (!(opt.cvt_points_per_site == 0 || opt.cvt_points_per_site >= 3) || !std::isfinite(opt.cvt_points_per_site))
+    throw InvalidInputError("--points-per-site must be 0 (every point) or at least 3");
+  if (!(opt.lloyd_relaxation >= 1 && opt.lloyd_relaxation < 2)) throw InvalidInputError("--relaxation must be in [1, 2)");
+  if (!(opt.lloyd_tolerance >= 0) || !std::isfinite(opt.lloyd_tolerance)) throw InvalidInputError("--tolerance must be >= 0");
+  if (opt.max_hole_edges < 0) throw InvalidInputError("--max-hole-edges must be >= 0");
+  if (opt.relaxation_iterations < 0) throw InvalidInputError("--polish-iterations must be >= 0");
+  if (opt.denoise_neighbors < 2) throw InvalidInputError("--denoise-k must be >= 2");
+  if (!(opt.denoise_stddev > 0) || !std::isfinite(opt.denoise_stddev))
+    throw InvalidInputError("--denoise-stddev must be a positive number");
+}
+
+// PCL's voxel grid indexes at most 2^31 voxels; a smaller voxel would silently do nothing.
+void reject_tiny_voxel(const Eigen::MatrixX3d& P, double voxel_size, const std::string& path) {
+  if (voxel_size <= 0) return;
+  const Eigen::RowVector3d extent = P.colwise().maxCoeff() - P.colwise().minCoeff();
+  double voxels = 1;
+  for (int k = 0; k < 3; ++k) voxels *= std::floor(extent[k] / voxel_size) + 1;
+  if (!(voxels <= static_cast<double>(INT_MAX)))
+    throw InvalidInputError("--voxel " + format_double(voxel_size) + ": too small for " + path +
+                            " (more than 2^31 voxels over its bounding box)");
+}
+
+// The --report of a run (schema: report_json.h), without the common tail.
+cli::Json make_report(const std::string& cloud_path, const std::vector<std::string>& outputs, const CloudReadReport& rr,
+                      const ReconstructionOptions& opt, const ReconstructionResult& res, double per_iter, double total_s) {
+  cli::Json j = cli::report_head("cloud2mesh", cloud_path, outputs);
+  j["format"] = rr.format;
+  j["points_in_file"] = rr.points_in_file;
+  j["non_finite_dropped"] = rr.non_finite_dropped;
+  j["duplicates_merged"] = rr.duplicates_merged;
+  j["points_denoised"] = res.points_denoised;
+  j["points_voxel_removed"] = res.points_voxel_removed;
+  j["points_used"] = res.points_used;
+  j["sites"] = opt.sites;
+  j["iterations"] = res.iterations;
+  j["neighbors"] = opt.neighbors;
+  j["anisotropy"] = opt.anisotropy;
+  j["seed"] = opt.seed;
+  j["vertices"] = res.mesh.V.rows();
+  j["faces"] = res.mesh.F.rows();
+  j["unused_sites"] = res.unused_sites;
+  j["candidate_triangles"] = res.candidate_triangles;
+  j["rejected_triangles"] = res.rejected_triangles;
+  j["removed_triangles"] = res.removed_triangles;
+  j["holes_filled"] = res.holes_filled;
+  j["boundary_loops"] = res.validation.boundary_loops;
+  j["components"] = res.validation.components;
+  j["genus"] = res.validation.genus;
+  j["self_intersecting_pairs"] = res.validation.self_intersecting_pairs;
+  j["phi_min_deg"] = res.min_angle_deg;
+  j["phi_mean_deg"] = res.mean_min_angle_deg;
+  j["blas"] = heatcvt::blas_description();
+  j["laplacian_s"] = res.laplacian_seconds;
+  j["factor_s"] = res.factor_seconds;
+  j["cvt_s"] = res.cvt_seconds;
+  j["per_iteration_s"] = per_iter;
+  j["reconstruct_s"] = res.total_seconds;
+  j["total_s"] = total_s;
+  return j;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -101,27 +176,7 @@ int main(int argc, char** argv) {
   if (const int status = cli::parse_command_line(app, argc, argv, "cloud2mesh"); status >= 0) return status;
 
   return cli::run_tool("cloud2mesh", [&]() -> int {
-    // Option checks before any work (reconstruct_surface checks them again).
-    if (opt.sites < 4) throw InvalidInputError("-n must be at least 4 (got " + std::to_string(opt.sites) + ")");
-    if (opt.iterations < 0) throw InvalidInputError("-i must be >= 0");
-    if (opt.neighbors < ReconstructionOptions::min_neighbors || opt.neighbors > ReconstructionOptions::max_neighbors)
-      throw InvalidInputError("-k must be between " + std::to_string(ReconstructionOptions::min_neighbors) + " and " +
-                              std::to_string(ReconstructionOptions::max_neighbors));
-    if (!(opt.anisotropy >= 0) || !std::isfinite(opt.anisotropy)) throw InvalidInputError("--anisotropy must be >= 0");
-    if (!(opt.voxel_size >= 0) || !std::isfinite(opt.voxel_size)) throw InvalidInputError("--voxel must be >= 0");
-    if (!(opt.time_coefficient > 0) || !std::isfinite(opt.time_coefficient))
-      throw InvalidInputError("--t-coef must be a positive number");
-    if (opt.threads < 0) throw InvalidInputError("--threads must be >= 0");
-    if (opt.surface_lloyd_iterations < 0) throw InvalidInputError("--surface-lloyd must be >= 0");
-    if (!(opt.cvt_points_per_site == 0 || opt.cvt_points_per_site >= 3) || !std::isfinite(opt.cvt_points_per_site))
-      throw InvalidInputError("--points-per-site must be 0 (every point) or at least 3");
-    if (!(opt.lloyd_relaxation >= 1 && opt.lloyd_relaxation < 2)) throw InvalidInputError("--relaxation must be in [1, 2)");
-    if (!(opt.lloyd_tolerance >= 0) || !std::isfinite(opt.lloyd_tolerance)) throw InvalidInputError("--tolerance must be >= 0");
-    if (opt.max_hole_edges < 0) throw InvalidInputError("--max-hole-edges must be >= 0");
-    if (opt.relaxation_iterations < 0) throw InvalidInputError("--polish-iterations must be >= 0");
-    if (opt.denoise_neighbors < 2) throw InvalidInputError("--denoise-k must be >= 2");
-    if (!(opt.denoise_stddev > 0) || !std::isfinite(opt.denoise_stddev))
-      throw InvalidInputError("--denoise-stddev must be a positive number");
+    check_options(opt);
     cli::check_output_path(out_path, {".ply", ".obj", ".off", ".stl"});
     cli::check_output_path(report_path, {".json"});
     cli::check_distinct_outputs({{"-o", out_path}, {"--report", report_path}});
@@ -136,15 +191,7 @@ int main(int argc, char** argv) {
     if (opt.sites > cloud.P.rows())
       throw InvalidInputError(cloud_path + ": -n " + std::to_string(opt.sites) + " exceeds the " +
                               std::to_string(cloud.P.rows()) + " usable points");
-    if (opt.voxel_size > 0) {
-      // PCL's voxel grid indexes at most 2^31 voxels; a smaller voxel would silently do nothing.
-      const Eigen::RowVector3d extent = cloud.P.colwise().maxCoeff() - cloud.P.colwise().minCoeff();
-      double voxels = 1;
-      for (int k = 0; k < 3; ++k) voxels *= std::floor(extent[k] / opt.voxel_size) + 1;
-      if (!(voxels <= static_cast<double>(INT_MAX)))
-        throw InvalidInputError("--voxel " + format_double(opt.voxel_size) + ": too small for " + cloud_path +
-                                " (more than 2^31 voxels over its bounding box)");
-    }
+    reject_tiny_voxel(cloud.P, opt.voxel_size, cloud_path);
 
     ReconstructionResult res;
     {
@@ -168,39 +215,7 @@ int main(int argc, char** argv) {
     const double per_iter = res.iterations > 0 ? iteration_sum / res.iterations : 0.0;
 
     const std::vector<cli::CheckRecord> checks = cli::check_records(val);
-    cli::Json j = cli::report_head("cloud2mesh", cloud_path, {out_path, report_path});
-    j["format"] = rr.format;
-    j["points_in_file"] = rr.points_in_file;
-    j["non_finite_dropped"] = rr.non_finite_dropped;
-    j["duplicates_merged"] = rr.duplicates_merged;
-    j["points_denoised"] = res.points_denoised;
-    j["points_voxel_removed"] = res.points_voxel_removed;
-    j["points_used"] = res.points_used;
-    j["sites"] = opt.sites;
-    j["iterations"] = res.iterations;
-    j["neighbors"] = opt.neighbors;
-    j["anisotropy"] = opt.anisotropy;
-    j["seed"] = opt.seed;
-    j["vertices"] = res.mesh.V.rows();
-    j["faces"] = res.mesh.F.rows();
-    j["unused_sites"] = res.unused_sites;
-    j["candidate_triangles"] = res.candidate_triangles;
-    j["rejected_triangles"] = res.rejected_triangles;
-    j["removed_triangles"] = res.removed_triangles;
-    j["holes_filled"] = res.holes_filled;
-    j["boundary_loops"] = val.boundary_loops;
-    j["components"] = val.components;
-    j["genus"] = val.genus;
-    j["self_intersecting_pairs"] = val.self_intersecting_pairs;
-    j["phi_min_deg"] = res.min_angle_deg;
-    j["phi_mean_deg"] = res.mean_min_angle_deg;
-    j["blas"] = heatcvt::blas_description();
-    j["laplacian_s"] = res.laplacian_seconds;
-    j["factor_s"] = res.factor_seconds;
-    j["cvt_s"] = res.cvt_seconds;
-    j["per_iteration_s"] = per_iter;
-    j["reconstruct_s"] = res.total_seconds;
-    j["total_s"] = total_s;
+    cli::Json j = make_report(cloud_path, {out_path, report_path}, rr, opt, res, per_iter, total_s);
     const int status = cli::finish_report(j, res.stage_seconds, checks);
     {
       OutputTransaction outputs;  // all outputs or none (atomic_file.h)
