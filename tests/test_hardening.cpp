@@ -20,6 +20,7 @@
 #include "heatcvt/mesh_io.h"
 #include "heatcvt/natural_neighbour.h"
 #include "heatcvt/normalize.h"
+#include "heatcvt/pcl/heat_cvt_reconstruction.h"
 #include "heatcvt/reconstruct.h"
 #include "test_support.h"
 
@@ -585,6 +586,19 @@ TEST(Hardening, OneNeighbourRangeInTheLibraryAndTheTool) {
     expect_bad_input(test::run_tool("cloud2mesh", dir.path("c.xyz") + " -n 20 -k " + std::to_string(k) + " -o " +
                                                       dir.path("o.ply")),
                      "cloud2mesh", "-k", dir, 1);
+  // The PCL adapter: the same range (an empty mesh, PCL's failure contract, outside it).
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+  for (Eigen::Index i = 0; i < P.rows(); ++i)
+    cloud->push_back(pcl::PointXYZ(static_cast<float>(P(i, 0)), static_cast<float>(P(i, 1)), static_cast<float>(P(i, 2))));
+  for (int k : {ReconstructionOptions::min_neighbors - 1, ReconstructionOptions::max_neighbors + 1}) {
+    HeatCVTReconstruction<pcl::PointXYZ> rec;
+    rec.setInputCloud(cloud);
+    rec.setNumberOfSites(20);
+    rec.setKSearch(k);
+    pcl::PolygonMesh mesh;
+    rec.reconstruct(mesh);
+    EXPECT_TRUE(mesh.polygons.empty()) << k;
+  }
   const auto help = test::run_tool("cloud2mesh", "--help");
   EXPECT_NE(help.out.find("[" + std::to_string(ReconstructionOptions::min_neighbors) + ", " +
                           std::to_string(ReconstructionOptions::max_neighbors) + "]"),
