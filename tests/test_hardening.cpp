@@ -20,6 +20,7 @@
 #include "heatcvt/mesh_io.h"
 #include "heatcvt/natural_neighbour.h"
 #include "heatcvt/normalize.h"
+#include "heatcvt/pcl/heat_cvt_reconstruction.h"
 #include "heatcvt/reconstruct.h"
 #include "test_support.h"
 
@@ -468,15 +469,19 @@ TEST(Hardening, ErrorLinesNameTheFileOrOptionNotAFunction) {
   test::write_text_file(dir.path("c.xyz"), cloud.str());
   expect_bad_input(test::run_tool("cloud2mesh", dir.path("c.xyz") + " -n 50 --voxel 1e-30 -o " + dir.path("o.ply")),
                    "cloud2mesh", "--voxel", dir, 2);
+  // ±1e300 outliers: named as such, not "collinear or coincident".
+  test::write_text_file(dir.path("far.xyz"), cloud.str() + "1e300 0 0\n-1e300 0 0\n");
+  expect_bad_input(test::run_tool("cloud2mesh", dir.path("far.xyz") + " -n 50 -o " + dir.path("o.ply")), "cloud2mesh",
+                   dir.path("far.xyz") + ": a few points lie far outside", dir, 3);
   // Directories as the input or the sites file.
   fs::create_directory(dir.path("d.obj"));
   fs::create_directory(dir.path("sites"));
   write_obj(dir.path("m.obj"), test::icosphere(1).V, test::icosphere(1).F);
   expect_bad_input(test::run_tool("meshcvt", dir.path("d.obj") + " -o " + dir.path("o.obj")), "meshcvt",
-                   dir.path("d.obj") + ": is a directory", dir, 5);
+                   dir.path("d.obj") + ": is a directory", dir, 6);
   expect_bad_input(test::run_tool("heatvoronoi", dir.path("m.obj") + " --sites-file " + dir.path("sites") + " -o " +
                                                      dir.path("o.ply")),
-                   "heatvoronoi", dir.path("sites") + ": is a directory", dir, 5);
+                   "heatvoronoi", dir.path("sites") + ": is a directory", dir, 6);
   EXPECT_EQ(without_function_prefix("reconstruct_surface: only 10 usable points"), "only 10 usable points");
   EXPECT_EQ(without_function_prefix("HeatSolver: not positive definite"), "not positive definite");
   EXPECT_EQ(without_function_prefix("mesh.obj: truncated"), "mesh.obj: truncated");
@@ -581,6 +586,19 @@ TEST(Hardening, OneNeighbourRangeInTheLibraryAndTheTool) {
     expect_bad_input(test::run_tool("cloud2mesh", dir.path("c.xyz") + " -n 20 -k " + std::to_string(k) + " -o " +
                                                       dir.path("o.ply")),
                      "cloud2mesh", "-k", dir, 1);
+  // The PCL adapter: the same range (an empty mesh, PCL's failure contract, outside it).
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+  for (Eigen::Index i = 0; i < P.rows(); ++i)
+    cloud->push_back(pcl::PointXYZ(static_cast<float>(P(i, 0)), static_cast<float>(P(i, 1)), static_cast<float>(P(i, 2))));
+  for (int k : {ReconstructionOptions::min_neighbors - 1, ReconstructionOptions::max_neighbors + 1}) {
+    HeatCVTReconstruction<pcl::PointXYZ> rec;
+    rec.setInputCloud(cloud);
+    rec.setNumberOfSites(20);
+    rec.setKSearch(k);
+    pcl::PolygonMesh mesh;
+    rec.reconstruct(mesh);
+    EXPECT_TRUE(mesh.polygons.empty()) << k;
+  }
   const auto help = test::run_tool("cloud2mesh", "--help");
   EXPECT_NE(help.out.find("[" + std::to_string(ReconstructionOptions::min_neighbors) + ", " +
                           std::to_string(ReconstructionOptions::max_neighbors) + "]"),

@@ -2,12 +2,15 @@
 // point Laplacian -> centroidal Voronoi tessellation -> dual triangulation on a fitted surface.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <climits>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <map>
 #include <string>
+#include <vector>
 
 #include "cli_common.h"
 #include "heatcvt/atomic_file.h"
@@ -24,6 +27,103 @@
 using namespace heatcvt;
 using Clock = std::chrono::steady_clock;
 
+namespace {
+// Far outliers: when a few points set the bounding box (the normalisation frame) and the bulk of
+// the cloud spans less than `ratio` of it, the bulk collapses below the precision of the
+// normalised coordinates. The bulk is the 1 %-99 % quantile box per axis.
+void reject_far_outliers(const Eigen::MatrixX3d& P, const std::string& path) {
+  constexpr double ratio = 1e-6;
+  const Eigen::Index n = P.rows();
+  if (n < 100) return;
+  Eigen::RowVector3d bulk, full;
+  for (int k = 0; k < 3; ++k) {
+    std::vector<double> v(P.col(k).data(), P.col(k).data() + n);
+    std::sort(v.begin(), v.end());
+    bulk[k] = 0.5 * v[n - 1 - n / 100] - 0.5 * v[n / 100];
+    full[k] = 0.5 * v[n - 1] - 0.5 * v[0];
+  }
+  if (bulk.norm() < ratio * full.norm())
+    throw InvalidInputError(path + ": a few points lie far outside the others (98 % of the points span " +
+                            format_double(2 * bulk.norm()) + ", the bounding box " + format_double(2 * full.norm()) +
+                            "): remove these outliers");
+}
+
+// Option checks before any work (the library checks them again), naming the option at fault.
+void check_options(const ReconstructionOptions& opt) {
+  if (opt.sites < 4) throw InvalidInputError("-n must be at least 4 (got " + std::to_string(opt.sites) + ")");
+  if (opt.iterations < 0) throw InvalidInputError("-i must be >= 0");
+  if (opt.neighbors < ReconstructionOptions::min_neighbors || opt.neighbors > ReconstructionOptions::max_neighbors)
+    throw InvalidInputError("-k must be between " + std::to_string(ReconstructionOptions::min_neighbors) + " and " +
+                            std::to_string(ReconstructionOptions::max_neighbors));
+  if (!(opt.anisotropy >= 0) || !std::isfinite(opt.anisotropy)) throw InvalidInputError("--anisotropy must be >= 0");
+  if (!(opt.voxel_size >= 0) || !std::isfinite(opt.voxel_size)) throw InvalidInputError("--voxel must be >= 0");
+  if (!(opt.time_coefficient > 0) || !std::isfinite(opt.time_coefficient))
+    throw InvalidInputError("--t-coef must be a positive number");
+  if (opt.threads < 0) throw InvalidInputError("--threads must be >= 0");
+  if (opt.surface_lloyd_iterations < 0) throw InvalidInputError("--surface-lloyd must be >= 0");
+  if (!(opt.cvt_points_per_site == 0 || opt.cvt_points_per_site >= 3) || !std::isfinite(opt.cvt_points_per_site))
+    throw InvalidInputError("--points-per-site must be 0 (every point) or at least 3");
+  if (!(opt.lloyd_relaxation >= 1 && opt.lloyd_relaxation < 2)) throw InvalidInputError("--relaxation must be in [1, 2)");
+  if (!(opt.lloyd_tolerance >= 0) || !std::isfinite(opt.lloyd_tolerance)) throw InvalidInputError("--tolerance must be >= 0");
+  if (opt.max_hole_edges < 0) throw InvalidInputError("--max-hole-edges must be >= 0");
+  if (opt.relaxation_iterations < 0) throw InvalidInputError("--polish-iterations must be >= 0");
+  if (opt.denoise_neighbors < 2) throw InvalidInputError("--denoise-k must be >= 2");
+  if (!(opt.denoise_stddev > 0) || !std::isfinite(opt.denoise_stddev))
+    throw InvalidInputError("--denoise-stddev must be a positive number");
+}
+
+// PCL's voxel grid indexes at most 2^31 voxels; a smaller voxel would silently do nothing.
+void reject_tiny_voxel(const Eigen::MatrixX3d& P, double voxel_size, const std::string& path) {
+  if (voxel_size <= 0) return;
+  const Eigen::RowVector3d extent = P.colwise().maxCoeff() - P.colwise().minCoeff();
+  double voxels = 1;
+  for (int k = 0; k < 3; ++k) voxels *= std::floor(extent[k] / voxel_size) + 1;
+  if (!(voxels <= static_cast<double>(INT_MAX)))
+    throw InvalidInputError("--voxel " + format_double(voxel_size) + ": too small for " + path +
+                            " (more than 2^31 voxels over its bounding box)");
+}
+
+// The --report of a run (schema: report_json.h), without the common tail.
+cli::Json make_report(const std::string& cloud_path, const std::vector<std::string>& outputs, const CloudReadReport& rr,
+                      const ReconstructionOptions& opt, const ReconstructionResult& res, double per_iter, double total_s) {
+  cli::Json j = cli::report_head("cloud2mesh", cloud_path, outputs);
+  j["format"] = rr.format;
+  j["points_in_file"] = rr.points_in_file;
+  j["non_finite_dropped"] = rr.non_finite_dropped;
+  j["duplicates_merged"] = rr.duplicates_merged;
+  j["points_denoised"] = res.points_denoised;
+  j["points_voxel_removed"] = res.points_voxel_removed;
+  j["points_used"] = res.points_used;
+  j["sites"] = opt.sites;
+  j["iterations"] = res.iterations;
+  j["neighbors"] = opt.neighbors;
+  j["anisotropy"] = opt.anisotropy;
+  j["seed"] = opt.seed;
+  j["vertices"] = res.mesh.V.rows();
+  j["faces"] = res.mesh.F.rows();
+  j["unused_sites"] = res.unused_sites;
+  j["candidate_triangles"] = res.candidate_triangles;
+  j["rejected_triangles"] = res.rejected_triangles;
+  j["removed_triangles"] = res.removed_triangles;
+  j["holes_filled"] = res.holes_filled;
+  j["boundary_loops"] = res.validation.boundary_loops;
+  j["components"] = res.validation.components;
+  j["genus"] = res.validation.genus;
+  j["self_intersecting_pairs"] = res.validation.self_intersecting_pairs;
+  j["phi_min_deg"] = res.min_angle_deg;
+  j["phi_mean_deg"] = res.mean_min_angle_deg;
+  j["blas"] = heatcvt::blas_description();
+  j["laplacian_s"] = res.laplacian_seconds;
+  j["factor_s"] = res.factor_seconds;
+  j["cvt_s"] = res.cvt_seconds;
+  j["per_iteration_s"] = per_iter;
+  j["reconstruct_s"] = res.total_seconds;
+  j["total_s"] = total_s;
+  return j;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   CLI::App app{"cloud2mesh: reconstruct a triangle mesh from a point cloud with a heat-diffusion centroidal "
                "Voronoi tessellation of the points (Herholz et al. 2017, §7-8)"};
@@ -39,6 +139,15 @@ int main(int argc, char** argv) {
   app.add_option("--conf", conf_path,
                  "Stanford-style .conf listing scans with a translation and quaternion each (bmesh FILE tx ty tz qx qy "
                  "qz qw), instead of CLOUD");
+  app.add_option("--holes", opt.mesher.holes.policy,
+                 "which holes to close: auto (holes inside sampled surface and scan holes the surface continues "
+                 "around; the border of an open scan stays open), fill (every hole: watertight wherever the cloud "
+                 "encloses a volume), keep (only where the surface is sampled: no invented surface)")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, HolePolicy>{{"auto", HolePolicy::automatic},
+                                                                            {"fill", HolePolicy::fill},
+                                                                            {"keep", HolePolicy::keep}},
+                                          CLI::ignore_case))
+      ->default_str("auto");
   app.add_flag("--normals", write_normals, "write per-vertex normals (outward on closed pieces) with the mesh");
   app.add_option("-o,--output", out_path, "output mesh (.ply .obj .off .stl)")->required();
   app.add_option("-n,--sites", opt.sites, "number of output vertices (CVT sites)")->capture_default_str();
@@ -89,27 +198,7 @@ int main(int argc, char** argv) {
   if (const int status = cli::parse_command_line(app, argc, argv, "cloud2mesh"); status >= 0) return status;
 
   return cli::run_tool("cloud2mesh", [&]() -> int {
-    // Option checks before any work (reconstruct_surface checks them again).
-    if (opt.sites < 4) throw InvalidInputError("-n must be at least 4 (got " + std::to_string(opt.sites) + ")");
-    if (opt.iterations < 0) throw InvalidInputError("-i must be >= 0");
-    if (opt.neighbors < ReconstructionOptions::min_neighbors || opt.neighbors > ReconstructionOptions::max_neighbors)
-      throw InvalidInputError("-k must be between " + std::to_string(ReconstructionOptions::min_neighbors) + " and " +
-                              std::to_string(ReconstructionOptions::max_neighbors));
-    if (!(opt.anisotropy >= 0) || !std::isfinite(opt.anisotropy)) throw InvalidInputError("--anisotropy must be >= 0");
-    if (!(opt.voxel_size >= 0) || !std::isfinite(opt.voxel_size)) throw InvalidInputError("--voxel must be >= 0");
-    if (!(opt.time_coefficient > 0) || !std::isfinite(opt.time_coefficient))
-      throw InvalidInputError("--t-coef must be a positive number");
-    if (opt.threads < 0) throw InvalidInputError("--threads must be >= 0");
-    if (opt.surface_lloyd_iterations < 0) throw InvalidInputError("--surface-lloyd must be >= 0");
-    if (!(opt.cvt_points_per_site == 0 || opt.cvt_points_per_site >= 3) || !std::isfinite(opt.cvt_points_per_site))
-      throw InvalidInputError("--points-per-site must be 0 (every point) or at least 3");
-    if (!(opt.lloyd_relaxation >= 1 && opt.lloyd_relaxation < 2)) throw InvalidInputError("--relaxation must be in [1, 2)");
-    if (!(opt.lloyd_tolerance >= 0) || !std::isfinite(opt.lloyd_tolerance)) throw InvalidInputError("--tolerance must be >= 0");
-    if (opt.max_hole_edges < 0) throw InvalidInputError("--max-hole-edges must be >= 0");
-    if (opt.relaxation_iterations < 0) throw InvalidInputError("--polish-iterations must be >= 0");
-    if (opt.denoise_neighbors < 2) throw InvalidInputError("--denoise-k must be >= 2");
-    if (!(opt.denoise_stddev > 0) || !std::isfinite(opt.denoise_stddev))
-      throw InvalidInputError("--denoise-stddev must be a positive number");
+    check_options(opt);
     if (cloud_paths.empty() == conf_path.empty())
       throw InvalidInputError("give the input clouds either as CLOUD arguments or with --conf, not both");
     if (!pose_paths.empty() && pose_paths.size() != cloud_paths.size())
@@ -131,18 +220,11 @@ int main(int argc, char** argv) {
     if (!quiet)
       std::cerr << "read " << cloud_path << ": " << rr.points_in_file << " points, " << rr.non_finite_dropped
                 << " non-finite dropped, " << rr.duplicates_merged << " duplicates merged" << std::endl;
+    reject_far_outliers(cloud.P, cloud_path);
     if (opt.sites > cloud.P.rows())
       throw InvalidInputError(cloud_path + ": -n " + std::to_string(opt.sites) + " exceeds the " +
                               std::to_string(cloud.P.rows()) + " usable points");
-    if (opt.voxel_size > 0) {
-      // PCL's voxel grid indexes at most 2^31 voxels; a smaller voxel would silently do nothing.
-      const Eigen::RowVector3d extent = cloud.P.colwise().maxCoeff() - cloud.P.colwise().minCoeff();
-      double voxels = 1;
-      for (int k = 0; k < 3; ++k) voxels *= std::floor(extent[k] / opt.voxel_size) + 1;
-      if (!(voxels <= static_cast<double>(INT_MAX)))
-        throw InvalidInputError("--voxel " + format_double(opt.voxel_size) + ": too small for " + cloud_path +
-                                " (more than 2^31 voxels over its bounding box)");
-    }
+    reject_tiny_voxel(cloud.P, opt.voxel_size, cloud_path);
 
     ReconstructionResult res;
     {
@@ -174,41 +256,10 @@ int main(int argc, char** argv) {
     }
     if (write_normals) attributes.vertex_normal = vertex_normals(res.mesh.V, res.mesh.F);
     const std::vector<cli::CheckRecord> checks = cli::check_records(val);
-    cli::Json j = cli::report_head("cloud2mesh", cloud_path, {out_path, report_path});
-    j["format"] = rr.format;
+    cli::Json j = make_report(cloud_path, {out_path, report_path}, rr, opt, res, per_iter, total_s);
     j["inputs"] = static_cast<long>(scans.size());
     j["colours"] = cloud.has_colours();
-    j["points_in_file"] = rr.points_in_file;
-    j["non_finite_dropped"] = rr.non_finite_dropped;
-    j["duplicates_merged"] = rr.duplicates_merged;
-    j["points_denoised"] = res.points_denoised;
-    j["points_voxel_removed"] = res.points_voxel_removed;
-    j["points_used"] = res.points_used;
-    j["sites"] = opt.sites;
-    j["iterations"] = res.iterations;
-    j["neighbors"] = opt.neighbors;
-    j["anisotropy"] = opt.anisotropy;
-    j["seed"] = opt.seed;
-    j["vertices"] = res.mesh.V.rows();
-    j["faces"] = res.mesh.F.rows();
-    j["unused_sites"] = res.unused_sites;
-    j["candidate_triangles"] = res.candidate_triangles;
-    j["rejected_triangles"] = res.rejected_triangles;
-    j["removed_triangles"] = res.removed_triangles;
-    j["holes_filled"] = res.holes_filled;
-    j["boundary_loops"] = val.boundary_loops;
-    j["components"] = val.components;
-    j["genus"] = val.genus;
-    j["self_intersecting_pairs"] = val.self_intersecting_pairs;
-    j["phi_min_deg"] = res.min_angle_deg;
-    j["phi_mean_deg"] = res.mean_min_angle_deg;
-    j["blas"] = heatcvt::blas_description();
-    j["laplacian_s"] = res.laplacian_seconds;
-    j["factor_s"] = res.factor_seconds;
-    j["cvt_s"] = res.cvt_seconds;
-    j["per_iteration_s"] = per_iter;
-    j["reconstruct_s"] = res.total_seconds;
-    j["total_s"] = total_s;
+    j["filled_hole_edges"] = res.filled_hole_edges;
     const int status = cli::finish_report(j, res.stage_seconds, checks);
     {
       OutputTransaction outputs;  // all outputs or none (atomic_file.h)

@@ -43,6 +43,90 @@ std::vector<int> random_vertices(int num_vertices, int count, unsigned seed) {
   return all;
 }
 
+// What one run of the diagram produced, in the normalised frame.
+struct DiagramRun {
+  VoronoiDiagram diagram;
+  std::vector<SurfacePoint> centroids;  // empty unless asked for
+  double factor_s = 0, solve_s = 0, tess_s = 0, centroid_s = 0, time_step = 0;
+  long degenerate_faces = 0;
+};
+
+// Cotan Laplacian, one factorisation, one point-source diffusion per generator (eq. 8), the exact
+// tessellation, and with centroid_steps > 0 the heat centroids (§5).
+DiagramRun compute_diagram(const TriangleMesh& mesh, const std::vector<SurfacePoint>& sites, double t_coef,
+                           int threads, int centroid_steps, bool quiet) {
+  DiagramRun r;
+  const int nv = static_cast<int>(mesh.V.rows()), n = static_cast<int>(sites.size());
+  auto t0 = Clock::now();
+  Laplacian lap = cotan_laplacian(mesh.V, mesh.F);
+  r.degenerate_faces = static_cast<long>(lap.degenerate_faces.size());
+  HeatSolverOptions sopt;
+  sopt.time_coefficient = t_coef;
+  sopt.threads = threads;
+  HeatSolver solver(lap, sopt);
+  r.factor_s = cli::seconds_since(t0);
+  r.time_step = solver.time_step();
+
+  // One point-source diffusion per generator (eq. 8), in chunks so progress can be shown.
+  t0 = Clock::now();
+  Eigen::MatrixXd U(nv, n);
+  {
+    cli::Progress progress("diffusing", n, quiet);
+    const int chunk = 64;
+    for (int c0 = 0; c0 < n; c0 += chunk) {
+      const int width = std::min(chunk, n - c0);
+      Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(nv, width);
+      for (int j = 0; j < width; ++j)
+        for (int k = 0; k < 3; ++k) rhs(mesh.F(sites[c0 + j].face, k), j) += sites[c0 + j].bary[k];
+      U.middleCols(c0, width) = solver.solve(rhs);
+      progress.update(c0 + width);
+    }
+    progress.finish();
+  }
+  r.solve_s = cli::seconds_since(t0);
+
+  t0 = Clock::now();
+  VoronoiOptions vopt;
+  vopt.threads = threads;
+  r.diagram = tessellate(mesh.V, mesh.F, heat_field_from_dense(U, vopt.keep_sites_per_vertex), vopt);
+  U.resize(0, 0);
+  r.tess_s = cli::seconds_since(t0);
+
+  if (centroid_steps > 0) {
+    t0 = Clock::now();
+    CentroidOptions copt;
+    copt.steps = centroid_steps;
+    copt.threads = threads;
+    r.centroids = heat_centroids(mesh.V, mesh.F, solver, r.diagram, copt);
+    r.centroid_s = cli::seconds_since(t0);
+  }
+  return r;
+}
+
+// Checks of a diagram (exit status 3 when one fails, cli_common.h): every connected component
+// reached by a generator, no cell of zero area (a generator on a vertex of degenerate faces only).
+std::vector<cli::CheckRecord> diagram_checks(const VoronoiDiagram& diagram) {
+  int empty_cells = 0;
+  for (Eigen::Index i = 0; i < diagram.cell_area.size(); ++i) empty_cells += diagram.cell_area[i] > 0 ? 0 : 1;
+  const size_t unreached = diagram.unreached_components.size();
+  return {{"every_component_has_a_site", unreached == 0, true,
+           unreached == 0 ? "ok" : std::to_string(unreached) + " connected components without a generator"},
+          {"no_empty_cells", empty_cells == 0, true,
+           empty_cells == 0 ? "ok" : std::to_string(empty_cells) + " cells with zero area"}};
+}
+
+// Cell areas (in input units) and sizes of the refined mesh, for the report.
+void add_diagram_figures(cli::Json& report, const VoronoiDiagram& diagram, const Eigen::VectorXd& areas) {
+  report["cell_area_min"] = areas.minCoeff();
+  report["cell_area_mean"] = areas.mean();
+  report["cell_area_max"] = areas.maxCoeff();
+  report["refined_vertices"] = diagram.V.rows();
+  report["refined_faces"] = diagram.F.rows();
+  report["voronoi_vertices"] = diagram.voronoi_vertices.size();
+  report["voronoi_edges"] = diagram.edges.size();
+  report["unreached_components"] = diagram.unreached_components.size();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -106,75 +190,22 @@ int main(int argc, char** argv) {
     }
     const int n = static_cast<int>(sites.size());
 
-    double factor_s = 0, solve_s = 0, tess_s = 0, centroid_s = 0, time_step = 0;
-    long degenerate_faces = 0;
-    VoronoiDiagram diagram;
-    std::vector<SurfacePoint> centroids;
-    cli::on_file(mesh_path, [&] {
-      auto t0 = Clock::now();
-      Laplacian lap = cotan_laplacian(mesh.V, mesh.F);
-      degenerate_faces = static_cast<long>(lap.degenerate_faces.size());
-      if (degenerate_faces > 0)
-        log("warning: " + std::to_string(degenerate_faces) + " degenerate faces in " + mesh_path +
-            " carry no heat conduction");
-      HeatSolverOptions sopt;
-      sopt.time_coefficient = t_coef;
-      sopt.threads = threads;
-      HeatSolver solver(lap, sopt);
-      factor_s = cli::seconds_since(t0);
-      time_step = solver.time_step();
-      log("factored M - tL (t = " + std::to_string(time_step * frame.scale * frame.scale) + ") in " +
-          std::to_string(factor_s) + " s");
-
-      // One point-source diffusion per generator (eq. 8), in chunks so progress can be shown.
-      t0 = Clock::now();
-      Eigen::MatrixXd U(nv, n);
-      {
-        cli::Progress progress("diffusing", n, quiet);
-        const int chunk = 64;
-        for (int c0 = 0; c0 < n; c0 += chunk) {
-          const int width = std::min(chunk, n - c0);
-          Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(nv, width);
-          for (int j = 0; j < width; ++j)
-            for (int k = 0; k < 3; ++k) rhs(mesh.F(sites[c0 + j].face, k), j) += sites[c0 + j].bary[k];
-          U.middleCols(c0, width) = solver.solve(rhs);
-          progress.update(c0 + width);
-        }
-        progress.finish();
-      }
-      solve_s = cli::seconds_since(t0);
-
-      t0 = Clock::now();
-      VoronoiOptions vopt;
-      vopt.threads = threads;
-      diagram = tessellate(mesh.V, mesh.F, heat_field_from_dense(U, vopt.keep_sites_per_vertex), vopt);
-      U.resize(0, 0);
-      tess_s = cli::seconds_since(t0);
-
-      if (!centroids_path.empty()) {
-        t0 = Clock::now();
-        CentroidOptions copt;
-        copt.steps = centroid_steps;
-        copt.threads = threads;
-        centroids = heat_centroids(mesh.V, mesh.F, solver, diagram, copt);
-        centroid_s = cli::seconds_since(t0);
-      }
+    const DiagramRun run = cli::on_file(mesh_path, [&] {
+      return compute_diagram(mesh, sites, t_coef, threads, centroids_path.empty() ? 0 : centroid_steps, quiet);
     });
+    const VoronoiDiagram& diagram = run.diagram;
+    if (run.degenerate_faces > 0)
+      log("warning: " + std::to_string(run.degenerate_faces) + " degenerate faces in " + mesh_path +
+          " carry no heat conduction");
+    log("factored M - tL (t = " + std::to_string(run.time_step * frame.scale * frame.scale) + ") in " +
+        std::to_string(run.factor_s) + " s");
     for (int comp : diagram.unreached_components)
       log("warning: connected component " + std::to_string(comp) + " of " + mesh_path +
           " has no generator and gets no cell");
 
-    // Checks of the result (exit status 3 when one fails, cli_common.h).
     const Eigen::VectorXd areas = diagram.cell_area * (frame.scale * frame.scale);
-    int empty_cells = 0;
-    for (Eigen::Index i = 0; i < areas.size(); ++i) empty_cells += areas[i] > 0 ? 0 : 1;
-    const std::vector<cli::CheckRecord> checks = {
-        {"every_component_has_a_site", diagram.unreached_components.empty(), true,
-         diagram.unreached_components.empty()
-             ? "ok"
-             : std::to_string(diagram.unreached_components.size()) + " connected components without a generator"},
-        {"no_empty_cells", empty_cells == 0, true,
-         empty_cells == 0 ? "ok" : std::to_string(empty_cells) + " cells with zero area"}};
+    const std::vector<cli::CheckRecord> checks = diagram_checks(diagram);
+    const std::vector<SurfacePoint>& centroids = run.centroids;
     Eigen::MatrixX3d refined_V = diagram.V;
     restore_frame(refined_V, frame);
 
@@ -183,20 +214,14 @@ int main(int argc, char** argv) {
     cli::Json report = cli::report_head("heatvoronoi", mesh_path, {cells_path, edges_path, centroids_path, report_path});
     report["vertices"] = nv;
     report["faces"] = mesh.F.rows();
-    report["time_step"] = time_step * frame.scale * frame.scale;
+    report["time_step"] = run.time_step * frame.scale * frame.scale;
     report["cells"] = n;
-    report["cell_area_min"] = areas.minCoeff();
-    report["cell_area_mean"] = areas.mean();
-    report["cell_area_max"] = areas.maxCoeff();
-    report["refined_vertices"] = diagram.V.rows();
-    report["refined_faces"] = diagram.F.rows();
-    report["voronoi_vertices"] = diagram.voronoi_vertices.size();
-    report["voronoi_edges"] = diagram.edges.size();
-    report["unreached_components"] = diagram.unreached_components.size();
-    report["degenerate_faces"] = degenerate_faces;
+    add_diagram_figures(report, diagram, areas);
+    report["degenerate_faces"] = run.degenerate_faces;
     report["total_s"] = total_s;
     const int status = cli::finish_report(
-        report, {{"factor", factor_s}, {"solves", solve_s}, {"tessellation", tess_s}, {"centroids", centroid_s}}, checks);
+        report, {{"factor", run.factor_s}, {"solves", run.solve_s}, {"tessellation", run.tess_s}, {"centroids", run.centroid_s}},
+        checks);
     {
       OutputTransaction outputs;
       MeshAttributes attr;
@@ -222,7 +247,7 @@ int main(int argc, char** argv) {
                   static_cast<long>(mesh.F.rows()), static_cast<long>(diagram.F.rows()), diagram.voronoi_vertices.size());
       std::printf("  cell area min / mean / max: %.6g / %.6g / %.6g\n", areas.minCoeff(), areas.mean(), areas.maxCoeff());
       std::printf("  time: factor %.3f s, %d diffusions %.3f s, tessellation %.3f s, centroids %.3f s, total %.3f s\n",
-                  factor_s, n, solve_s, tess_s, centroid_s, total_s);
+                  run.factor_s, n, run.solve_s, run.tess_s, run.centroid_s, total_s);
       std::printf("  wrote %s%s%s%s\n", cells_path.c_str(), edges_path.empty() ? "" : (", " + edges_path).c_str(),
                   centroids_path.empty() ? "" : (", " + centroids_path).c_str(),
                   report_path.empty() ? "" : (", " + report_path).c_str());

@@ -237,6 +237,8 @@ int main(int argc, char** argv) {
     rep["converged"] = r.converged;
     rep["reached_quality_target"] = r.reached_quality;
     rep["blas"] = heatcvt::blas_description();
+    rep["laplacian_s"] = laplacian_s;
+    rep["factor_s"] = r.factor_seconds;
     rep["factor_memory_bytes"] = r.factor_bytes;
     rep["time_per_iteration_s"] = per_iter;
     rep["total_s"] = total_s;
