@@ -331,6 +331,7 @@ void copy_stats(const MesherStats& st, ReconstructionResult& res) {
   res.rejected_triangles = st.rejected_triangles;
   res.removed_triangles = st.removed_triangles;
   res.holes_filled = st.holes_filled;
+  res.filled_hole_edges = st.filled_hole_edges;
   res.flipped_edges = st.flipped_edges;
   res.polish_fallback = st.polish_fallback;
   res.angle_polish_undone = st.angle_polish_undone;

@@ -151,7 +151,8 @@ struct ReconstructionResult {
   int candidate_triangles = 0;     ///< distinct dual triangles witnessed by the point triangles
   int rejected_triangles = 0;      ///< candidates not kept (non-manifold or orientation conflict)
   int removed_triangles = 0;       ///< kept, then removed to make vertices manifold / drop tiny pieces
-  int holes_filled = 0;            ///< boundary loops with ≤ max_hole_edges edges that were filled
+  int holes_filled = 0;            ///< boundary loops filled (mesher.holes.policy decides which)
+  std::vector<int> filled_hole_edges;  ///< edge count of each filled loop
   int flipped_edges = 0;           ///< edge flips on the extracted mesh (max-min-angle and valence)
   bool polish_fallback = false;    ///< the valence-flip polish self-intersected; redone with Delaunay flips only
   int unused_sites = 0;            ///< sites that ended in no triangle (dropped from the mesh)

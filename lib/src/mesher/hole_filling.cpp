@@ -65,9 +65,22 @@ bool is_back_of_face(const WorkingMesh& mesh, const std::vector<int>& loop) {
   return f0 >= 0 && f1 >= 0 && f2 >= 0 && f0 == f1 && f1 == f2;
 }
 
+// Whether the policy closes the simple loop `loop`.
+bool selected(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop,
+              const HoleFillingOptions& o) {
+  const int L = static_cast<int>(loop.size());
+  switch (o.policy) {
+    case HolePolicy::fill: return true;
+    case HolePolicy::keep: return L <= o.sampled_hole_factor * o.max_hole_edges && is_sampled_hole(mesh, surface, loop, o);
+    case HolePolicy::automatic: break;
+  }
+  return L <= o.max_hole_edges || (L <= o.sampled_hole_factor * o.max_hole_edges && is_sampled_hole(mesh, surface, loop, o)) ||
+         is_surrounded_hole(mesh, surface, loop, o);
+}
+
 // One pass: every simple boundary loop that qualifies is triangulated. Returns the loops filled.
-int fill_pass(WorkingMesh& mesh, const SurfaceProjector& surface, const HoleFillingOptions& o) {
-  const int max_loop = o.surrounded_hole_factor * o.max_hole_edges;
+int fill_pass(WorkingMesh& mesh, const SurfaceProjector& surface, const HoleFillingOptions& o, std::vector<int>* sizes) {
+  const int max_loop = o.policy == HolePolicy::fill ? o.max_fill_edges : o.surrounded_hole_factor * o.max_hole_edges;
   std::unordered_map<int, std::vector<int>> next;  // boundary half-edge a->b (face side) by start vertex
   std::vector<std::pair<int, int>> bedges;
   for (const MeshFace& f : mesh.faces())
@@ -101,9 +114,7 @@ int fill_pass(WorkingMesh& mesh, const SurfaceProjector& surface, const HoleFill
     }
     const int L = static_cast<int>(loop.size());
     if (!simple || cur != a0 || L > max_loop || L < 3) continue;
-    if (L > o.max_hole_edges && !((L <= o.sampled_hole_factor * o.max_hole_edges && is_sampled_hole(mesh, surface, loop, o)) ||
-                                  is_surrounded_hole(mesh, surface, loop, o)))
-      continue;
+    if (!selected(mesh, surface, loop, o)) continue;
     std::vector<int> sorted = loop;
     std::sort(sorted.begin(), sorted.end());
     if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) continue;
@@ -111,6 +122,7 @@ int fill_pass(WorkingMesh& mesh, const SurfaceProjector& surface, const HoleFill
     std::vector<MeshFace> tris;
     if (!triangulate_loop(mesh, loop, tris)) continue;
     added.insert(added.end(), tris.begin(), tris.end());
+    if (sizes) sizes->push_back(L);
     ++filled;
   }
   for (const MeshFace& t : added) mesh.add_face(t);
@@ -157,11 +169,11 @@ bool triangulate_loop(const WorkingMesh& mesh, const std::vector<int>& loop, std
 }
 
 int fill_holes(WorkingMesh& mesh, const SurfaceProjector& surface, const HoleFillingOptions& options,
-               const ManifoldOptions& manifold, int& removed) {
+               const ManifoldOptions& manifold, int& removed, std::vector<int>* filled_edges) {
   int filled = 0;
   for (int pass = 0; pass < options.passes; ++pass) {
     const int before = mesh.num_faces();
-    const int pass_filled = fill_pass(mesh, surface, options);
+    const int pass_filled = fill_pass(mesh, surface, options, filled_edges);
     if (mesh.num_faces() == before) break;
     filled += pass_filled;
     removed += make_vertices_manifold(mesh, manifold);

@@ -39,7 +39,8 @@ void mesh_from_candidates(WorkingMesh& mesh, const DualCandidates& candidates, c
   stats.rejected_triangles += extract_manifold(mesh, candidates.coherent);
   stats.removed_triangles += make_vertices_manifold(mesh, options.manifold);
   stats.rejected_triangles -= add_compatible_candidates(mesh, candidates.coherent, candidates.loose);
-  stats.holes_filled += fill_holes(mesh, surface, options.holes, options.manifold, stats.removed_triangles);
+  stats.holes_filled +=
+      fill_holes(mesh, surface, options.holes, options.manifold, stats.removed_triangles, &stats.filled_hole_edges);
   timer.done("extraction and holes");
   untangle(mesh, surface, options.untangle, options.holes, options.manifold, stats);
   timer.done("untangle");

@@ -21,7 +21,7 @@ void untangle(WorkingMesh& mesh, const SurfaceProjector& surface, const Untangle
         if (vbad[mesh.face(i)[0]] || vbad[mesh.face(i)[1]] || vbad[mesh.face(i)[2]]) drop[i] = 1;
     stats.removed_triangles += mesh.remove_faces(drop);
     stats.removed_triangles += make_vertices_manifold(mesh, manifold);
-    stats.holes_filled += fill_holes(mesh, surface, holes, manifold, stats.removed_triangles);
+    stats.holes_filled += fill_holes(mesh, surface, holes, manifold, stats.removed_triangles, &stats.filled_hole_edges);
   }
 }
 

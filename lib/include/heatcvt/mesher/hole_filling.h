@@ -10,8 +10,21 @@
 
 namespace heatcvt {
 
+/// Which boundary loops are holes to close.
+///   automatic  loops the extraction leaves (at most max_hole_edges edges) and larger ones whose
+///              inside is sampled or whose surroundings are (the tests below): scan holes are
+///              closed where the surface around them continues, the border of an open scan stays.
+///   fill       every simple loop of up to max_fill_edges edges: watertight output wherever the
+///              cloud encloses a volume (3D printing, volumes).
+///   keep       only loops whose inside is sampled (is the scanned surface): no invented
+///              surface; every scan hole stays open (inspection).
+enum class HolePolicy { automatic, fill, keep };
+
 /// Options of fill_holes(). h is the mean edge length of a loop.
 struct HoleFillingOptions {
+  HolePolicy policy = HolePolicy::automatic;  ///< Default automatic.
+  /// With HolePolicy::fill: the longest loop triangulated (the triangulation costs O(L³)). Default 600.
+  int max_fill_edges = 600;
   /// Boundary loops of at most this many edges are holes of the extraction: always filled.
   /// Default 8.
   int max_hole_edges = 8;
@@ -39,10 +52,11 @@ struct HoleFillingOptions {
 /// triangulation exists.
 bool triangulate_loop(const WorkingMesh& mesh, const std::vector<int>& loop, std::vector<MeshFace>& out);
 
-/// Boundary loops of the mesh (followed along the faces' half-edges) that are simple and pass
-/// the tests above are triangulated; then make_vertices_manifold(). Returns the loops filled;
-/// faces removed by make_vertices_manifold() are added to `removed`.
+/// Boundary loops of the mesh (followed along the faces' half-edges) that are simple and that
+/// the policy selects are triangulated; then make_vertices_manifold(). Returns the loops filled;
+/// faces removed by make_vertices_manifold() are added to `removed`, and the edge count of each
+/// filled loop to `filled_edges` if given.
 int fill_holes(WorkingMesh& mesh, const SurfaceProjector& surface, const HoleFillingOptions& options,
-               const ManifoldOptions& manifold, int& removed);
+               const ManifoldOptions& manifold, int& removed, std::vector<int>* filled_edges = nullptr);
 
 }  // namespace heatcvt

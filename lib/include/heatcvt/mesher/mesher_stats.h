@@ -14,6 +14,7 @@ struct MesherStats {
   int rejected_triangles = 0;   ///< candidates not kept (non-manifold or orientation conflict)
   int removed_triangles = 0;    ///< kept, then removed (non-manifold vertices, small pieces, intersections)
   int holes_filled = 0;         ///< boundary loops triangulated by fill_holes()
+  std::vector<int> filled_hole_edges;  ///< edge count of each filled loop, in filling order
   int flipped_edges = 0;        ///< edge flips
   bool polish_fallback = false;      ///< the valence-flip polish self-intersected; redone with Delaunay flips only
   bool angle_polish_undone = false;  ///< the angle polish self-intersected and was undone

@@ -1,0 +1,97 @@
+// The hole policy of the surface mesher (mesher/hole_filling.h, cloud2mesh --holes): a closed
+// object scanned with a hole is closed with the right genus by `fill`, keeps a boundary loop
+// around the hole with `keep`, and a completely scanned object stays closed under every policy.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <fstream>
+#include <string>
+
+#include "heatcvt/mesher/hole_filling.h"
+#include "heatcvt/reconstruct.h"
+#include "test_support.h"
+
+using namespace heatcvt;
+
+namespace {
+
+// Points sampled from `mesh`, without those within `radius` of `centre` (the hole).
+Eigen::MatrixX3d scan_with_hole(const TriangleMesh& mesh, int count, const Eigen::RowVector3d& centre, double radius) {
+  const Eigen::MatrixX3d all = sample_surface(mesh.V, mesh.F, count, 3);
+  Eigen::MatrixX3d kept(all.rows(), 3);
+  Eigen::Index n = 0;
+  for (Eigen::Index i = 0; i < all.rows(); ++i)
+    if ((all.row(i) - centre).norm() > radius) kept.row(n++) = all.row(i);
+  kept.conservativeResize(n, 3);
+  return kept;
+}
+
+ReconstructionResult reconstruct_with(const Eigen::MatrixX3d& P, HolePolicy policy, int sites) {
+  ReconstructionOptions opt;
+  opt.sites = sites;
+  opt.mesher.holes.policy = policy;
+  return reconstruct_surface(P, opt);
+}
+
+}  // namespace
+
+TEST(HolePolicy, SphereWithACapCutOff) {
+  // Unit sphere without the cap within 0.63 of the north pole (z > 0.8): a hole of radius 0.6, a
+  // loop of more than max_hole_edges (8) edges at 500 sites (edge length ≈ 0.17).
+  const Eigen::MatrixX3d P = scan_with_hole(test::icosphere(5), 30000, Eigen::RowVector3d(0, 0, 1), 0.63);
+  const ReconstructionResult filled = reconstruct_with(P, HolePolicy::fill, 500);
+  EXPECT_EQ(filled.validation.boundary_loops, 0);
+  EXPECT_EQ(filled.validation.components, 1);
+  EXPECT_EQ(filled.validation.genus, 0);
+  EXPECT_EQ(filled.validation.self_intersecting_pairs, 0);
+  ASSERT_FALSE(filled.filled_hole_edges.empty());
+  int largest = 0;
+  for (int e : filled.filled_hole_edges) largest = std::max(largest, e);
+  EXPECT_GT(largest, HoleFillingOptions().max_hole_edges);  // the cap's loop, not only extraction holes
+
+  const ReconstructionResult kept = reconstruct_with(P, HolePolicy::keep, 500);
+  EXPECT_EQ(kept.validation.boundary_loops, 1);
+  EXPECT_EQ(kept.validation.components, 1);
+  EXPECT_EQ(kept.validation.self_intersecting_pairs, 0);
+  // The loop lies at the cut: no vertex of the kept mesh above it.
+  EXPECT_LE(kept.mesh.V.col(2).maxCoeff(), 0.8 + 0.05);
+}
+
+TEST(HolePolicy, TorusWithAHoleFilledKeepsItsGenus) {
+  // Torus R = 1, r = 0.4 with a hole of radius 0.35 on the outer equator.
+  const Eigen::MatrixX3d P = scan_with_hole(test::torus(96, 48), 30000, Eigen::RowVector3d(1.4, 0, 0), 0.35);
+  const ReconstructionResult filled = reconstruct_with(P, HolePolicy::fill, 800);
+  EXPECT_EQ(filled.validation.boundary_loops, 0);
+  EXPECT_EQ(filled.validation.components, 1);
+  EXPECT_EQ(filled.validation.genus, 1);
+  EXPECT_EQ(filled.validation.self_intersecting_pairs, 0);
+  const ReconstructionResult kept = reconstruct_with(P, HolePolicy::keep, 800);
+  EXPECT_EQ(kept.validation.boundary_loops, 1);
+  EXPECT_EQ(kept.validation.components, 1);
+}
+
+TEST(HolePolicy, ACompleteScanStaysClosedUnderEveryPolicy) {
+  const TriangleMesh sphere = test::icosphere(5);
+  const Eigen::MatrixX3d P = sample_surface(sphere.V, sphere.F, 20000, 4);
+  for (HolePolicy policy : {HolePolicy::automatic, HolePolicy::fill, HolePolicy::keep}) {
+    const ReconstructionResult r = reconstruct_with(P, policy, 400);
+    EXPECT_EQ(r.validation.boundary_loops, 0) << static_cast<int>(policy);
+    EXPECT_EQ(r.validation.genus, 0) << static_cast<int>(policy);
+    EXPECT_EQ(r.mesh.V.rows(), 400) << static_cast<int>(policy);
+  }
+}
+
+TEST(HolePolicy, Cloud2MeshOptionAndReport) {
+  test::ScratchDir dir("holes_tool");
+  const std::string out = dir.path("m.ply"), rep = dir.path("m.json");
+  const auto ok = test::run_tool("cloud2mesh", test::data_path("clouds/pcl_milk.pcd") + " -n 300 -q --holes keep -o " + out +
+                                                   " --report " + rep);
+  ASSERT_EQ(ok.exit_code, 0) << ok.err;
+  std::ifstream in(rep);
+  const std::string json((std::istreambuf_iterator<char>(in)), {});
+  EXPECT_NE(json.find("\"filled_hole_edges\""), std::string::npos);
+  const auto bad = test::run_tool("cloud2mesh", test::data_path("clouds/pcl_milk.pcd") + " -n 300 -q --holes sometimes -o " +
+                                                    dir.path("x.ply"));
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_EQ(bad.err.rfind("cloud2mesh: error: ", 0), 0u) << bad.err;
+}
