@@ -5,7 +5,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <set>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "heatcvt/mesh.h"
 #include "heatcvt/mesher/angle_polish.h"
@@ -695,21 +699,18 @@ TEST(ReconstructionDriver, RejectsBadStageOptions) {
       EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
     }
   };
-  ReconstructionOptions a = o;
-  a.cloud.fit_cells = 0;
-  rejects(a, "fit_cells");
-  ReconstructionOptions b = o;
-  b.cloud.max_crossing_fraction = 1.5;
-  rejects(b, "max_crossing_fraction");
-  ReconstructionOptions c = o;
-  c.cloud.surface_lloyd_relaxation = 2;
-  rejects(c, "surface_lloyd_relaxation");
-  ReconstructionOptions d = o;
-  d.fit.min_quadratic_points = 3;
-  rejects(d, "min_quadratic_points");
-  ReconstructionOptions e = o;
-  e.mesher.min_piece_faces = -1;
-  rejects(e, "min_piece_faces");
+  const std::vector<std::pair<std::function<void(ReconstructionOptions&)>, std::string>> cases = {
+      {[](ReconstructionOptions& b) { b.cloud.fit_cells = 0; }, "fit_cells"},
+      {[](ReconstructionOptions& b) { b.cloud.max_crossing_fraction = 1.5; }, "max_crossing_fraction"},
+      {[](ReconstructionOptions& b) { b.cloud.surface_lloyd_relaxation = 2; }, "surface_lloyd_relaxation"},
+      {[](ReconstructionOptions& b) { b.cloud.orientation_offset_penalty = -1; }, "orientation_offset_penalty"},
+      {[](ReconstructionOptions& b) { b.fit.min_quadratic_points = 3; }, "min_quadratic_points"},
+      {[](ReconstructionOptions& b) { b.mesher.min_piece_faces = -1; }, "min_piece_faces"}};
+  for (const auto& [change, needle] : cases) {
+    ReconstructionOptions bad = o;
+    change(bad);
+    rejects(bad, needle);
+  }
 }
 
 }  // namespace
