@@ -101,8 +101,9 @@ int fill_pass(WorkingMesh& mesh, const SurfaceProjector& surface, const HoleFill
     }
     const int L = static_cast<int>(loop.size());
     if (!simple || cur != a0 || L > max_loop || L < 3) continue;
-    if (L > o.max_hole_edges && !((L <= o.sampled_hole_factor * o.max_hole_edges && is_sampled_hole(mesh, surface, loop, o)) ||
-                                  is_surrounded_hole(mesh, surface, loop, o)))
+    const bool short_loop = L <= o.max_hole_edges && o.fill_short_loops;
+    if (!short_loop && !((L <= o.sampled_hole_factor * o.max_hole_edges && is_sampled_hole(mesh, surface, loop, o)) ||
+                         is_surrounded_hole(mesh, surface, loop, o)))
       continue;
     std::vector<int> sorted = loop;
     std::sort(sorted.begin(), sorted.end());
