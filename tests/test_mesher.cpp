@@ -5,7 +5,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <set>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "heatcvt/mesh.h"
 #include "heatcvt/mesher/angle_polish.h"
@@ -331,6 +335,7 @@ TEST(HoleFilling, ClosesASphereWithACutOutCap) {
   cut_cap(w, 0.93);
   ASSERT_FALSE(validate(w, true).ok());
   HoleFillingOptions o;  // a loop of 15 edges: filled as a hole in sampled surface
+  o.fill_short_loops = false;
   int removed = 0;
   EXPECT_EQ(fill_holes(w, surface, o, {}, removed), 1);
   const ValidationReport r = validate(w, true);
@@ -365,6 +370,35 @@ TEST(HoleFilling, KeepsTheBorderOfAnOpenSheet) {
   int removed = 0;
   EXPECT_EQ(fill_holes(w, surface, {}, {}, removed), 0);
   EXPECT_EQ(w.num_faces(), g.F.rows());
+}
+
+TEST(HoleFilling, ShortLoopsOfTheSurfaceItselfAreKeptOnRequest) {
+  // An annulus (radii 1 and 2, 8 vertices per ring) as both the mesh and the surface: two
+  // boundary loops of 8 edges with no surface across them.
+  Eigen::MatrixX3d V(16, 3);
+  for (int k = 0; k < 8; ++k) {
+    V.row(k) << std::cos(k * M_PI / 4), std::sin(k * M_PI / 4), 0;
+    V.row(8 + k) = 2 * V.row(k);
+  }
+  Eigen::MatrixX3i F(16, 3);
+  for (int k = 0; k < 8; ++k) {
+    const int j = (k + 1) % 8;
+    F.row(2 * k) << k, 8 + k, 8 + j;
+    F.row(2 * k + 1) << k, 8 + j, j;
+  }
+  const MeshSurfaceProjector surface(V, F);
+  TriangleMesh annulus;
+  annulus.V = V;
+  annulus.F = F;
+  HoleFillingOptions keep;
+  keep.fill_short_loops = false;
+  WorkingMesh w = working(annulus);
+  int removed = 0;
+  EXPECT_EQ(fill_holes(w, surface, keep, {}, removed), 0);
+  EXPECT_EQ(w.num_faces(), 16);
+  EXPECT_EQ(fill_holes(w, surface, {}, {}, removed), 2);  // the default fills loops of <= 8 edges
+  const std::vector<char> boundary = w.boundary_vertices();
+  EXPECT_EQ(std::count(boundary.begin(), boundary.end(), 1), 0);
 }
 
 TEST(HoleFilling, LoopTriangulationMaximisesTheSmallestAngle) {
@@ -695,21 +729,18 @@ TEST(ReconstructionDriver, RejectsBadStageOptions) {
       EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
     }
   };
-  ReconstructionOptions a = o;
-  a.cloud.fit_cells = 0;
-  rejects(a, "fit_cells");
-  ReconstructionOptions b = o;
-  b.cloud.max_crossing_fraction = 1.5;
-  rejects(b, "max_crossing_fraction");
-  ReconstructionOptions c = o;
-  c.cloud.surface_lloyd_relaxation = 2;
-  rejects(c, "surface_lloyd_relaxation");
-  ReconstructionOptions d = o;
-  d.fit.min_quadratic_points = 3;
-  rejects(d, "min_quadratic_points");
-  ReconstructionOptions e = o;
-  e.mesher.min_piece_faces = -1;
-  rejects(e, "min_piece_faces");
+  const std::vector<std::pair<std::function<void(ReconstructionOptions&)>, std::string>> cases = {
+      {[](ReconstructionOptions& b) { b.cloud.fit_cells = 0; }, "fit_cells"},
+      {[](ReconstructionOptions& b) { b.cloud.max_crossing_fraction = 1.5; }, "max_crossing_fraction"},
+      {[](ReconstructionOptions& b) { b.cloud.surface_lloyd_relaxation = 2; }, "surface_lloyd_relaxation"},
+      {[](ReconstructionOptions& b) { b.cloud.orientation_offset_penalty = -1; }, "orientation_offset_penalty"},
+      {[](ReconstructionOptions& b) { b.fit.min_quadratic_points = 3; }, "min_quadratic_points"},
+      {[](ReconstructionOptions& b) { b.mesher.min_piece_faces = -1; }, "min_piece_faces"}};
+  for (const auto& [change, needle] : cases) {
+    ReconstructionOptions bad = o;
+    change(bad);
+    rejects(bad, needle);
+  }
 }
 
 }  // namespace

@@ -74,7 +74,7 @@ bool selected(const WorkingMesh& mesh, const SurfaceProjector& surface, const st
     case HolePolicy::keep: return L <= o.sampled_hole_factor * o.max_hole_edges && is_sampled_hole(mesh, surface, loop, o);
     case HolePolicy::automatic: break;
   }
-  return L <= o.max_hole_edges || (L <= o.sampled_hole_factor * o.max_hole_edges && is_sampled_hole(mesh, surface, loop, o)) ||
+  return (L <= o.max_hole_edges && o.fill_short_loops) || (L <= o.sampled_hole_factor * o.max_hole_edges && is_sampled_hole(mesh, surface, loop, o)) ||
          is_surrounded_hole(mesh, surface, loop, o);
 }
 

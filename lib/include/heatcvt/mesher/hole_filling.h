@@ -25,9 +25,14 @@ struct HoleFillingOptions {
   HolePolicy policy = HolePolicy::automatic;  ///< Default automatic.
   /// With HolePolicy::fill: the longest loop triangulated (the triangulation costs O(L³)). Default 600.
   int max_fill_edges = 600;
-  /// Boundary loops of at most this many edges are holes of the extraction: always filled.
-  /// Default 8.
+  /// Boundary loops of at most this many edges are holes of the extraction: filled (without
+  /// the tests below when `fill_short_loops` is set). Default 8.
   int max_hole_edges = 8;
+  /// Fill loops of at most max_hole_edges edges whatever the surface looks like there. Default
+  /// true (a scan's own holes that small are gaps of the sampling); false keeps every real
+  /// boundary of the projector's surface (an input mesh with holes): such loops are then filled
+  /// only when the tests below find surface across them.
+  bool fill_short_loops = true;
   /// Loops of up to this many times max_hole_edges edges are filled when their centre is more
   /// than `clearance`·h from every triangle yet within `sample_gap`·h of the sampled surface (a
   /// hole in sampled surface, not the border of a scan). Default 4.
