@@ -18,29 +18,11 @@ using namespace heatcvt;
 
 namespace {
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), {});
-}
-
-std::vector<std::string> error_lines(const std::string& err) {
-  std::vector<std::string> out;
-  std::istringstream lines(err);
-  for (std::string line; std::getline(lines, line);)
-    if (line.find("error") != std::string::npos) out.push_back(line);
-  return out;
-}
-
 // Non-zero exit, exactly one "cloud2mesh: error:" line containing every needle, and the
 // directory holds `expected_entries` entries (no output, no temporary).
 void expect_clean_failure(const test::CommandResult& r, const std::vector<std::string>& needles,
                           const test::ScratchDir& dir, int expected_entries) {
-  EXPECT_NE(r.exit_code, 0);
-  const auto lines = error_lines(r.err);
-  ASSERT_EQ(lines.size(), 1u) << r.err;
-  EXPECT_EQ(lines[0].rfind("cloud2mesh: error: ", 0), 0u) << lines[0];
-  for (const auto& n : needles) EXPECT_NE(lines[0].find(n), std::string::npos) << "'" << n << "' not in: " << lines[0];
-  EXPECT_EQ(dir.entries(), expected_entries) << "an output or temporary file was left behind";
+  test::expect_tool_failure("cloud2mesh", r, needles, dir, expected_entries);
 }
 
 // Writes a sphere cloud ("x y z" lines) of n golden-spiral points.
@@ -85,7 +67,7 @@ TEST(Cloud2MeshTool, SphereCloudClosedGenus0WithReportAndSameSeedSameOutput) {
   EXPECT_EQ(m.V.rows(), 400);
   EXPECT_EQ(m.F.rows(), 2 * 400 - 4);  // closed genus-0 triangulation
   for (Eigen::Index i = 0; i < m.V.rows(); ++i) EXPECT_NEAR(m.V.row(i).norm(), 1.0, 5e-3);
-  const std::string json = slurp(dir.path("r.json"));
+  const std::string json = test::read_file(dir.path("r.json"));
   for (const char* key : {"\"points_in_file\": 6000", "\"vertices\": 400", "\"laplacian_s\"", "\"factor_s\"",
                           "\"per_iteration_s\"", "\"min_angle_deg\"", "\"mean_min_angle_deg\"", "\"no_self_intersections\": \"pass\"",
                           "\"valid\": true"})
@@ -97,11 +79,11 @@ TEST(Cloud2MeshTool, SphereCloudClosedGenus0WithReportAndSameSeedSameOutput) {
                                                std::to_string(threads) + " -q");
     ASSERT_EQ(r2.exit_code, 0) << r2.err;
     EXPECT_TRUE(r2.out.empty() && r2.err.empty()) << "--quiet must be silent";
-    EXPECT_EQ(slurp(dir.path("a.ply")), slurp(dir.path("b.ply")));
+    EXPECT_EQ(test::read_file(dir.path("a.ply")), test::read_file(dir.path("b.ply")));
   }
   auto r3 = test::run_tool("cloud2mesh", dir.path("s.xyz") + " -n 400 -o " + dir.path("c.ply") + " --seed 5 -q");
   ASSERT_EQ(r3.exit_code, 0) << r3.err;
-  EXPECT_NE(slurp(dir.path("a.ply")), slurp(dir.path("c.ply")));
+  EXPECT_NE(test::read_file(dir.path("a.ply")), test::read_file(dir.path("c.ply")));
 }
 
 // Every shared cloud at -n 200 (5 iterations, k = 12, to keep the suite short), one rule for all:

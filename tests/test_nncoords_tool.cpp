@@ -17,16 +17,7 @@ namespace {
 
 void expect_clean_failure(const test::CommandResult& r, const std::vector<std::string>& needles,
                           const test::ScratchDir& dir, int expected_entries) {
-  EXPECT_NE(r.exit_code, 0);
-  std::vector<std::string> error_lines;
-  std::istringstream lines(r.err);
-  for (std::string line; std::getline(lines, line);)
-    if (line.find("error") != std::string::npos) error_lines.push_back(line);
-  ASSERT_EQ(error_lines.size(), 1u) << r.err;
-  EXPECT_EQ(error_lines[0].rfind("nncoords: error: ", 0), 0u) << error_lines[0];
-  for (const auto& n : needles)
-    EXPECT_NE(error_lines[0].find(n), std::string::npos) << "'" << n << "' not in: " << error_lines[0];
-  EXPECT_EQ(dir.entries(), expected_entries) << "an output or temporary file was left behind";
+  test::expect_tool_failure("nncoords", r, needles, dir, expected_entries);
 }
 
 // An icosphere written as OBJ, and sites at four of its vertices.

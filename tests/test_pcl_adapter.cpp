@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <queue>
 #include <random>
@@ -344,9 +345,9 @@ TEST(HeatVoronoiSegmentation, BadInputsGivePclErrorAndEmptyResult) {
 // HeatCVTReconstruction
 
 // Largest distance of a reconstructed vertex from the unit sphere its 1500-point cloud was drawn
-// from: 1500 points give a mean spacing of about 0.09, and a vertex fitted to the local surface
-// of its neighbours lies within a few per cent of that spacing's sagitta of the sphere.
-constexpr float kSphereVertexTolerance = 0.01f;
+// from: 1500 points give a mean spacing of about 0.09, whose sagitta on the unit sphere is
+// 0.001; a vertex fitted to the local surface of its neighbours lies within it (measured 3e-4).
+constexpr float kSphereVertexTolerance = 0.001f;
 
 // PCL's SurfaceReconstruction contract: the class inherits reconstruct() (the base class does the
 // input set-up and calls performReconstruction); the address of HeatCVTReconstruction::reconstruct
@@ -488,7 +489,10 @@ TEST(HeatCVTReconstruction, IndicesNanAndDuplicatesAreCleanedLikeTheCore) {
   pcl::PointCloud<pcl::PointXYZ> vertices;
   pcl::fromPCLPointCloud2(mesh.cloud, vertices);
   ASSERT_GE(vertices.size(), 140u);
-  for (const auto& p : vertices) EXPECT_NEAR(p.getVector3fMap().norm(), 1.0f, kSphereVertexTolerance);
+  float worst = 0;
+  for (const auto& p : vertices) worst = std::max(worst, std::abs(p.getVector3fMap().norm() - 1.0f));
+  std::printf("[ info ] %zu vertices, largest | |v| - 1 | = %.5f\n", vertices.size(), worst);
+  EXPECT_LT(worst, kSphereVertexTolerance);
 }
 
 TEST(HeatCVTReconstruction, PointTypeWithColourAndNormals) {
