@@ -17,6 +17,11 @@ using namespace heatcvt;
 
 namespace {
 
+// Distance (in mean edge lengths) allowed between the heat centroid of a symmetric cell and its
+// symmetry axis: the mirror images agree up to the rounding of the sparse solves and of the
+// voronoi tie rule, far below an edge length.
+constexpr double kSymmetricCentroidTolerance = 1e-6;
+
 // Unit disk: an n×n grid of [−1,1]² mapped by the elliptical square-to-disk map
 // (x√(1 − y²/2), y√(1 − x²/2)); alternating diagonals.
 TriangleMesh disk(int n) {
@@ -184,9 +189,8 @@ TEST(HeatCentroid, CellsOnIcosphereNearAreaCentroid) {
 }
 
 // The exact cell load vectors integrate linear functions exactly (∫_cell f = Σ_v w_v f(v) for
-// linear f), and heat_centroids follows the documented pipeline: load vector → `steps` implicit
-// steps (diffuse_steps) → hottest vertex of the cell's parent faces → refinement.
-TEST(HeatCentroid, LoadVectorsAndPipelineConsistent) {
+// linear f, the integral summed here over the refined pieces of the cell).
+TEST(HeatCentroid, LoadVectorsIntegrateLinearFunctionsExactly) {
   auto m = test::icosphere(3);
   HeatSolver solver(cotan_laplacian(m.V, m.F));
   std::mt19937 rng(9);
@@ -203,22 +207,42 @@ TEST(HeatCentroid, LoadVectorsAndPipelineConsistent) {
     for (auto& [v, w] : cell_load_vector(d, m.F, c)) via_load += w * m.V.row(v).transpose();
     EXPECT_LT((exact - via_load).norm(), 1e-12);
   }
+}
+
+// Analytic centroids: six sites on the coordinate axes of an icosphere, which is symmetric under
+// the reflections x → −x, y → −y, z → −z and the cyclic permutation of the axes. Each cell is then
+// symmetric under the two reflections that fix its axis, so its centroid (the heat centroid as
+// well as the area centroid) lies on that axis: it is the site itself.
+TEST(HeatCentroid, SymmetricCellsHaveTheirSiteAsCentroid) {
+  const auto m = test::icosphere(4);
+  const double h = mean_edge_length(m.V, m.F);
+  HeatSolver solver(cotan_laplacian(m.V, m.F));
+  std::vector<SurfacePoint> sites;
+  for (int axis = 0; axis < 3; ++axis)
+    for (double sign : {1.0, -1.0}) {
+      Eigen::Vector3d target = Eigen::Vector3d::Zero();
+      target[axis] = sign;
+      SurfacePoint site;
+      for (int f = 0; f < m.F.rows() && site.face < 0; ++f)
+        for (int k = 0; k < 3; ++k)
+          if ((m.V.row(m.F(f, k)).transpose() - target).norm() < 1e-12) {
+            site.face = f;
+            site.bary = Eigen::Vector3d::Zero();
+            site.bary[k] = 1;
+          }
+      ASSERT_GE(site.face, 0) << "the icosphere has a vertex on every coordinate axis";
+      sites.push_back(site);
+    }
+  const VoronoiDiagram d = heat_voronoi(m.V, m.F, solver, sites);
   CentroidOptions opt;
-  opt.steps = 3;
+  opt.steps = 5;
   const auto cents = heat_centroids(m.V, m.F, solver, d, opt);
-  const auto vf = vertex_faces(static_cast<int>(m.V.rows()), m.F);
-  const Eigen::MatrixX3d N = vertex_normals(m.V, m.F);
-  for (int c = 0; c < d.num_cells(); ++c) {
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m.V.rows());
-    for (auto& [v, w] : cell_load_vector(d, m.F, c)) rhs[v] += w;
-    const Eigen::VectorXd u = solver.diffuse_steps(rhs, 3);
-    int hot = -1;
-    for (int r : faces[c])
-      for (int k = 0; k < 3; ++k) {
-        const int v = m.F(d.face_parent[r], k);
-        if (hot < 0 || u[v] > u[hot] || (u[v] == u[hot] && v < hot)) hot = v;
-      }
-    const SurfacePoint p = refine_hottest_vertex(m.V, m.F, vf, N, u, hot);
-    EXPECT_LT((position(m.V, m.F, p) - position(m.V, m.F, cents[c])).norm(), 1e-9) << "cell " << c;
+  ASSERT_EQ(cents.size(), sites.size());
+  double worst = 0;
+  for (size_t c = 0; c < sites.size(); ++c) {
+    const double e = (position(m.V, m.F, cents[c]) - position(m.V, m.F, sites[c])).norm();
+    worst = std::max(worst, e);
+    EXPECT_LT(e, kSymmetricCentroidTolerance * h) << "cell " << c;
   }
+  std::printf("[ info ] six axis cells: worst |heat centroid - axis point| = %.3g h\n", worst / h);
 }

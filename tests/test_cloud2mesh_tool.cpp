@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "heatcvt/dual_mesh.h"
 #include "heatcvt/mesh_io.h"
 #include "heatcvt/validate.h"
 #include "test_support.h"
@@ -17,29 +18,11 @@ using namespace heatcvt;
 
 namespace {
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), {});
-}
-
-std::vector<std::string> error_lines(const std::string& err) {
-  std::vector<std::string> out;
-  std::istringstream lines(err);
-  for (std::string line; std::getline(lines, line);)
-    if (line.find("error") != std::string::npos) out.push_back(line);
-  return out;
-}
-
 // Non-zero exit, exactly one "cloud2mesh: error:" line containing every needle, and the
 // directory holds `expected_entries` entries (no output, no temporary).
 void expect_clean_failure(const test::CommandResult& r, const std::vector<std::string>& needles,
                           const test::ScratchDir& dir, int expected_entries) {
-  EXPECT_NE(r.exit_code, 0);
-  const auto lines = error_lines(r.err);
-  ASSERT_EQ(lines.size(), 1u) << r.err;
-  EXPECT_EQ(lines[0].rfind("cloud2mesh: error: ", 0), 0u) << lines[0];
-  for (const auto& n : needles) EXPECT_NE(lines[0].find(n), std::string::npos) << "'" << n << "' not in: " << lines[0];
-  EXPECT_EQ(dir.entries(), expected_entries) << "an output or temporary file was left behind";
+  test::expect_tool_failure("cloud2mesh", r, needles, dir, expected_entries);
 }
 
 // Writes a sphere cloud ("x y z" lines) of n golden-spiral points.
@@ -84,24 +67,42 @@ TEST(Cloud2MeshTool, SphereCloudClosedGenus0WithReportAndSameSeedSameOutput) {
   EXPECT_EQ(m.V.rows(), 400);
   EXPECT_EQ(m.F.rows(), 2 * 400 - 4);  // closed genus-0 triangulation
   for (Eigen::Index i = 0; i < m.V.rows(); ++i) EXPECT_NEAR(m.V.row(i).norm(), 1.0, 5e-3);
-  const std::string json = slurp(dir.path("r.json"));
+  const std::string json = test::read_file(dir.path("r.json"));
   for (const char* key : {"\"points_in_file\": 6000", "\"vertices\": 400", "\"laplacian_s\"", "\"factor_s\"",
                           "\"per_iteration_s\"", "\"phi_min_deg\"", "\"phi_mean_deg\"", "\"name\": \"no_self_intersections\"",
                           "\"all_checks_passed\": true"})
     EXPECT_NE(json.find(key), std::string::npos) << key << " not in:\n" << json;
-  // Same seed: byte-identical output (also with another thread count); another seed differs.
-  auto r2 = test::run_tool("cloud2mesh", dir.path("s.xyz") + " -n 400 -o " + dir.path("b.ply") + " --threads 1 -q");
-  ASSERT_EQ(r2.exit_code, 0) << r2.err;
-  EXPECT_TRUE(r2.out.empty() && r2.err.empty()) << "--quiet must be silent";
-  EXPECT_EQ(slurp(dir.path("a.ply")), slurp(dir.path("b.ply")));
+  // Same seed: byte-identical output with 1, 2 and 4 threads; another seed differs.
+  for (int threads : test::kThreadCounts) {
+    SCOPED_TRACE(threads);
+    auto r2 = test::run_tool("cloud2mesh", dir.path("s.xyz") + " -n 400 -o " + dir.path("b.ply") + " --threads " +
+                                               std::to_string(threads) + " -q");
+    ASSERT_EQ(r2.exit_code, 0) << r2.err;
+    EXPECT_TRUE(r2.out.empty() && r2.err.empty()) << "--quiet must be silent";
+    EXPECT_EQ(test::read_file(dir.path("a.ply")), test::read_file(dir.path("b.ply")));
+  }
   auto r3 = test::run_tool("cloud2mesh", dir.path("s.xyz") + " -n 400 -o " + dir.path("c.ply") + " --seed 5 -q");
   ASSERT_EQ(r3.exit_code, 0) << r3.err;
-  EXPECT_NE(slurp(dir.path("a.ply")), slurp(dir.path("c.ply")));
+  EXPECT_NE(test::read_file(dir.path("a.ply")), test::read_file(dir.path("c.ply")));
 }
 
-// Every shared cloud at -n 200 (5 iterations, k = 12, to keep the suite short: the defaults took
-// ~9 min for the 42 clouds on the shared 2-core machine): either a mesh whose
-// edges and vertices are manifold and consistently oriented, or exactly one error line.
+// Every shared cloud at -n 200 (5 iterations, k = 12, to keep the suite short), one rule for all:
+// a mesh that passes every check (manifold edges and vertices, consistent orientation, every
+// vertex used, no self-intersections) and whose vertex count, components, boundary loops, φm and
+// φmin are within the bounds below. The real-scans issue sets the targets (vertex count within
+// 2 % of -n, φm >= 52°, φmin >= 25°, no stray components); today's reconstruction does not meet
+// them on partial, cluttered or sparse scans, so the bounds are the floor that every shared cloud
+// meets today (the worst cloud of each figure, measured with these options: blobby.xyz keeps 14
+// of the 200 sites, pcldata_capture0001.pcd has 6 components, pcldata_region_growing_tutorial.pcd
+// 2 boundary loops and a φmin of 0.08°, open3d_cloud_bin_1.pcd a φm of 24.5°): a guard against
+// regressions, not the targets.
+constexpr int kSweepSites = 200;
+constexpr int kSweepMinVertices = 14;
+constexpr int kSweepMaxComponents = 6;
+constexpr int kSweepMaxBoundaryLoops = 2;
+constexpr double kSweepMinPhiMean = 24.5;
+constexpr double kSweepMinPhiMin = 0.05;
+
 TEST(Cloud2MeshTool, EverySharedCloudSmallSiteCount) {
   test::ScratchDir dir("c2m");
   const std::string clouds = test::data_path("clouds");
@@ -110,36 +111,72 @@ TEST(Cloud2MeshTool, EverySharedCloudSmallSiteCount) {
     if (e.is_regular_file() && e.path().extension() != ".md") files.push_back(e.path().string());
   std::sort(files.begin(), files.end());
   ASSERT_GE(files.size(), 20u);
-  int ok = 0, failed = 0;
   for (const auto& f : files) {
+    SCOPED_TRACE(f);
     const std::string out = dir.path(std::filesystem::path(f).stem().string() + ".ply");
-    auto r = test::run_tool("cloud2mesh", "'" + f + "' -n 200 -i 5 -k 12 -o '" + out + "' -q --threads 2");
-    if (r.exit_code == 0 || r.exit_code == 3) {  // 3: written, but some check failed
-      ++ok;
-      TriangleMesh m = read_mesh(out);
-      ValidationOptions vo;
-      vo.require_closed = false;
-      const ValidationReport rep = validate_triangle_mesh(m.V, m.F, vo);
-      std::printf("[ %s ] V %ld F %ld components %d boundary loops %d self-intersecting pairs %ld\n",
-                  std::filesystem::path(f).filename().c_str(), static_cast<long>(m.V.rows()),
-                  static_cast<long>(m.F.rows()), rep.components, rep.boundary_loops, rep.self_intersecting_pairs);
-      for (const char* check : {"manifold_edges", "manifold_vertices", "consistent_orientation", "all_vertices_used"}) {
-        const MeshCheck* c = rep.find(check);
-        ASSERT_NE(c, nullptr) << check;
-        EXPECT_TRUE(c->passed) << f << ": " << check << " " << c->detail;
-      }
-      EXPECT_TRUE(r.err.empty()) << f << ": " << r.err;
-    } else {
-      ++failed;
-      std::printf("[ %s ] error: %s", std::filesystem::path(f).filename().c_str(), r.err.c_str());
-      EXPECT_TRUE(r.exit_code == 1 || r.exit_code == 2) << f;  // clean error (a crash would be a signal / other code)
-      const auto lines = error_lines(r.err);
-      EXPECT_EQ(lines.size(), 1u) << f << ": " << r.err;
-      EXPECT_FALSE(std::filesystem::exists(out)) << f;
+    auto r = test::run_tool("cloud2mesh", "'" + f + "' -n " + std::to_string(kSweepSites) + " -i 5 -k 12 -o '" + out +
+                                              "' -q --threads 2");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_TRUE(r.err.empty()) << r.err;
+    const TriangleMesh m = read_mesh(out);
+    ValidationOptions vo;
+    vo.require_closed = false;
+    const ValidationReport rep = validate_triangle_mesh(m.V, m.F, vo);
+    const TriangleQuality q = triangle_quality(m.V, m.F);
+    std::printf("[ %s ] V %ld F %ld components %d boundary loops %d self-intersecting pairs %ld phi_min %.1f phi_m %.1f\n",
+                std::filesystem::path(f).filename().c_str(), static_cast<long>(m.V.rows()),
+                static_cast<long>(m.F.rows()), rep.components, rep.boundary_loops, rep.self_intersecting_pairs,
+                q.min_angle_deg, q.mean_min_angle_deg);
+    for (const char* check : {"manifold_edges", "manifold_vertices", "consistent_orientation", "all_vertices_used",
+                              "no_self_intersections"}) {
+      const MeshCheck* c = rep.find(check);
+      ASSERT_NE(c, nullptr) << check;
+      EXPECT_TRUE(c->ran && c->passed) << check << " " << c->detail;
     }
+    EXPECT_GE(m.V.rows(), kSweepMinVertices);
+    EXPECT_LE(m.V.rows(), kSweepSites);
+    EXPECT_GE(rep.components, 1);
+    EXPECT_LE(rep.components, kSweepMaxComponents);
+    EXPECT_LE(rep.boundary_loops, kSweepMaxBoundaryLoops);
+    EXPECT_GE(q.mean_min_angle_deg, kSweepMinPhiMean);
+    EXPECT_GE(q.min_angle_deg, kSweepMinPhiMin);
   }
-  std::printf("[ info ] %d clouds reconstructed, %d clean errors\n", ok, failed);
-  EXPECT_GE(ok, static_cast<int>(files.size()) - 3);
+}
+
+// The README's own command on the README's own input (clouds/pcl_milk.pcd, an open scan of a
+// milk carton: one boundary loop). Bounds: every check passes, one component with one boundary
+// loop, the vertex count and φm meet the real-scans targets (within 2 % of -n, φm >= 52°);
+// φmin does not meet its 25° target today (4.2° measured, a sliver along the scan's edge) and
+// is held at kReadmeMinPhiMin, today's level.
+constexpr double kReadmeMinPhiMin = 4.0;
+TEST(Cloud2MeshTool, ReadmeCommandOnPclMilk) {
+  test::ScratchDir dir("c2m");
+  const std::string cloud = std::string(HEATCVT_SOURCE_DIR) + "/clouds/pcl_milk.pcd";
+  auto r = test::run_tool("cloud2mesh", cloud + " -n 3000 -o " + dir.path("milk.ply") + " --report " +
+                                            dir.path("milk.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const TriangleMesh m = read_mesh(dir.path("milk.ply"));
+  ValidationOptions vo;
+  vo.require_closed = false;
+  const ValidationReport rep = validate_triangle_mesh(m.V, m.F, vo);
+  const TriangleQuality q = triangle_quality(m.V, m.F);
+  std::printf("[ pcl_milk.pcd, -n 3000 ] V %ld F %ld components %d boundary loops %d phi_min %.1f phi_m %.2f\n",
+              static_cast<long>(m.V.rows()), static_cast<long>(m.F.rows()), rep.components, rep.boundary_loops,
+              q.min_angle_deg, q.mean_min_angle_deg);
+  EXPECT_TRUE(rep.ok()) << rep.summary();
+  EXPECT_TRUE(rep.find("no_self_intersections") && rep.find("no_self_intersections")->ran);
+  EXPECT_EQ(rep.components, 1);
+  EXPECT_EQ(rep.boundary_loops, 1);
+  EXPECT_EQ(rep.genus, 0);
+  EXPECT_GE(m.V.rows(), 0.98 * 3000);
+  EXPECT_LE(m.V.rows(), 3000);
+  EXPECT_GE(q.mean_min_angle_deg, 52.0);
+  EXPECT_GE(q.min_angle_deg, kReadmeMinPhiMin);
+  // The report describes the written mesh.
+  const std::string json = test::read_file(dir.path("milk.json"));
+  EXPECT_EQ(test::json_number(json, "vertices"), m.V.rows());
+  EXPECT_EQ(test::json_number(json, "faces"), m.F.rows());
+  EXPECT_NE(json.find("\"valid\": true"), std::string::npos);
 }
 
 TEST(Cloud2MeshTool, MissingFile) {

@@ -183,10 +183,23 @@ TEST(DualMesh, DualOfHeatVoronoiOnSphereIsAClosedGenus0Manifold) {
     Eigen::Vector3d a = dual.V.row(dual.F(f, 0)), b = dual.V.row(dual.F(f, 1)), c = dual.V.row(dual.F(f, 2));
     EXPECT_GT((b - a).cross(c - a).dot(a + b + c), 0.0);
   }
+  // triangle_quality against the angles computed here from the dot products (acos of the
+  // normalised edge vectors): the smallest angle and the mean of the per-triangle smallest angles.
   TriangleQuality q = triangle_quality(dual.V, dual.F);
-  EXPECT_GT(q.min_angle_deg, 0.0);
-  EXPECT_LE(q.min_angle_deg, q.mean_min_angle_deg);
-  EXPECT_LE(q.mean_min_angle_deg, 60.0);
+  double smallest = 180, sum_of_smallest = 0;
+  for (int f = 0; f < dual.F.rows(); ++f) {
+    double tri_min = 180;
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d p = dual.V.row(dual.F(f, k)), u = dual.V.row(dual.F(f, (k + 1) % 3)) - p.transpose(),
+                            w = dual.V.row(dual.F(f, (k + 2) % 3)) - p.transpose();
+      tri_min = std::min(tri_min, std::acos(u.normalized().dot(w.normalized())) * 180.0 / M_PI);
+    }
+    smallest = std::min(smallest, tri_min);
+    sum_of_smallest += tri_min;
+  }
+  EXPECT_NEAR(q.min_angle_deg, smallest, 1e-9);
+  EXPECT_NEAR(q.mean_min_angle_deg, sum_of_smallest / dual.F.rows(), 1e-9);
+  EXPECT_GT(smallest, 0.0);  // no degenerate triangle
 }
 
 TEST(DualMesh, FourSitesInASquareGiveTwoOrientedTriangles) {

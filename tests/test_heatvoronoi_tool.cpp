@@ -3,9 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <cmath>
 #include <fstream>
+#include <map>
 #include <sstream>
+#include <vector>
 
+#include "heatcvt/laplacian.h"
 #include "heatcvt/mesh_io.h"
 #include "test_support.h"
 
@@ -17,17 +21,7 @@ namespace {
 // every needle, no output file and no temporary left behind.
 void expect_clean_failure(const test::CommandResult& r, const std::vector<std::string>& needles,
                           const test::ScratchDir& dir, int expected_entries) {
-  EXPECT_NE(r.exit_code, 0);
-  ASSERT_FALSE(r.err.empty());
-  std::vector<std::string> error_lines;
-  std::istringstream lines(r.err);
-  for (std::string line; std::getline(lines, line);)
-    if (line.find("error") != std::string::npos) error_lines.push_back(line);
-  ASSERT_EQ(error_lines.size(), 1u) << r.err;
-  EXPECT_EQ(error_lines[0].rfind("heatvoronoi: error: ", 0), 0u) << error_lines[0];
-  for (const auto& n : needles)
-    EXPECT_NE(error_lines[0].find(n), std::string::npos) << "'" << n << "' not in: " << error_lines[0];
-  EXPECT_EQ(dir.entries(), expected_entries) << "an output or temporary file was left behind";
+  test::expect_tool_failure("heatvoronoi", r, needles, dir, expected_entries);
 }
 
 const char* kTetra =
@@ -47,12 +41,51 @@ TEST(HeatVoronoiTool, RealMeshProducesCellsEdgesCentroidsAndReport) {
   TriangleMesh input = read_mesh(mesh);
   EXPECT_GE(cells.F.rows(), input.F.rows());
   EXPECT_NEAR(surface_area(cells.V, cells.F), surface_area(input.V, input.F), 1e-9 * surface_area(input.V, input.F));
+  // Centroids: 30 points "x y z", each on the input surface (a heat centroid is a surface point):
+  // within a mean edge length of an input vertex.
+  const double h = mean_edge_length(input.V, input.F);
   std::ifstream c(dir.path("c.xyz"));
   int lines = 0;
-  for (std::string line; std::getline(c, line);) ++lines;
+  for (std::string line; std::getline(c, line);) {
+    std::istringstream ls(line);
+    Eigen::RowVector3d p;
+    ASSERT_TRUE(ls >> p[0] >> p[1] >> p[2]) << line;
+    EXPECT_LT((input.V.rowwise() - p).rowwise().norm().minCoeff(), h) << line;
+    ++lines;
+  }
   EXPECT_EQ(lines, 30);
-  EXPECT_TRUE(std::filesystem::exists(dir.path("edges.obj")));
-  EXPECT_TRUE(std::filesystem::exists(dir.path("r.json")));
+  // Edges: the OBJ holds the refined vertices of cells.ply and one polyline per Voronoi edge;
+  // every polyline runs between two Voronoi vertices (points where three or more cells meet).
+  std::ifstream e(dir.path("edges.obj"));
+  int edge_points = 0, polylines = 0;
+  std::map<int, int> endpoint_uses;
+  for (std::string line; std::getline(e, line);) {
+    if (line.rfind("v ", 0) == 0) ++edge_points;
+    if (line.rfind("l ", 0) != 0) continue;
+    ++polylines;
+    std::istringstream ls(line.substr(2));
+    std::vector<int> ids;
+    for (int id; ls >> id;) ids.push_back(id);
+    ASSERT_GE(ids.size(), 2u) << line;
+    for (int id : ids) ASSERT_TRUE(id >= 1 && id <= edge_points) << line;
+    ++endpoint_uses[ids.front()];
+    ++endpoint_uses[ids.back()];
+  }
+  EXPECT_EQ(edge_points, cells.V.rows());
+  // Spot is a closed genus-0 surface: the cells, Voronoi edges and Voronoi vertices form a
+  // cell complex of Euler characteristic 2, and every Voronoi vertex ends at least 3 edges.
+  EXPECT_EQ(static_cast<int>(endpoint_uses.size()) - polylines + 30, 2);
+  for (const auto& [id, uses] : endpoint_uses) EXPECT_GE(uses, 3) << "Voronoi vertex " << id;
+  // Report: the counts of the files and of the input.
+  const std::string json = test::read_file(dir.path("r.json"));
+  EXPECT_EQ(test::json_number(json, "cells"), 30);
+  EXPECT_EQ(test::json_number(json, "vertices"), input.V.rows());
+  EXPECT_EQ(test::json_number(json, "faces"), input.F.rows());
+  EXPECT_EQ(test::json_number(json, "refined_vertices"), cells.V.rows());
+  EXPECT_EQ(test::json_number(json, "refined_faces"), cells.F.rows());
+  EXPECT_EQ(test::json_number(json, "voronoi_edges"), polylines);
+  EXPECT_EQ(test::json_number(json, "voronoi_vertices"), static_cast<double>(endpoint_uses.size()));
+  EXPECT_NEAR(30 * test::json_number(json, "cell_area_mean"), surface_area(input.V, input.F), 1e-6 * surface_area(input.V, input.F));
   // same seed, same output
   auto r2 = test::run_tool("heatvoronoi", mesh + " -o " + dir.path("cells2.ply") + " --sites 30 -q");
   ASSERT_EQ(r2.exit_code, 0);

@@ -17,16 +17,7 @@ namespace {
 
 void expect_clean_failure(const test::CommandResult& r, const std::vector<std::string>& needles,
                           const test::ScratchDir& dir, int expected_entries) {
-  EXPECT_NE(r.exit_code, 0);
-  std::vector<std::string> error_lines;
-  std::istringstream lines(r.err);
-  for (std::string line; std::getline(lines, line);)
-    if (line.find("error") != std::string::npos) error_lines.push_back(line);
-  ASSERT_EQ(error_lines.size(), 1u) << r.err;
-  EXPECT_EQ(error_lines[0].rfind("nncoords: error: ", 0), 0u) << error_lines[0];
-  for (const auto& n : needles)
-    EXPECT_NE(error_lines[0].find(n), std::string::npos) << "'" << n << "' not in: " << error_lines[0];
-  EXPECT_EQ(dir.entries(), expected_entries) << "an output or temporary file was left behind";
+  test::expect_tool_failure("nncoords", r, needles, dir, expected_entries);
 }
 
 // An icosphere written as OBJ, and sites at four of its vertices.
@@ -64,6 +55,7 @@ TEST(NncoordsTool, InterpolatesColoursAndWritesWeights) {
   int nv = 0;
   bool colour = false, header = true;
   int checked = 0;
+  std::vector<Eigen::Vector3d> values;  // value_0..2 per vertex, checked against the weights below
   while (std::getline(in, line)) {
     if (header) {
       if (line.rfind("element vertex", 0) == 0) nv = std::stoi(line.substr(15));
@@ -75,9 +67,9 @@ TEST(NncoordsTool, InterpolatesColoursAndWritesWeights) {
     std::istringstream ls(line);
     double x, y, z, a, b, c;
     ls >> x >> y >> z >> a >> b >> c;
-    EXPECT_NEAR(a + b + c, 1.0 + 0.0, 1.0) << "values are convex combinations of the site rows";
     EXPECT_GE(std::min({a, b, c}), -1e-12);
     EXPECT_LE(std::max({a, b, c}), 1 + 1e-12);
+    values.emplace_back(a, b, c);
     ++checked;
   }
   EXPECT_EQ(checked, s.m.V.rows());
@@ -88,6 +80,7 @@ TEST(NncoordsTool, InterpolatesColoursAndWritesWeights) {
   ASSERT_EQ(w.exit_code, 0) << w.err;
   EXPECT_TRUE(w.err.empty()) << w.err;
   std::ifstream win(s.dir.path("w.txt"));
+  const Eigen::Vector3d site_rows[4] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 0}};  // rgb.txt
   int rows = 0;
   while (std::getline(win, line)) {
     if (line.empty() || line[0] == '#') continue;
@@ -96,17 +89,23 @@ TEST(NncoordsTool, InterpolatesColoursAndWritesWeights) {
     ls >> v >> k;
     EXPECT_EQ(v, rows);
     double sum = 0;
+    Eigen::Vector3d interpolated = Eigen::Vector3d::Zero();
     for (int i = 0; i < k; ++i) {
       int site;
       double weight;
       ls >> site >> weight;
-      EXPECT_GE(site, 0);
-      EXPECT_LT(site, 4);
+      ASSERT_GE(site, 0);
+      ASSERT_LT(site, 4);
       EXPECT_GT(weight, 0);
       sum += weight;
+      interpolated += weight * site_rows[site];
       if (v == 0 || v == 3 || v == 5 || v == 9) EXPECT_NEAR(weight, 1.0, 1e-9) << "vertex " << v;
     }
     EXPECT_NEAR(sum, 1.0, 1e-9);
+    // The interpolated values are the weighted sums of the site rows (the same coordinates), up
+    // to the precision of the two text files.
+    ASSERT_LT(v, static_cast<int>(values.size()));
+    EXPECT_LT((values[v] - interpolated).norm(), 1e-6) << "vertex " << v;
     ++rows;
   }
   EXPECT_EQ(rows, s.m.V.rows());

@@ -262,12 +262,14 @@ TEST_P(BothModes, DeterministicAcrossRunsAndThreads) {
   const Eigen::MatrixX3d P = random_sphere(4000, 9);
   PointLaplacianOptions one = options();
   one.threads = 1;
-  PointLaplacianOptions two = options();
-  two.threads = 2;
   const PointLaplacian a = point_laplacian(P, one);
-  const PointLaplacian b = point_laplacian(P, two);
-  const PointLaplacian c = point_laplacian(P, two);
-  for (const PointLaplacian* x : {&b, &c}) {
+  std::vector<PointLaplacian> others;  // 1, 2 and 4 threads, and 2 threads once more
+  for (int threads : {1, 2, 4, 2}) {
+    PointLaplacianOptions o = options();
+    o.threads = threads;
+    others.push_back(point_laplacian(P, o));
+  }
+  for (const PointLaplacian* x : {&others[0], &others[1], &others[2], &others[3]}) {
     ASSERT_EQ(a.laplacian.L.nonZeros(), x->laplacian.L.nonZeros());
     EXPECT_TRUE(std::equal(a.laplacian.L.valuePtr(), a.laplacian.L.valuePtr() + a.laplacian.L.nonZeros(),
                            x->laplacian.L.valuePtr()));
@@ -423,14 +425,14 @@ TEST_P(BothModes, DuplicatePointsKeepMassPositive) {
   EXPECT_EQ(solver.num_vertices(), 2100);
 }
 
-TEST_P(BothModes, Timing50kPoints) {
+// A cloud of the size of the reconstruction benchmark (50k points): a valid Laplacian (its build
+// time is measured by bench/, not here).
+TEST_P(BothModes, FiftyThousandPointsGiveAValidLaplacian) {
   const Eigen::MatrixX3d P = random_sphere(50000, 41);
   const PointLaplacian pl = point_laplacian(P, options());
-  std::printf("[%s] 50k points, k = 30: built in %.3f s (%lld triangles, %lld flips, %d clamped)\n", mode(),
-              pl.build_seconds, static_cast<long long>(pl.triangles.rows()), pl.intrinsic_flips,
-              pl.clamped_edges);
+  std::printf("[%s] 50k points, k = 30: %lld triangles, %lld flips, %d clamped\n", mode(),
+              static_cast<long long>(pl.triangles.rows()), pl.intrinsic_flips, pl.clamped_edges);
   expect_valid_laplacian(pl.laplacian, 50000);
-  EXPECT_LT(pl.build_seconds, 60.0);  // a few seconds expected on 2 cores; generous on a shared machine
 }
 
 TEST(PointLaplacianRealData, Sphere926Pwn) {

@@ -119,6 +119,7 @@ UnitSphere unit_area_sphere(int subdivisions) {
 }  // namespace heatcvt::test
 
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <unistd.h>
 
@@ -174,6 +175,34 @@ CommandResult run_tool(const std::string& tool, const std::string& args) {
 
 void write_text_file(const std::string& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;
+}
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+double json_number(const std::string& json, const std::string& key) {
+  std::smatch m;
+  if (!std::regex_search(json, m, std::regex("\"" + key + "\"\\s*:\\s*(-?[0-9.eE+-]+)"))) {
+    ADD_FAILURE() << key << " not in:\n" << json;
+    return std::nan("");
+  }
+  return std::stod(m[1].str());
+}
+
+void expect_tool_failure(const std::string& tool, const CommandResult& r, const std::vector<std::string>& needles,
+                         const ScratchDir& dir, int expected_entries) {
+  EXPECT_NE(r.exit_code, 0);
+  std::vector<std::string> error_lines;
+  std::istringstream lines(r.err);
+  for (std::string line; std::getline(lines, line);)
+    if (line.find("error") != std::string::npos) error_lines.push_back(line);
+  ASSERT_EQ(error_lines.size(), 1u) << r.err;
+  EXPECT_EQ(error_lines[0].rfind(tool + ": error: ", 0), 0u) << error_lines[0];
+  for (const auto& n : needles)
+    EXPECT_NE(error_lines[0].find(n), std::string::npos) << "'" << n << "' not in: " << error_lines[0];
+  EXPECT_EQ(dir.entries(), expected_entries) << "an output or temporary file was left behind";
 }
 
 }  // namespace heatcvt::test

@@ -1,12 +1,17 @@
 #pragma once
 // Shared helpers for the tests: shapes built in code and access to ../shared/data.
 #include <Eigen/Core>
+#include <array>
 #include <string>
+#include <vector>
 
 #include "heatcvt/laplacian.h"
 #include "heatcvt/mesh.h"
 
 namespace heatcvt::test {
+
+/// The thread counts every determinism test compares: results must be bit-identical for each.
+constexpr std::array<int, 3> kThreadCounts{1, 2, 4};
 
 /// Path of a file under ../shared/data (e.g. "meshes/torus.obj"); fails the test with a clear
 /// message (via ADD_FAILURE + throw) when the data directory or the file is missing.
@@ -64,5 +69,18 @@ CommandResult run_tool(const std::string& tool, const std::string& args);
 
 /// Writes a text file.
 void write_text_file(const std::string& path, const std::string& text);
+
+/// The bytes of a file ("" when it cannot be read).
+std::string read_file(const std::string& path);
+
+/// The number after `"key":` in a JSON text (the first occurrence); fails the test and returns NaN
+/// when there is none.
+double json_number(const std::string& json, const std::string& key);
+
+/// The contract of a tool on bad input: a non-zero exit, exactly one line mentioning "error" on
+/// stderr, which starts with "<tool>: error: " and contains every needle, and `dir` holding
+/// `expected_entries` entries afterwards (no output or temporary left behind).
+void expect_tool_failure(const std::string& tool, const CommandResult& r, const std::vector<std::string>& needles,
+                         const ScratchDir& dir, int expected_entries);
 
 }  // namespace heatcvt::test

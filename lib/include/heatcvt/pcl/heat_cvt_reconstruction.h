@@ -2,7 +2,8 @@
 /// \file pcl/heat_cvt_reconstruction.h
 /// PCL-style surface reconstruction with heat CVT (paper §7–8, METHOD.md §7): the
 /// pcl::SurfaceReconstruction contract (setInputCloud, setIndices, setSearchMethod,
-/// camelCase parameters, reconstruct(pcl::PolygonMesh&)) around heatcvt::reconstruct_surface().
+/// camelCase parameters; the base class's reconstruct() does the input set-up and calls the
+/// performReconstruction() overrides of this class) around heatcvt::reconstruct_surface().
 ///
 /// Explicitly instantiated in heatcvt_pcl (target heatcvt::pcl) for pcl::PointXYZ,
 /// pcl::PointNormal and pcl::PointXYZRGBNormal. For another point type with x, y, z fields,
@@ -34,17 +35,23 @@ namespace heatcvt {
 /// own normals).
 ///
 /// Output (input units): #sites vertices (fewer if some sites are in no triangle) and
-/// consistently oriented triangles. reconstruct(pcl::PolygonMesh&) fills `output.cloud` with
-/// the fields of PointT; reconstruct(points, polygons) returns the vertices as PointT. Fields
+/// consistently oriented triangles. reconstruct(pcl::PolygonMesh&) (inherited from
+/// pcl::SurfaceReconstruction) fills `output.cloud` with the fields of PointT and keeps the
+/// input's header; reconstruct(points, polygons) returns the vertices as PointT. Fields
 /// other than x, y, z are copied from the nearest input point found with the search method
-/// (a pcl::search::KdTree is built over the indexed input when none was set), except normals
+/// (a pcl::search::KdTree is built over the indexed input, after the indices are checked, when
+/// none was set: the class clears pcl::SurfaceReconstruction's `check_tree_` so the base class
+/// does not build one over unchecked indices), except normals
 /// (normal_x/y/z, when PointT has them), which are set to the area-weighted unit vertex normals
 /// of the output mesh (curvature copied from the nearest point).
 ///
-/// Errors: no input, an empty cloud (or no finite point among the indices), more sites than
-/// usable points, bad parameters, and any heatcvt exception are reported with
+/// Errors: no input (a new object holds an empty placeholder cloud until setInputCloud(), so
+/// the base class's reconstruct() never dereferences a null cloud), an empty cloud (or no
+/// finite point among the indices), an index outside the cloud, more sites than usable points,
+/// bad parameters, and any heatcvt exception are reported with
 /// `PCL_ERROR("[heatcvt::HeatCVTReconstruction::reconstruct] ...")` and give an empty result
-/// (no points, no polygons). Nothing is thrown.
+/// (no points, no polygons). Nothing is thrown. As for every PCL class, setInputCloud(nullptr)
+/// is not supported.
 ///
 /// Cost: dominated by the CVT, about (sites) × (a few cells) per iteration; see cloud2mesh.
 template <typename PointT>
@@ -59,13 +66,16 @@ class HeatCVTReconstruction : public pcl::SurfaceReconstruction<PointT> {
   using pcl::SurfaceReconstruction<PointT>::input_;
   using pcl::SurfaceReconstruction<PointT>::indices_;
   using pcl::SurfaceReconstruction<PointT>::tree_;
-  using pcl::SurfaceReconstruction<PointT>::initCompute;
-  using pcl::SurfaceReconstruction<PointT>::deinitCompute;
+  using pcl::SurfaceReconstruction<PointT>::check_tree_;
+  using pcl::SurfaceReconstruction<PointT>::reconstruct;
 
   /// Defaults are those of ReconstructionOptions (= `cloud2mesh --help`): 3000 sites, CVT on
   /// ~10 points per site, 40 surface-Lloyd + 6 heat Lloyd iterations, k = 30, t = 1·h̄²,
   /// anisotropy 0, all threads, seed 1.
-  HeatCVTReconstruction() = default;
+  HeatCVTReconstruction() {
+    check_tree_ = false;
+    input_ = no_input_;
+  }
   ~HeatCVTReconstruction() override = default;
 
   /// Number of CVT sites = vertices of the output mesh. Must be ≥ 4 and ≤ the number of
@@ -120,26 +130,25 @@ class HeatCVTReconstruction : public pcl::SurfaceReconstruction<PointT> {
   /// timings, φmin / φm); empty after a failure.
   const ReconstructionResult& getReconstructionResult() const { return result_; }
 
-  /// Reconstructs into `output` (cloud with the fields of PointT, triangles as pcl::Vertices,
-  /// header of the input). On failure: PCL_ERROR and an empty mesh.
-  void reconstruct(pcl::PolygonMesh& output) override;
-
-  /// Reconstructs into `points` (#vertices PointT, see the class comment for the fields) and
-  /// `polygons` (triangles indexing `points`). On failure: PCL_ERROR, both empty.
-  void reconstruct(pcl::PointCloud<PointT>& points, std::vector<pcl::Vertices>& polygons) override;
-
  protected:
   std::string getClassName() const override { return "heatcvt::HeatCVTReconstruction"; }
 
-  /// Runs the reconstruction on input_/indices_ (after initCompute and the search set-up).
+  /// Called by pcl::SurfaceReconstruction::reconstruct(pcl::PolygonMesh&) after initCompute():
+  /// reconstructs input_/indices_ into `output` (cloud with the fields of PointT, triangles as
+  /// pcl::Vertices; the base class has copied the input's header). On failure: PCL_ERROR and an
+  /// empty mesh.
   void performReconstruction(pcl::PolygonMesh& output) override;
-  /// Same, returning PointT vertices and polygons.
+  /// Called by pcl::SurfaceReconstruction::reconstruct(points, polygons) after initCompute():
+  /// reconstructs into `points` (#vertices PointT, see the class comment for the fields) and
+  /// `polygons` (triangles indexing `points`). On failure: PCL_ERROR, both empty.
   void performReconstruction(pcl::PointCloud<PointT>& points, std::vector<pcl::Vertices>& polygons) override;
 
  private:
   /// Common path of both overloads; false (after PCL_ERROR) on failure.
-  bool run(const char* method, pcl::PointCloud<PointT>& points, std::vector<pcl::Vertices>& polygons);
+  bool run(pcl::PointCloud<PointT>& points, std::vector<pcl::Vertices>& polygons);
 
+  /// Placeholder input of a new object: empty, recognised as "no input given".
+  const typename PointCloud::ConstPtr no_input_{new PointCloud};
   ReconstructionOptions options_;
   ReconstructionCallback progress_;
   ReconstructionResult result_;

@@ -16,54 +16,42 @@
 
 namespace heatcvt {
 
+// The base class's reconstruct(output) has copied the input's header and the input cloud into
+// `output`; the cloud is replaced by the mesh vertices (or emptied on failure).
 template <typename PointT>
-void HeatCVTReconstruction<PointT>::reconstruct(pcl::PolygonMesh& output) {
+void HeatCVTReconstruction<PointT>::performReconstruction(pcl::PolygonMesh& output) {
   output.polygons.clear();
   output.cloud = pcl::PCLPointCloud2();
   pcl::PointCloud<PointT> points;
   std::vector<pcl::Vertices> polygons;
-  if (!run("reconstruct", points, polygons)) return;
+  if (!run(points, polygons)) return;
   pcl::toPCLPointCloud2(points, output.cloud);
   output.polygons = std::move(polygons);
-  if (input_) output.header = input_->header;
-}
-
-template <typename PointT>
-void HeatCVTReconstruction<PointT>::reconstruct(pcl::PointCloud<PointT>& points,
-                                                std::vector<pcl::Vertices>& polygons) {
-  run("reconstruct", points, polygons);
-}
-
-template <typename PointT>
-void HeatCVTReconstruction<PointT>::performReconstruction(pcl::PolygonMesh& output) {
-  reconstruct(output);
 }
 
 template <typename PointT>
 void HeatCVTReconstruction<PointT>::performReconstruction(pcl::PointCloud<PointT>& points,
                                                           std::vector<pcl::Vertices>& polygons) {
-  run("performReconstruction", points, polygons);
+  run(points, polygons);
 }
 
 template <typename PointT>
-bool HeatCVTReconstruction<PointT>::run(const char* method, pcl::PointCloud<PointT>& points,
-                                        std::vector<pcl::Vertices>& polygons) {
+bool HeatCVTReconstruction<PointT>::run(pcl::PointCloud<PointT>& points, std::vector<pcl::Vertices>& polygons) {
+  // Errors name reconstruct(), the call the user made (the base class calls this through
+  // performReconstruction after initCompute()).
+  const char* method = "reconstruct";
   points.clear();
   points.width = 0;
   points.height = 1;
   polygons.clear();
   result_ = ReconstructionResult();
-  if (!input_) {
+  if (input_ == no_input_) {
     PCL_ERROR("[heatcvt::HeatCVTReconstruction::%s] No input cloud given (setInputCloud).\n", method);
     return false;
   }
   points.header = input_->header;
   if (input_->empty()) {
     PCL_ERROR("[heatcvt::HeatCVTReconstruction::%s] The input cloud is empty.\n", method);
-    return false;
-  }
-  if (!initCompute()) {
-    PCL_ERROR("[heatcvt::HeatCVTReconstruction::%s] Invalid input cloud or indices.\n", method);
     return false;
   }
   bool ok = false;
@@ -77,7 +65,6 @@ bool HeatCVTReconstruction<PointT>::run(const char* method, pcl::PointCloud<Poin
       if (idx < 0 || static_cast<std::size_t>(idx) >= input_->size()) {
         PCL_ERROR("[heatcvt::HeatCVTReconstruction::%s] Index %d is outside the cloud (%zu points).\n", method, idx,
                   static_cast<std::size_t>(input_->size()));
-        deinitCompute();
         return false;
       }
       const PointT& p = (*input_)[static_cast<std::size_t>(idx)];
@@ -143,7 +130,6 @@ bool HeatCVTReconstruction<PointT>::run(const char* method, pcl::PointCloud<Poin
     polygons.clear();
     result_ = ReconstructionResult();
   }
-  deinitCompute();
   return ok;
 }
 

@@ -1,0 +1,53 @@
+#pragma once
+// The peer reconstruction pipelines that the reconstruction acceptance compares heatcvt with, shared
+// by tests/test_reconstruct.cpp and bench/bench_reconstruct.cpp: normals as heatcvt estimates
+// them, PCL Poisson and CGAL Poisson, and CGAL isotropic remeshing to a vertex count (the
+// two-step pipelines "Poisson + remesh" that a careful user would run).
+#include <pcl/PolygonMesh.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "heatcvt/mesh.h"
+
+namespace heatcvt::test {
+
+/// Unit normals for the peers: PCA over k = 30 neighbours, oriented by a minimum spanning tree over
+/// k = 10 neighbours (heatcvt's own estimate, normals.h), `threads` as there (0 = all).
+Eigen::MatrixX3d peer_normals(const Eigen::MatrixX3d& P, int threads = 0);
+
+/// Points with normals as a PCL cloud.
+pcl::PointCloud<pcl::PointNormal>::Ptr with_normals(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N);
+
+/// A PCL polygon mesh (x, y, z of its cloud; polygons fanned into triangles) as a TriangleMesh.
+TriangleMesh from_pcl(const pcl::PolygonMesh& pm);
+
+/// The mesh without its unreferenced vertices (faces renumbered, order kept).
+TriangleMesh compact(const TriangleMesh& m);
+
+/// PCL Poisson surface reconstruction (octree depth `depth`, PCL's other defaults), compacted.
+TriangleMesh pcl_poisson(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N, int depth = 8);
+
+/// CGAL Poisson surface reconstruction (poisson_surface_reconstruction_delaunay with the average
+/// spacing over 6 neighbours). Throws std::runtime_error when CGAL reports a failure.
+TriangleMesh cgal_poisson(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N);
+
+/// CGAL isotropic remeshing (5 iterations) of a mesh, after repairing and orienting it as a polygon
+/// soup, with the target edge length of an equilateral mesh of `target_vertices` vertices of the
+/// same area.
+TriangleMesh remesh_to(const TriangleMesh& m, int target_vertices);
+
+/// One two-step peer result: its name and mesh.
+struct PeerMesh {
+  std::string method;
+  TriangleMesh mesh;
+};
+
+/// The two two-step peers of the acceptance on the bare points P: normals (peer_normals), then
+/// "PCL Poisson + CGAL remesh" and "CGAL Poisson + CGAL remesh" to `target_vertices` vertices.
+std::vector<PeerMesh> two_step_peers(const Eigen::MatrixX3d& P, int target_vertices, int threads = 0);
+
+}  // namespace heatcvt::test

@@ -1,0 +1,137 @@
+// The meshcvt tool end to end: open meshes keep their boundary (the dual has the input's
+// boundary loops, components and Euler characteristic), and every class of bad input (missing
+// file, unknown format, broken file, bad options) gives one "meshcvt: error:" line, a non-zero
+// exit and no output file.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <string>
+
+#include "heatcvt/mesh_io.h"
+#include "heatcvt/validate.h"
+#include "test_support.h"
+
+using namespace heatcvt;
+
+namespace {
+
+const char* kTetra = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
+
+// Remeshes an open mesh of ../shared/data and checks that the dual is a manifold surface with the
+// input's topology: as many boundary loops and components, the same Euler characteristic, and
+// (for an orientable input) a consistent orientation.
+void expect_open_mesh_kept(const std::string& file, int sites, bool orientable) {
+  SCOPED_TRACE(file);
+  test::ScratchDir dir("meshcvt");
+  const std::string input_path = test::data_path("meshes/" + file);
+  const std::string out = dir.path("dual.ply"), report = dir.path("r.json");
+  const auto r = test::run_tool("meshcvt", input_path + " -n " + std::to_string(sites) + " -q -o " + out + " --report " + report);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(r.err.empty()) << r.err;
+  const TriangleMesh input = read_mesh(input_path);
+  ValidationOptions open;
+  open.require_closed = false;
+  open.check_self_intersections = false;  // only the topology of the input is compared
+  open.allow_non_orientable = !orientable;
+  const ValidationReport in = validate_triangle_mesh(input.V, input.F, open);
+  ASSERT_GE(in.boundary_loops, 1) << "not an open mesh";
+  const TriangleMesh dual = read_mesh(out);
+  const ValidationReport rep = validate_triangle_mesh(dual.V, dual.F, open);
+  std::printf("[ %s, -n %d ] V %ld F %ld components %d boundary loops %d (input %d) chi %d\n", file.c_str(), sites,
+              static_cast<long>(dual.V.rows()), static_cast<long>(dual.F.rows()), rep.components, rep.boundary_loops,
+              in.boundary_loops, rep.euler_characteristic);
+  EXPECT_EQ(rep.boundary_loops, in.boundary_loops);
+  EXPECT_EQ(rep.components, in.components);
+  EXPECT_EQ(rep.euler_characteristic, in.euler_characteristic);
+  EXPECT_EQ(rep.orientable, orientable ? 1 : 0);
+  for (const char* c : {"manifold_edges", "manifold_vertices", "consistent_orientation", "all_vertices_used"})
+    EXPECT_TRUE(rep.find(c) && rep.find(c)->passed) << c << "\n" << rep.summary();
+  // Every site is a vertex: the requested ones and those added for thin parts (report "sites").
+  EXPECT_GE(dual.V.rows(), sites);
+  EXPECT_EQ(dual.V.rows(), test::json_number(test::read_file(report), "sites"));
+}
+
+}  // namespace
+
+TEST(MeshcvtTool, OpenHemisphereKeepsItsBoundaryLoop) { expect_open_mesh_kept("hemisphere_open.obj", 300, true); }
+
+TEST(MeshcvtTool, OpenKleinDiscKeepsItsBoundaryLoop) { expect_open_mesh_kept("klein_disc.obj", 300, true); }
+
+TEST(MeshcvtTool, MoebiusStripKeepsItsBoundaryAndStaysNonOrientable) {
+  expect_open_mesh_kept("moebius.obj", 100, false);
+}
+
+TEST(MeshcvtTool, MissingFile) {
+  test::ScratchDir dir("meshcvt");
+  const std::string missing = dir.path("nope.obj");
+  test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", missing + " -n 10 -o " + dir.path("o.ply")), {missing},
+                            dir, 0);
+}
+
+TEST(MeshcvtTool, UnknownFormat) {
+  test::ScratchDir dir("meshcvt");
+  test::write_text_file(dir.path("mesh.xyzw"), kTetra);
+  test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", dir.path("mesh.xyzw") + " -n 3 -o " + dir.path("o.ply")),
+                            {dir.path("mesh.xyzw")}, dir, 1);
+}
+
+TEST(MeshcvtTool, BrokenFiles) {
+  test::ScratchDir dir("meshcvt");
+  // A binary PLY cut in half.
+  const std::string bytes = test::read_file(test::data_path("meshes/knot_open3d.ply"));
+  ASSERT_FALSE(bytes.empty());
+  test::write_text_file(dir.path("cut.ply"), bytes.substr(0, bytes.size() / 2));
+  test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", dir.path("cut.ply") + " -n 10 -o " + dir.path("o.ply")),
+                            {dir.path("cut.ply")}, dir, 1);
+  // An OBJ face naming a vertex that does not exist.
+  test::write_text_file(dir.path("bad_index.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
+  test::expect_tool_failure("meshcvt",
+                            test::run_tool("meshcvt", dir.path("bad_index.obj") + " -n 2 -o " + dir.path("o.ply")),
+                            {dir.path("bad_index.obj")}, dir, 2);
+  // Text where numbers should be.
+  test::write_text_file(dir.path("words.off"), "OFF\nthree four five\n");
+  test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", dir.path("words.off") + " -n 2 -o " + dir.path("o.ply")),
+                            {dir.path("words.off")}, dir, 3);
+  // An empty file.
+  test::write_text_file(dir.path("empty.obj"), "");
+  test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", dir.path("empty.obj") + " -n 2 -o " + dir.path("o.ply")),
+                            {dir.path("empty.obj")}, dir, 4);
+}
+
+TEST(MeshcvtTool, BadOptions) {
+  test::ScratchDir dir("meshcvt");
+  test::write_text_file(dir.path("t.obj"), kTetra);
+  const std::string base = dir.path("t.obj") + " -o " + dir.path("o.ply") + " ";
+  auto fails = [&](const std::string& args, const std::string& needle) {
+    SCOPED_TRACE(args);
+    test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", base + args), {needle}, dir, 1);
+  };
+  fails("-n 0", "--sites");
+  fails("-n abc", "abc");
+  fails("-n 5", "exceeds");  // more sites than the 4 vertices
+  fails("-n 3 -i -1", "--iterations");
+  fails("-n 3 --tolerance -1", "--tolerance");
+  fails("-n 3 --anisotropy -0.5", "--anisotropy");
+  fails("-n 3 --t-coef 0", "--t-coef");
+  fails("-n 3 --threads -1", "--threads");
+  fails("-n 3 --relaxation 2", "--relaxation");
+  fails("-n 3 --target-phi-m 70", "--target-phi-m");
+  fails("-n 3 --init sideways", "--init");
+  fails("-n 3 --bogus", "bogus");
+  test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", dir.path("t.obj") + " -n 3 -o " + dir.path("o.xyz")),
+                            {"o.xyz"}, dir, 1);
+  test::expect_tool_failure("meshcvt",
+                            test::run_tool("meshcvt", dir.path("t.obj") + " -n 3 -o " + dir.path("missing/o.ply")),
+                            {"missing"}, dir, 1);
+  test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", dir.path("t.obj") + " -n 3 -o " + dir.path("o.ply") +
+                                                         " --report " + dir.path("r.txt")),
+                            {"r.txt"}, dir, 1);
+}
+
+TEST(MeshcvtTool, FailureLeavesAnExistingOutputUntouched) {
+  test::ScratchDir dir("meshcvt");
+  test::write_text_file(dir.path("o.ply"), "keep me");
+  test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", dir.path("nope.obj") + " -n 3 -o " + dir.path("o.ply")),
+                            {dir.path("nope.obj")}, dir, 1);
+  EXPECT_EQ(test::read_file(dir.path("o.ply")), "keep me");
+}
