@@ -250,7 +250,10 @@ bool CloudChunkReader::next(CloudChunk& chunk) {
   return n > 0;
 }
 
-void CloudChunkReader::rewind() { open(); }
+void CloudChunkReader::rewind() {
+  open();
+  ++passes_;
+}
 
 const std::string& CloudChunkReader::format() const { return decoder_->format; }
 bool CloudChunkReader::has_normals() const { return decoder_->normals; }

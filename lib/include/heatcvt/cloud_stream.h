@@ -107,6 +107,8 @@ class CloudChunkReader : public CloudChunkSource {
   /// Bytes of the file consumed so far and the file size.
   std::int64_t bytes_read() const;
   std::int64_t bytes_total() const;
+  /// Passes over the file started so far (1 + the number of rewind() calls).
+  int passes() const { return passes_; }
 
   /// The format-specific decoder (defined in the implementation).
   class Decoder;
@@ -116,6 +118,7 @@ class CloudChunkReader : public CloudChunkSource {
   std::string path_;
   StreamReaderOptions options_;
   std::unique_ptr<Decoder> decoder_;
+  int passes_ = 1;
 };
 
 }  // namespace heatcvt
