@@ -158,6 +158,29 @@ TEST(VoxelSummary, PlaneNormalsAndNonFinitePoints) {
   }
 }
 
+TEST(VoxelSummary, SurfacePointsRemoveTheNoiseLayersAndHitTheTarget) {
+  // Unit sphere with noise σ = 0.01 and voxels of 0.02: the noise band (±2σ) spans two voxel layers.
+  const TriangleMesh sphere = test::icosphere(5);
+  const Eigen::MatrixX3d P = sample_surface(sphere.V, sphere.F, 300000, 4, 0.01);
+  VoxelSummary s(0.02);
+  s.add(P);
+  auto rms_off_sphere = [](const Eigen::MatrixX3d& Q) {
+    return std::sqrt((Q.rowwise().norm().array() - 1.0).square().mean());
+  };
+  const Eigen::MatrixX3d means = s.points();
+  Eigen::VectorXi weights;
+  const Eigen::MatrixX3d surface = s.surface_points(0, &weights);
+  EXPECT_LT(rms_off_sphere(surface), 0.5 * rms_off_sphere(means));
+  EXPECT_LT(surface.rows(), means.rows());  // one point per cell of a thin layer
+  EXPECT_EQ(weights.sum(), 300000);         // every point accounted for once
+  // With a target: at most that many points, and not far below it.
+  for (Eigen::Index target : {2000, 10000}) {
+    const Eigen::MatrixX3d thin = s.surface_points(target);
+    EXPECT_LE(thin.rows(), target);
+    EXPECT_GE(thin.rows(), target * 9 / 10);
+  }
+}
+
 TEST(VoxelSizeChooser, AreaOfASphereAndVoxelCountNearTarget) {
   // Unit sphere (area 4π): every orientation, so the mean crossing factor 1.5 holds.
   const TriangleMesh sphere = test::icosphere(5);
@@ -239,7 +262,7 @@ TEST(ReconstructStreamed, PushInterfaceGivesTheStreamedMesh) {
   const StreamedReconstruction streamed = reconstruct_surface_streamed(dir.path("torus.ply"), options, stream);
   EXPECT_EQ(streamed.passes, 1);
   const VoxelSummary pushed = summarise(cloud, 0.04, 4096);  // a PCL user's pieces
-  const StreamedReconstruction from_push = reconstruct_surface_from_summary(pushed, options);
+  const StreamedReconstruction from_push = reconstruct_surface_from_summary(pushed, options, stream);
   EXPECT_TRUE(same_mesh(streamed.result.mesh, from_push.result.mesh));
   EXPECT_THROW(reconstruct_surface_from_summary(VoxelSummary(0.1), options), InvalidInputError);
 }

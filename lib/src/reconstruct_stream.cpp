@@ -63,6 +63,7 @@ class Reservoir {
       ++seen_;
     }
   }
+  std::int64_t seen() const { return seen_; }
   Eigen::MatrixX3d sample() const {
     Eigen::MatrixX3d S(static_cast<Eigen::Index>(sample_.size()), 3);
     for (std::size_t i = 0; i < sample_.size(); ++i) S.row(static_cast<Eigen::Index>(i)) = sample_[i];
@@ -79,6 +80,8 @@ void check_stream_options(const StreamOptions& s) {
   if (s.max_raw_points < 0) throw InvalidInputError("reconstruct_surface_streamed: max_raw_points must be >= 0");
   if (!(s.voxel_size >= 0 && std::isfinite(s.voxel_size)))
     throw InvalidInputError("reconstruct_surface_streamed: voxel_size must be finite and >= 0");
+  if (!(s.fine_voxel_factor >= 1 && std::isfinite(s.fine_voxel_factor)))
+    throw InvalidInputError("reconstruct_surface_streamed: fine_voxel_factor must be finite and >= 1");
   if (s.sample_points < 10) throw InvalidInputError("reconstruct_surface_streamed: sample_points must be >= 10");
 }
 
@@ -103,12 +106,17 @@ StreamedReconstruction reconstruct_raw(const CloudChunkSource& source, PointClou
 }  // namespace
 
 StreamedReconstruction reconstruct_surface_from_summary(const VoxelSummary& summary, const ReconstructionOptions& options,
-                                                        const ReconstructionCallback& progress) {
+                                                        const StreamOptions& stream, const ReconstructionCallback& progress) {
   if (summary.voxels() == 0) throw InvalidInputError("reconstruct_surface_from_summary: the summary holds no point");
   StreamedReconstruction out;
-  out.cloud.P = summary.points();
-  out.cloud.N = summary.normals();
-  out.cloud.C = summary.colours();
+  if (stream.project_to_surface) {
+    const double target = static_cast<double>(options.sites) * stream.voxel.points_per_site;
+    out.cloud.P = summary.surface_points(static_cast<Eigen::Index>(std::ceil(target)), nullptr, &out.cloud.C);
+  } else {
+    out.cloud.P = summary.points();
+    out.cloud.N = summary.normals();
+    out.cloud.C = summary.colours();
+  }
   ReconstructionOptions subset = options;
   subset.cvt_points_per_site = 0;  // the voxel means already are the uniform subset
   out.result = reconstruct_surface(out.cloud.P, subset, progress);
@@ -138,13 +146,16 @@ StreamedReconstruction reconstruct_surface_streamed(CloudChunkSource& source, co
   if (raw.kept) return reconstruct_raw(source, raw.cloud(), options, progress);
   int passes = 1;
   if (!summary) {
-    const double h = choose_voxel_size(reservoir.sample(), options.sites, stream.voxel);
+    if (reservoir.seen() < 10)
+      throw InvalidInputError(source.name() + ": fewer than 10 finite points (" + std::to_string(points) + " points read)");
+    double h = choose_voxel_size(reservoir.sample(), options.sites, stream.voxel);
+    if (stream.project_to_surface) h /= stream.fine_voxel_factor;
     summary = std::make_unique<VoxelSummary>(h);
     source.rewind();  // pass 2: every point into the summary
     while (source.next(chunk)) summary->add(chunk);
     passes = 2;
   }
-  StreamedReconstruction out = reconstruct_surface_from_summary(*summary, options, progress);
+  StreamedReconstruction out = reconstruct_surface_from_summary(*summary, options, stream, progress);
   out.points_read = points;
   out.passes = passes;
   return out;

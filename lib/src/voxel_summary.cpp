@@ -40,6 +40,17 @@ Cell cell_of(double x, double y, double z, double inv_h) {
   return {static_cast<std::int64_t>(c[0]), static_cast<std::int64_t>(c[1]), static_cast<std::int64_t>(c[2])};
 }
 
+Eigen::Index occupied_voxels(const Eigen::MatrixX3d& P, double h) {
+  std::unordered_set<Cell, CellHash> cells;
+  cells.reserve(static_cast<std::size_t>(P.rows()));
+  const double inv_h = 1.0 / h;
+  for (Eigen::Index i = 0; i < P.rows(); ++i) cells.insert(cell_of(P(i, 0), P(i, 1), P(i, 2), inv_h));
+  return static_cast<Eigen::Index>(cells.size());
+}
+
+// Bisection steps of the rebinning size of surface_points (ratio 2^(2^-12) at the end).
+constexpr int kRebinBisections = 12;
+
 // Moments of one voxel, relative to its corner.
 struct Moments {
   std::int64_t count = 0;
@@ -68,15 +79,18 @@ VoxelSummary& VoxelSummary::operator=(VoxelSummary&&) noexcept = default;
 
 void VoxelSummary::add(const CloudChunk& chunk) { add(chunk.P, chunk.has_colours() ? chunk.C : Eigen::MatrixX3d(0, 3)); }
 
-void VoxelSummary::add(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& C) {
+void VoxelSummary::add(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& C) { add_weighted(P, C, 1); }
+
+void VoxelSummary::add_weighted(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& C, std::int64_t weight) {
   const bool colours = C.rows() == P.rows() && P.rows() > 0;
+  const double w = static_cast<double>(weight);
   const double inv_h = 1.0 / h_;
   Impl& m = *impl_;
   m.order_valid = false;
   for (Eigen::Index i = 0; i < P.rows(); ++i) {
     const double x = P(i, 0), y = P(i, 1), z = P(i, 2);
     if (!(std::isfinite(x) && std::isfinite(y) && std::isfinite(z))) {
-      ++skipped_;
+      skipped_ += weight;
       continue;
     }
     const Cell key = cell_of(x, y, z, inv_h);
@@ -88,19 +102,19 @@ void VoxelSummary::add(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& C) {
     Moments& v = m.moments[it->second];
     const double d[3] = {x - static_cast<double>(key[0]) * h_, y - static_cast<double>(key[1]) * h_,
                          z - static_cast<double>(key[2]) * h_};
-    ++v.count;
-    for (int k = 0; k < 3; ++k) v.s[k] += d[k];
-    v.ss[0] += d[0] * d[0];
-    v.ss[1] += d[0] * d[1];
-    v.ss[2] += d[0] * d[2];
-    v.ss[3] += d[1] * d[1];
-    v.ss[4] += d[1] * d[2];
-    v.ss[5] += d[2] * d[2];
+    v.count += weight;
+    for (int k = 0; k < 3; ++k) v.s[k] += w * d[k];
+    v.ss[0] += w * d[0] * d[0];
+    v.ss[1] += w * d[0] * d[1];
+    v.ss[2] += w * d[0] * d[2];
+    v.ss[3] += w * d[1] * d[1];
+    v.ss[4] += w * d[1] * d[2];
+    v.ss[5] += w * d[2] * d[2];
     if (colours) {
-      for (int k = 0; k < 3; ++k) v.c[k] += C(i, k);
-      ++coloured_;
+      for (int k = 0; k < 3; ++k) v.c[k] += w * C(i, k);
+      coloured_ += weight;
     }
-    ++added_;
+    added_ += weight;
   }
 }
 
@@ -180,20 +194,94 @@ Eigen::Matrix<std::int64_t, Eigen::Dynamic, 3> VoxelSummary::cells() const {
   return K;
 }
 
-// ------------------------------------------------------------------------------------------
-// Voxel size chooser
-
 namespace {
 
-Eigen::Index occupied_voxels(const Eigen::MatrixX3d& P, double h) {
-  std::unordered_set<Cell, CellHash> cells;
-  cells.reserve(static_cast<std::size_t>(P.rows()));
-  const double inv_h = 1.0 / h;
-  for (Eigen::Index i = 0; i < P.rows(); ++i) cells.insert(cell_of(P(i, 0), P(i, 1), P(i, 2), inv_h));
-  return static_cast<Eigen::Index>(cells.size());
-}
+// Moments of a neighbourhood, relative to one origin `o` (the centre voxel's corner).
+struct MergedMoments {
+  double n = 0;
+  Eigen::Vector3d s = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d ss = Eigen::Matrix3d::Zero();
+  // Adds voxel moments taken relative to a corner displaced by d from o: p − o = (p − c) + d.
+  void add(const Moments& v, const Eigen::Vector3d& d) {
+    const double k = static_cast<double>(v.count);
+    const Eigen::Vector3d vs(v.s[0], v.s[1], v.s[2]);
+    Eigen::Matrix3d vss;
+    vss << v.ss[0], v.ss[1], v.ss[2], v.ss[1], v.ss[3], v.ss[4], v.ss[2], v.ss[4], v.ss[5];
+    n += k;
+    s += vs + k * d;
+    ss += vss + vs * d.transpose() + d * vs.transpose() + k * d * d.transpose();
+  }
+};
 
 }  // namespace
+
+// Each voxel mean projected on the plane fitted to its 3×3×3 neighbourhood (absolute
+// coordinates), with its point count and mean colour.
+void VoxelSummary::project_means(Eigen::MatrixX3d& P, Eigen::VectorXd& w, Eigen::MatrixX3d& C) const {
+  const Impl& m = *impl_;
+  const auto& ord = order();
+  const auto rows = static_cast<Eigen::Index>(ord.size());
+  const bool with_colours = has_colours();
+  P.resize(rows, 3);
+  w.resize(rows);
+  C.resize(with_colours ? rows : 0, 3);
+  for (Eigen::Index r = 0; r < rows; ++r) {
+    const std::uint32_t vi = ord[static_cast<std::size_t>(r)];
+    const Cell& c = m.cell[vi];
+    const Moments& v = m.moments[vi];
+    MergedMoments nb;
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it = m.index.find({c[0] + dx, c[1] + dy, c[2] + dz});
+          if (it != m.index.end()) nb.add(m.moments[it->second], h_ * Eigen::Vector3d(dx, dy, dz));
+        }
+    const double k = static_cast<double>(v.count);
+    Eigen::Vector3d mean(v.s[0] / k, v.s[1] / k, v.s[2] / k);  // relative to the corner
+    if (nb.n >= 3) {
+      const Eigen::Vector3d mu = nb.s / nb.n;
+      const Eigen::Matrix3d cov = nb.ss / nb.n - mu * mu.transpose();
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+      if (eig.eigenvalues()(1) > kCollinearRatio * eig.eigenvalues()(2)) {
+        const Eigen::Vector3d normal = eig.eigenvectors().col(0);
+        mean -= (mean - mu).dot(normal) * normal;
+      }
+    }
+    for (int a = 0; a < 3; ++a) P(r, a) = static_cast<double>(c[static_cast<std::size_t>(a)]) * h_ + mean(a);
+    w(r) = k;
+    if (with_colours)
+      for (int a = 0; a < 3; ++a) C(r, a) = v.c[a] / k;
+  }
+}
+
+Eigen::MatrixX3d VoxelSummary::surface_points(Eigen::Index target_points, Eigen::VectorXi* weights,
+                                              Eigen::MatrixX3d* colours) const {
+  Eigen::MatrixX3d P, C;
+  Eigen::VectorXd w;
+  project_means(P, w, C);
+  // The rebinning size: the voxel size, or the smallest multiple of it (bisection in log scale)
+  // whose occupied cells are at most target_points.
+  double size = h_;
+  if (target_points > 0 && P.rows() > target_points) {
+    double lo = h_, hi = 2 * h_;
+    while (occupied_voxels(P, hi) > target_points) lo = hi, hi *= 2;
+    for (int it = 0; it < kRebinBisections; ++it) {
+      const double mid = std::sqrt(lo * hi);
+      (occupied_voxels(P, mid) > target_points ? lo : hi) = mid;
+    }
+    size = hi;
+  }
+  VoxelSummary rebinned(size);
+  for (Eigen::Index r = 0; r < P.rows(); ++r)
+    rebinned.add_weighted(P.row(r), C.rows() ? Eigen::MatrixX3d(C.row(r)) : Eigen::MatrixX3d(0, 3),
+                          static_cast<std::int64_t>(w(r)));
+  if (weights) *weights = rebinned.counts();
+  if (colours) *colours = rebinned.colours();
+  return rebinned.points();
+}
+
+// ------------------------------------------------------------------------------------------
+// Voxel size chooser
 
 SurfaceAreaEstimate estimate_surface_area(const Eigen::MatrixX3d& sample, const VoxelSizeOptions& options) {
   if (!(options.sample_points_per_voxel >= 1) || options.probe_iterations < 1)

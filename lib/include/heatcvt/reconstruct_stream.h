@@ -32,6 +32,15 @@ struct StreamOptions {
   VoxelSizeOptions voxel;
   /// Size of the uniform reservoir sample (first pass) the voxel size is chosen from. Default 100000.
   std::int64_t sample_points = 100000;
+  /// Reconstruct from VoxelSummary::surface_points(sites × voxel.points_per_site) (means
+  /// projected on the plane fitted to their 3×3×3 voxel neighbourhood, then thinned to at most
+  /// that many points) instead of the plain voxel means: removes the double layer of means where
+  /// the noise band spans two voxel layers, and hits the points-per-site target. Default true.
+  bool project_to_surface = true;
+  /// With project_to_surface and a chosen voxel size, the summary is built at the chosen size
+  /// divided by this factor (>= 1), so that the thinning has points to spare: about factor²
+  /// times more voxels in memory. Default 1.5.
+  double fine_voxel_factor = 1.5;
   /// Seed of the reservoir sampling (std::mt19937_64). Default 1.
   std::uint64_t sample_seed = 1;
   /// Reading progress: pass 1 (raw points / sample) or 2 (voxel summary), and the reader's counters.
@@ -41,8 +50,9 @@ struct StreamOptions {
 /// Result of the streamed reconstruction.
 struct StreamedReconstruction {
   ReconstructionResult result;   ///< of reconstruct_surface on `cloud.P`
-  /// The points the reconstruction ran on: the cleaned raw cloud, or the voxel means with their
-  /// covariance normals (unoriented; zero rows for voxels of < 3 points) and mean colours.
+  /// The points the reconstruction ran on: the cleaned raw cloud, or the voxel points (surface
+  /// points or plain means, see StreamOptions::project_to_surface) with their mean colours; for
+  /// plain means also their covariance normals (unoriented; zero rows where undefined).
   PointCloud cloud;
   bool summarised = false;       ///< true: voxel means; false: the raw points
   double voxel_size = 0;         ///< of the summary (0 when not summarised)
@@ -71,9 +81,11 @@ StreamedReconstruction reconstruct_surface_streamed(const std::string& path, con
                                                     const ReconstructionCallback& progress = {});
 
 /// Reconstructs from a summary filled through VoxelSummary::add (the push interface: a PCL user
-/// feeds clouds piece by piece): reconstruct_surface on its voxel means, cvt_points_per_site = 0.
+/// feeds clouds piece by piece): reconstruct_surface on its voxel points (stream.project_to_surface),
+/// cvt_points_per_site = 0; the other StreamOptions are not used.
 /// \throw InvalidInputError on an empty summary, as reconstruct_surface otherwise.
 StreamedReconstruction reconstruct_surface_from_summary(const VoxelSummary& summary, const ReconstructionOptions& options = {},
+                                                        const StreamOptions& stream = {},
                                                         const ReconstructionCallback& progress = {});
 
 }  // namespace heatcvt

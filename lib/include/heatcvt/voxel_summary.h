@@ -36,6 +36,10 @@ class VoxelSummary {
   /// Adds positions P (#P by 3) and optional colours C (#P by 3 or 0 rows).
   void add(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& C = Eigen::MatrixX3d(0, 3));
 
+  /// Adds each row of P (with colour row of C when C has as many rows) as `weight` coincident
+  /// points: count += weight, sums += weight × value. add(P, C) is add_weighted(P, C, 1).
+  void add_weighted(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& C, std::int64_t weight);
+
   double voxel_size() const { return h_; }
   /// Occupied voxels.
   Eigen::Index voxels() const;
@@ -56,12 +60,29 @@ class VoxelSummary {
   Eigen::MatrixX3d normals(std::vector<bool>* valid = nullptr, int min_points = 3) const;
   /// #voxels by 3 mean colours (empty, 0 rows, unless has_colours()).
   Eigen::MatrixX3d colours() const;
+  /// The voxel means moved onto the local surface and thinned, for a noisy cloud whose noise
+  /// band spans more than one voxel layer (there the plain means form a double layer, one mean
+  /// per layer, each pulled off the surface towards its side):
+  ///  1. each voxel's moments are merged with those of its 3×3×3 neighbourhood; the merged mean μ
+  ///     and the smallest-eigenvalue eigenvector n of the merged covariance (a plane fit to every
+  ///     point of the neighbourhood) give the local surface, and the voxel mean m is projected on
+  ///     it: m − ((m − μ)·n) n (kept as is when the neighbourhood has < 3 points or lies on a line);
+  ///  2. the projected means are binned again, each weighted by its point count, and each cell's
+  ///     weighted mean is one output point (cell-key order). The cells are of the voxel size when
+  ///     target_points is 0 (or not exceeded), else of the smallest size (within 0.02 %, found by
+  ///     bisection) at which at most target_points cells are occupied: the projected means lie on
+  ///     a thin surface, so the count hits the target without the noise of the raw points.
+  /// `weights` (optional) receives the point count behind each output point; `colours` (optional)
+  /// the count-weighted mean colour (0 rows unless has_colours()).
+  Eigen::MatrixX3d surface_points(Eigen::Index target_points = 0, Eigen::VectorXi* weights = nullptr,
+                                  Eigen::MatrixX3d* colours = nullptr) const;
   /// #voxels by 3 integer cells, in the same order.
   Eigen::Matrix<std::int64_t, Eigen::Dynamic, 3> cells() const;
 
  private:
   struct Impl;
   const std::vector<std::uint32_t>& order() const;  // voxel indices in cell-key order (cached)
+  void project_means(Eigen::MatrixX3d& P, Eigen::VectorXd& w, Eigen::MatrixX3d& C) const;
   double h_;
   std::int64_t added_ = 0, skipped_ = 0, coloured_ = 0;
   std::unique_ptr<Impl> impl_;
