@@ -9,7 +9,8 @@
 // the reconstruction ran on, vertices and the mesh checks (closed, genus, φmin, φm).
 //
 // Usage: bench_scale [--sizes 100000,1000000,10000000] [--huge] [--density-max 1000000]
-//                    [--sites 3000] [--keep-dir DIR]
+//                    [--sites 3000] [--keep-dir DIR] [--fine F] [--plain-means]
+// (--fine: StreamOptions::fine_voxel_factor; --plain-means: project_to_surface = false)
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -56,10 +57,12 @@ void write_sampled_ply(const std::string& path, const TriangleMesh& mesh, std::i
 }
 
 // Child: reconstruct one file, print one line "key=value ...".
-int run_child(const std::string& path, int sites) {
+int run_child(const std::string& path, int sites, double fine_factor, bool project) {
   ReconstructionOptions options;
   options.sites = sites;
   StreamOptions stream;
+  stream.fine_voxel_factor = fine_factor;
+  stream.project_to_surface = project;
   const double t0 = bench::now_seconds();
   double t_stream = -1;
   const auto progress = [&](const std::string&, double) {
@@ -96,7 +99,11 @@ std::vector<std::int64_t> parse_sizes(const std::string& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc == 4 && std::string(argv[1]) == "--child") return run_child(argv[2], std::atoi(argv[3]));
+  if (argc == 6 && std::string(argv[1]) == "--child")
+    return run_child(argv[2], std::atoi(argv[3]), std::atof(argv[4]), std::atoi(argv[5]) != 0);
+  const StreamOptions defaults;
+  double fine_factor = defaults.fine_voxel_factor;
+  bool project = defaults.project_to_surface;
   std::vector<std::int64_t> sizes = {100000, 1000000, 10000000};
   std::int64_t density_max = 1000000;
   int sites = 3000;
@@ -108,6 +115,8 @@ int main(int argc, char** argv) {
     else if (a == "--density-max" && i + 1 < argc) density_max = static_cast<std::int64_t>(std::stod(argv[++i]));
     else if (a == "--sites" && i + 1 < argc) sites = std::atoi(argv[++i]);
     else if (a == "--keep-dir" && i + 1 < argc) keep_dir = argv[++i];
+    else if (a == "--fine" && i + 1 < argc) fine_factor = std::stod(argv[++i]);
+    else if (a == "--plain-means") project = false;
     else {
       std::fprintf(stderr, "bench_scale: error: %s: unknown option\n", a.c_str());
       return 2;
@@ -132,7 +141,8 @@ int main(int argc, char** argv) {
     for (const int n : runs) {
       // popen runs through the shell: /proc/self/exe would be the shell, so name this binary.
       const std::string self = fs::read_symlink("/proc/self/exe").string();
-      const std::string command = "'" + self + "' --child '" + file.string() + "' " + std::to_string(n) + " 2>&1";
+      const std::string command = "'" + self + "' --child '" + file.string() + "' " + std::to_string(n) + " " +
+                                  std::to_string(fine_factor) + " " + (project ? "1" : "0") + " 2>&1";
       FILE* pipe = popen(command.c_str(), "r");
       std::string line, all;
       char buf[4096];

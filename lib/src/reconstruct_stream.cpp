@@ -1,6 +1,7 @@
 // Streamed, voxel-first front end of the surface reconstruction (reconstruct_stream.h).
 #include "heatcvt/reconstruct_stream.h"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <random>
@@ -82,6 +83,8 @@ void check_stream_options(const StreamOptions& s) {
     throw InvalidInputError("reconstruct_surface_streamed: voxel_size must be finite and >= 0");
   if (!(s.fine_voxel_factor >= 1 && std::isfinite(s.fine_voxel_factor)))
     throw InvalidInputError("reconstruct_surface_streamed: fine_voxel_factor must be finite and >= 1");
+  if (!(s.min_points_per_fine_voxel > 0 && std::isfinite(s.min_points_per_fine_voxel)))
+    throw InvalidInputError("reconstruct_surface_streamed: min_points_per_fine_voxel must be finite and > 0");
   if (s.sample_points < 10) throw InvalidInputError("reconstruct_surface_streamed: sample_points must be >= 10");
 }
 
@@ -149,7 +152,10 @@ StreamedReconstruction reconstruct_surface_streamed(CloudChunkSource& source, co
     if (reservoir.seen() < 10)
       throw InvalidInputError(source.name() + ": fewer than 10 finite points (" + std::to_string(points) + " points read)");
     double h = choose_voxel_size(reservoir.sample(), options.sites, stream.voxel);
-    if (stream.project_to_surface) h /= stream.fine_voxel_factor;
+    if (stream.project_to_surface) {
+      const double per_voxel = static_cast<double>(reservoir.seen()) / (options.sites * stream.voxel.points_per_site);
+      h /= std::min(stream.fine_voxel_factor, std::max(1.0, std::sqrt(per_voxel / stream.min_points_per_fine_voxel)));
+    }
     summary = std::make_unique<VoxelSummary>(h);
     source.rewind();  // pass 2: every point into the summary
     while (source.next(chunk)) summary->add(chunk);

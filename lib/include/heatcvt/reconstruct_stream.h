@@ -37,10 +37,14 @@ struct StreamOptions {
   /// that many points) instead of the plain voxel means: removes the double layer of means where
   /// the noise band spans two voxel layers, and hits the points-per-site target. Default true.
   bool project_to_surface = true;
-  /// With project_to_surface and a chosen voxel size, the summary is built at the chosen size
-  /// divided by this factor (>= 1), so that the thinning has points to spare: about factor²
-  /// times more voxels in memory. Default 1.5.
+  /// With project_to_surface and a chosen voxel size h, the summary is built at h / f, so that
+  /// the thinning has points to spare (about f² times more voxels in memory), where
+  /// f = min(fine_voxel_factor, max(1, sqrt(points per voxel at h / min_points_per_fine_voxel))):
+  /// finer only while each fine voxel still averages enough points to damp the noise (at a fixed
+  /// density of ~5 raw points per output point, finer voxels of ~2 points gave a spurious handle
+  /// on armadillo). Defaults 1.5 and 10.
   double fine_voxel_factor = 1.5;
+  double min_points_per_fine_voxel = 10.0;
   /// Seed of the reservoir sampling (std::mt19937_64). Default 1.
   std::uint64_t sample_seed = 1;
   /// Reading progress: pass 1 (raw points / sample) or 2 (voxel summary), and the reader's counters.
