@@ -1,0 +1,267 @@
+// Streaming cloud readers (cloud_stream.h): the buffered byte source, the chunk reader driving the
+// per-format decoders, and the XYZ / PWN / TXT decoder. PLY and PCD decoders are in
+// cloud_stream_ply.cpp and cloud_stream_pcd.cpp.
+#include "heatcvt/cloud_stream.h"
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+
+#include "cloud_stream_detail.h"
+
+namespace heatcvt {
+
+namespace stream_detail {
+
+namespace fs = std::filesystem;
+
+bool parse_double(std::string_view tok, double& out) {
+  if (!tok.empty() && tok.front() == '+') tok.remove_prefix(1);
+  if (tok.empty()) return false;
+  const auto res = std::from_chars(tok.data(), tok.data() + tok.size(), out);
+  return res.ec == std::errc() && res.ptr == tok.data() + tok.size();
+}
+
+bool parse_int(std::string_view tok, long long& out) {
+  if (!tok.empty() && tok.front() == '+') tok.remove_prefix(1);
+  if (tok.empty()) return false;
+  const auto res = std::from_chars(tok.data(), tok.data() + tok.size(), out);
+  return res.ec == std::errc() && res.ptr == tok.data() + tok.size();
+}
+
+void split(std::string_view line, std::vector<std::string_view>& tokens) {
+  tokens.clear();
+  size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && is_space(line[i])) ++i;
+    size_t j = i;
+    while (j < line.size() && !is_space(line[j])) ++j;
+    if (j > i) tokens.push_back(line.substr(i, j - i));
+    i = j;
+  }
+}
+
+ByteSource::ByteSource(const std::string& path, std::size_t buffer_bytes)
+    : path_(path), buf_(std::max<std::size_t>(buffer_bytes, 4096)) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) fail(path, "file does not exist");
+  if (fs::is_directory(path, ec)) fail(path, "is a directory, not a file");
+  in_.open(path, std::ios::binary);
+  if (!in_) fail(path, "cannot open file for reading");
+  const auto sz = fs::file_size(path, ec);
+  if (ec) fail(path, "cannot determine the file size");
+  size_ = static_cast<std::int64_t>(sz);
+  if (size_ == 0) fail(path, "file is empty");
+}
+
+bool ByteSource::fill(std::size_t want) {
+  if (pos_ > 0) {
+    std::memmove(buf_.data(), buf_.data() + pos_, end_ - pos_);
+    end_ -= pos_;
+    pos_ = 0;
+  }
+  while (end_ < want && in_) {
+    in_.read(buf_.data() + end_, static_cast<std::streamsize>(buf_.size() - end_));
+    const auto got = static_cast<std::size_t>(in_.gcount());
+    if (got == 0) break;
+    end_ += got;
+    file_pos_ += static_cast<std::int64_t>(got);
+  }
+  return end_ >= want;
+}
+
+bool ByteSource::read(char* dst, std::size_t n) {
+  while (n > 0) {
+    if (pos_ == end_ && !fill(1)) return false;
+    const std::size_t k = std::min(n, end_ - pos_);
+    std::memcpy(dst, buf_.data() + pos_, k);
+    pos_ += k;
+    dst += k;
+    n -= k;
+  }
+  return true;
+}
+
+bool ByteSource::getline(std::string& line) {
+  line.clear();
+  bool any = false;
+  while (true) {
+    if (pos_ == end_ && !fill(1)) return any;
+    any = true;
+    const char* start = buf_.data() + pos_;
+    const void* nl = std::memchr(start, '\n', end_ - pos_);
+    if (nl) {
+      const auto len = static_cast<std::size_t>(static_cast<const char*>(nl) - start);
+      line.append(start, len);
+      pos_ += len + 1;
+      return true;
+    }
+    line.append(start, end_ - pos_);
+    pos_ = end_;
+  }
+}
+
+bool ByteSource::token(std::string& tok) {
+  tok.clear();
+  while (true) {  // skip white space
+    if (pos_ == end_ && !fill(1)) return false;
+    while (pos_ < end_ && is_space(buf_[pos_])) ++pos_;
+    if (pos_ < end_) break;
+  }
+  while (true) {
+    const std::size_t start = pos_;
+    while (pos_ < end_ && !is_space(buf_[pos_])) ++pos_;
+    tok.append(buf_.data() + start, pos_ - start);
+    if (pos_ < end_ || !fill(1)) return true;
+  }
+}
+
+namespace {
+
+// XYZ / PWN / TXT: the rules of read_cloud's text reader, line by line.
+class XyzDecoder : public CloudChunkReader::Decoder {
+ public:
+  XyzDecoder(const std::string& path, std::size_t buffer_bytes) : Decoder(path, buffer_bytes) {
+    format = "xyz";
+    // Normals are carried when the first data line has >= 6 columns: look ahead to it.
+    while (next_line()) {
+      if (cols_ == 0 || skip_count_line()) continue;
+      pending_ = true;
+      normals = cols_ >= 6;
+      break;
+    }
+  }
+
+  std::int64_t read(std::int64_t max, CloudChunk& chunk) override {
+    std::int64_t n = 0;
+    while (n < max) {
+      if (!pending_) {
+        if (!next_line()) break;
+        if (cols_ == 0 || skip_count_line()) continue;
+      }
+      pending_ = false;
+      if (cols_ < 3)
+        fail(src.path(), "line " + std::to_string(line_no_) + ": expected at least 3 numbers (x y z), found " +
+                             std::to_string(cols_));
+      for (int k = 0; k < 3; ++k) chunk.P(n, k) = vals_[k];
+      if (normals) {
+        if (cols_ < 6) all_normals = false;
+        for (int k = 0; k < 3; ++k) chunk.N(n, k) = cols_ >= 6 ? vals_[k + 3] : std::numeric_limits<double>::quiet_NaN();
+      }
+      ++n;
+    }
+    return n;
+  }
+
+ private:
+  // Reads and tokenises the next line into vals_ / cols_; false at the end of the file.
+  bool next_line() {
+    if (!src.getline(line_)) return false;
+    ++line_no_;
+    std::string_view line(line_);
+    const size_t hash = line.find('#');
+    if (hash != std::string_view::npos) line = line.substr(0, hash);
+    cols_ = 0;
+    size_t i = 0;
+    while (true) {
+      while (i < line.size() && is_space(line[i])) ++i;
+      if (i >= line.size()) break;
+      size_t j = i;
+      while (j < line.size() && !is_space(line[j])) ++j;
+      const std::string_view tok = line.substr(i, j - i);
+      double v = 0;
+      if (!parse_double(tok, v))
+        fail(src.path(), "line " + std::to_string(line_no_) + ": malformed number " + quote_excerpt(tok));
+      if (cols_ < 6) vals_[cols_] = v;
+      ++cols_;
+      i = j;
+    }
+    return true;
+  }
+  // A single non-negative integer on the first data line is a point count, not a point.
+  bool skip_count_line() {
+    const bool first = first_data_line_;
+    first_data_line_ = false;
+    return first && cols_ == 1 && vals_[0] >= 0 && vals_[0] == std::floor(vals_[0]);
+  }
+
+  std::string line_;
+  long line_no_ = 0;
+  int cols_ = 0;
+  double vals_[6] = {0, 0, 0, 0, 0, 0};
+  bool first_data_line_ = true;
+  bool pending_ = false;  // vals_ holds a data line not yet handed out
+};
+
+std::string lower(std::string s) {
+  for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+}  // namespace
+
+std::unique_ptr<CloudChunkReader::Decoder> make_xyz_decoder(const std::string& path, std::size_t buffer_bytes) {
+  return std::make_unique<XyzDecoder>(path, buffer_bytes);
+}
+
+}  // namespace stream_detail
+
+CloudChunkReader::CloudChunkReader(const std::string& path, StreamReaderOptions options)
+    : path_(path), options_(std::move(options)) {
+  if (options_.chunk_points < 1)
+    throw InvalidInputError("CloudChunkReader: chunk_points must be >= 1 (got " + std::to_string(options_.chunk_points) + ")");
+  open();
+}
+
+CloudChunkReader::~CloudChunkReader() = default;
+
+void CloudChunkReader::open() {
+  using namespace stream_detail;
+  decoder_.reset();
+  std::error_code ec;
+  // The checks of read_cloud, in its order: existence before the extension.
+  if (!std::filesystem::exists(path_, ec)) fail(path_, "file does not exist");
+  if (std::filesystem::is_directory(path_, ec)) fail(path_, "is a directory, not a file");
+  const std::string ext = lower(std::filesystem::path(path_).extension().string());
+  if (ext != ".pcd" && ext != ".ply" && ext != ".xyz" && ext != ".pwn" && ext != ".txt")
+    fail(path_, "unknown point-cloud format " + quote_excerpt(ext) + " (expected .pcd, .ply, .xyz, .pwn or .txt)");
+  if (ext == ".pcd") decoder_ = make_pcd_decoder(path_, options_.buffer_bytes);
+  else if (ext == ".ply") decoder_ = make_ply_decoder(path_, options_.buffer_bytes);
+  else decoder_ = make_xyz_decoder(path_, options_.buffer_bytes);
+}
+
+bool CloudChunkReader::next(CloudChunk& chunk) {
+  const Eigen::Index m = static_cast<Eigen::Index>(options_.chunk_points);
+  chunk.P.resize(m, 3);
+  chunk.N.resize(decoder_->normals ? m : 0, 3);
+  chunk.C.resize(decoder_->colours ? m : 0, 3);
+  const std::int64_t n = decoder_->read(options_.chunk_points, chunk);
+  decoder_->points_read += n;
+  if (n < m) {
+    chunk.P.conservativeResize(n, 3);
+    if (decoder_->normals) chunk.N.conservativeResize(n, 3);
+    if (decoder_->colours) chunk.C.conservativeResize(n, 3);
+  }
+  if (options_.progress) options_.progress({bytes_read(), bytes_total(), points_read(), points_in_file()});
+  return n > 0;
+}
+
+void CloudChunkReader::rewind() {
+  open();
+  ++passes_;
+}
+
+const std::string& CloudChunkReader::format() const { return decoder_->format; }
+bool CloudChunkReader::has_normals() const { return decoder_->normals; }
+bool CloudChunkReader::has_colours() const { return decoder_->colours; }
+bool CloudChunkReader::all_points_had_normals() const { return decoder_->normals && decoder_->all_normals; }
+std::int64_t CloudChunkReader::points_in_file() const { return decoder_->points_total; }
+std::int64_t CloudChunkReader::points_read() const { return decoder_->points_read; }
+std::int64_t CloudChunkReader::bytes_read() const { return decoder_->src.offset(); }
+std::int64_t CloudChunkReader::bytes_total() const { return decoder_->src.size(); }
+
+}  // namespace heatcvt

@@ -1,0 +1,183 @@
+// Streamed, voxel-first front end of the surface reconstruction (reconstruct_stream.h).
+#include "heatcvt/reconstruct_stream.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include "heatcvt/errors.h"
+
+namespace heatcvt {
+
+namespace {
+
+using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+
+// The raw points of a cloud while it is small enough to keep (row-major triples).
+struct RawBuffer {
+  std::vector<double> p, n, c;
+  bool normals = true, colours = true;
+  bool kept = true;  // false once the cloud outgrew max_raw_points
+
+  void add(const CloudChunk& chunk) {
+    normals = normals && chunk.has_normals();
+    colours = colours && chunk.has_colours();
+    for (Eigen::Index i = 0; i < chunk.rows(); ++i)
+      for (int k = 0; k < 3; ++k) {
+        p.push_back(chunk.P(i, k));
+        if (normals) n.push_back(chunk.N(i, k));
+        if (colours) c.push_back(chunk.C(i, k));
+      }
+  }
+  void drop() {
+    kept = false;
+    std::vector<double>().swap(p);
+    std::vector<double>().swap(n);
+    std::vector<double>().swap(c);
+  }
+  PointCloud cloud() const {
+    const Eigen::Index rows = static_cast<Eigen::Index>(p.size() / 3);
+    PointCloud cloud;
+    cloud.P = Eigen::Map<const RowMajor>(p.data(), rows, 3);
+    if (normals && n.size() == p.size()) cloud.N = Eigen::Map<const RowMajor>(n.data(), rows, 3);
+    if (colours && c.size() == p.size()) cloud.C = Eigen::Map<const RowMajor>(c.data(), rows, 3);
+    return cloud;
+  }
+};
+
+// Uniform sample of the finite points seen so far (reservoir sampling, algorithm R), point by
+// point so that chunk boundaries do not matter.
+class Reservoir {
+ public:
+  Reservoir(std::int64_t size, std::uint64_t seed) : size_(std::max<std::int64_t>(size, 10)), rng_(seed) {}
+  void add(const CloudChunk& chunk) {
+    for (Eigen::Index i = 0; i < chunk.rows(); ++i) {
+      if (!chunk.P.row(i).allFinite()) continue;
+      if (seen_ < size_) {
+        sample_.push_back(chunk.P.row(i));
+      } else {
+        const std::uint64_t j = rng_() % static_cast<std::uint64_t>(seen_ + 1);
+        if (j < static_cast<std::uint64_t>(size_)) sample_[static_cast<std::size_t>(j)] = chunk.P.row(i);
+      }
+      ++seen_;
+    }
+  }
+  std::int64_t seen() const { return seen_; }
+  Eigen::MatrixX3d sample() const {
+    Eigen::MatrixX3d S(static_cast<Eigen::Index>(sample_.size()), 3);
+    for (std::size_t i = 0; i < sample_.size(); ++i) S.row(static_cast<Eigen::Index>(i)) = sample_[i];
+    return S;
+  }
+
+ private:
+  std::int64_t size_, seen_ = 0;
+  std::mt19937_64 rng_;
+  std::vector<Eigen::RowVector3d> sample_;
+};
+
+void check_stream_options(const StreamOptions& s) {
+  if (s.max_raw_points < 0) throw InvalidInputError("reconstruct_surface_streamed: max_raw_points must be >= 0");
+  if (!(s.voxel_size >= 0 && std::isfinite(s.voxel_size)))
+    throw InvalidInputError("reconstruct_surface_streamed: voxel_size must be finite and >= 0");
+  if (!(s.fine_voxel_factor >= 1 && std::isfinite(s.fine_voxel_factor)))
+    throw InvalidInputError("reconstruct_surface_streamed: fine_voxel_factor must be finite and >= 1");
+  if (!(s.min_points_per_fine_voxel > 0 && std::isfinite(s.min_points_per_fine_voxel)))
+    throw InvalidInputError("reconstruct_surface_streamed: min_points_per_fine_voxel must be finite and > 0");
+  if (s.sample_points < 10) throw InvalidInputError("reconstruct_surface_streamed: sample_points must be >= 10");
+}
+
+// The exact path: read_cloud's clean-up, then the whole-cloud reconstruction.
+StreamedReconstruction reconstruct_raw(const CloudChunkSource& source, PointCloud cloud, const ReconstructionOptions& options,
+                                       const ReconstructionCallback& progress) {
+  const auto* reader = dynamic_cast<const CloudChunkReader*>(&source);
+  if (reader && reader->has_normals() && !reader->all_points_had_normals()) cloud.N.resize(0, 3);  // as read_cloud
+  const Eigen::Index in_source = cloud.P.rows();
+  if (in_source == 0) throw InvalidInputError(source.name() + ": no points in the file");
+  clean_cloud(cloud);
+  if (cloud.P.rows() == 0)
+    throw InvalidInputError(source.name() + ": no finite points (all " + std::to_string(in_source) + " points are NaN/inf)");
+  StreamedReconstruction out;
+  out.result = reconstruct_surface(cloud.P, options, progress);
+  out.cloud = std::move(cloud);
+  out.points_read = in_source;
+  out.passes = 1;
+  return out;
+}
+
+}  // namespace
+
+StreamedReconstruction reconstruct_surface_from_summary(const VoxelSummary& summary, const ReconstructionOptions& options,
+                                                        const StreamOptions& stream, const ReconstructionCallback& progress) {
+  if (summary.voxels() == 0) throw InvalidInputError("reconstruct_surface_from_summary: the summary holds no point");
+  StreamedReconstruction out;
+  if (stream.project_to_surface) {
+    const double target = static_cast<double>(options.sites) * stream.voxel.points_per_site;
+    out.cloud.P = summary.surface_points(static_cast<Eigen::Index>(std::ceil(target)), nullptr, &out.cloud.C);
+  } else {
+    out.cloud.P = summary.points();
+    out.cloud.N = summary.normals();
+    out.cloud.C = summary.colours();
+  }
+  ReconstructionOptions subset = options;
+  subset.cvt_points_per_site = 0;  // the voxel means already are the uniform subset
+  out.result = reconstruct_surface(out.cloud.P, subset, progress);
+  out.summarised = true;
+  out.voxel_size = summary.voxel_size();
+  out.points_read = summary.points_added() + summary.non_finite_skipped();
+  return out;
+}
+
+StreamedReconstruction reconstruct_surface_streamed(CloudChunkSource& source, const ReconstructionOptions& options,
+                                                    const StreamOptions& stream, const ReconstructionCallback& progress) {
+  check_stream_options(stream);
+  RawBuffer raw;
+  Reservoir reservoir(stream.sample_points, stream.sample_seed);
+  std::unique_ptr<VoxelSummary> summary;
+  if (stream.voxel_size > 0) summary = std::make_unique<VoxelSummary>(stream.voxel_size);
+  std::int64_t points = 0;
+  CloudChunk chunk;
+  // Pass 1: raw points while they fit, the reservoir sample, and the summary when its size is given.
+  while (source.next(chunk)) {
+    points += chunk.rows();
+    if (raw.kept && points <= stream.max_raw_points) raw.add(chunk);
+    else if (raw.kept) raw.drop();
+    if (summary) summary->add(chunk);
+    else reservoir.add(chunk);
+  }
+  if (raw.kept) return reconstruct_raw(source, raw.cloud(), options, progress);
+  int passes = 1;
+  if (!summary) {
+    if (reservoir.seen() < 10)
+      throw InvalidInputError(source.name() + ": fewer than 10 finite points (" + std::to_string(points) + " points read)");
+    double h = choose_voxel_size(reservoir.sample(), options.sites, stream.voxel);
+    if (stream.project_to_surface) {
+      const double per_voxel = static_cast<double>(reservoir.seen()) / (options.sites * stream.voxel.points_per_site);
+      h /= std::min(stream.fine_voxel_factor, std::max(1.0, std::sqrt(per_voxel / stream.min_points_per_fine_voxel)));
+    }
+    summary = std::make_unique<VoxelSummary>(h);
+    source.rewind();  // pass 2: every point into the summary
+    while (source.next(chunk)) summary->add(chunk);
+    passes = 2;
+  }
+  StreamedReconstruction out = reconstruct_surface_from_summary(*summary, options, stream, progress);
+  out.points_read = points;
+  out.passes = passes;
+  return out;
+}
+
+StreamedReconstruction reconstruct_surface_streamed(const std::string& path, const ReconstructionOptions& options,
+                                                    const StreamOptions& stream, const ReconstructionCallback& progress) {
+  check_stream_options(stream);
+  StreamReaderOptions reader_options;
+  reader_options.chunk_points = stream.chunk_points;
+  const CloudChunkReader* reader_seen = nullptr;
+  if (stream.progress)
+    reader_options.progress = [&](const StreamProgress& p) { stream.progress(reader_seen ? reader_seen->passes() : 1, p); };
+  CloudChunkReader reader(path, reader_options);
+  reader_seen = &reader;
+  return reconstruct_surface_streamed(static_cast<CloudChunkSource&>(reader), options, stream, progress);
+}
+
+}  // namespace heatcvt

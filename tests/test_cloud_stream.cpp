@@ -1,0 +1,279 @@
+// Streaming cloud readers (cloud_stream.h): for every format, the chunks concatenated are the
+// points read_cloud reads (same order; read_cloud's clean-up applied to both), whatever the chunk
+// size; a truncated file gives one IOError naming the file, the same error read_cloud gives.
+#include <gtest/gtest.h>
+
+#include <pcl/io/pcd_io.h>
+#include <pcl/point_types.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "heatcvt/cloud_io.h"
+#include "heatcvt/cloud_stream.h"
+#include "heatcvt/errors.h"
+#include "heatcvt/mesh_io.h"
+#include "heatcvt/reconstruct.h"
+#include "test_support.h"
+
+using namespace heatcvt;
+namespace fs = std::filesystem;
+
+namespace {
+
+// Streams a whole file with the given chunk size into one PointCloud; checks that every chunk
+// but the last is full and that the counters add up.
+PointCloud stream_all(const std::string& path, std::int64_t chunk_points, bool* normals_complete = nullptr) {
+  StreamReaderOptions options;
+  options.chunk_points = chunk_points;
+  std::int64_t last_bytes = -1, last_points = -1, calls = 0;
+  options.progress = [&](const StreamProgress& p) {
+    EXPECT_GE(p.bytes_read, last_bytes);
+    EXPECT_GE(p.points_read, last_points);
+    EXPECT_LE(p.bytes_read, p.bytes_total);
+    last_bytes = p.bytes_read;
+    last_points = p.points_read;
+    ++calls;
+  };
+  CloudChunkReader reader(path, options);
+  std::vector<double> p, n, c;
+  CloudChunk chunk;
+  bool short_chunk_seen = false;
+  std::int64_t chunks = 0;
+  while (reader.next(chunk)) {
+    EXPECT_FALSE(short_chunk_seen) << path << ": a short chunk before the end";
+    EXPECT_LE(chunk.rows(), chunk_points);
+    EXPECT_EQ(chunk.has_normals(), reader.has_normals());
+    EXPECT_EQ(chunk.has_colours(), reader.has_colours());
+    if (chunk.rows() < chunk_points) short_chunk_seen = true;
+    for (Eigen::Index i = 0; i < chunk.rows(); ++i)
+      for (int k = 0; k < 3; ++k) {
+        p.push_back(chunk.P(i, k));
+        if (chunk.has_normals()) n.push_back(chunk.N(i, k));
+        if (chunk.has_colours()) c.push_back(chunk.C(i, k));
+      }
+    ++chunks;
+  }
+  EXPECT_EQ(calls, chunks + 1);  // one call per chunk and one at the end
+  EXPECT_EQ(last_points, static_cast<std::int64_t>(p.size() / 3));
+  if (reader.points_in_file() >= 0) EXPECT_EQ(reader.points_in_file(), last_points);
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+  const Eigen::Index rows = static_cast<Eigen::Index>(p.size() / 3);
+  PointCloud cloud;
+  cloud.P = Eigen::Map<RowMajor>(p.data(), rows, 3);
+  if (!n.empty()) cloud.N = Eigen::Map<RowMajor>(n.data(), rows, 3);
+  if (!c.empty()) cloud.C = Eigen::Map<RowMajor>(c.data(), rows, 3);
+  if (normals_complete) *normals_complete = reader.all_points_had_normals();
+  if (reader.has_normals() && !reader.all_points_had_normals()) cloud.N.resize(0, 3);
+  return cloud;
+}
+
+bool identical(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b) {
+  return a.rows() == b.rows() && (a.array() == b.array()).all();
+}
+
+// The property: streaming with chunk sizes 1, 7 and 1000, then read_cloud's clean-up, gives
+// exactly read_cloud's cloud (positions, normals, colours, order).
+void expect_stream_matches_read_cloud(const std::string& path) {
+  CloudReadReport rep;
+  const PointCloud whole = read_cloud(path, &rep);
+  for (std::int64_t chunk : {1, 7, 1000}) {
+    PointCloud streamed = stream_all(path, chunk);
+    EXPECT_EQ(streamed.P.rows(), rep.points_in_file) << path << " chunk " << chunk;
+    clean_cloud(streamed);
+    EXPECT_TRUE(identical(streamed.P, whole.P)) << path << " chunk " << chunk;
+    EXPECT_TRUE(identical(streamed.N, whole.N)) << path << " chunk " << chunk << " normals";
+    EXPECT_TRUE(identical(streamed.C, whole.C)) << path << " chunk " << chunk << " colours";
+  }
+}
+
+// A noisy torus sample with normals and colours (2,000 points).
+PointCloud torus_cloud() {
+  const TriangleMesh torus = test::torus(40, 20);
+  PointCloud cloud;
+  cloud.P = sample_surface(torus.V, torus.F, 2000, 3, 0.01);
+  cloud.N = cloud.P.rowwise().normalized();
+  cloud.C = ((cloud.P.array() + 1.5) / 3.0).min(1.0).max(0.0).matrix();
+  cloud.C = (cloud.C * 255.0).array().round().matrix() / 255.0;  // exactly representable as uchar
+  return cloud;
+}
+
+void write_ply(const std::string& path, const PointCloud& cloud, PlyEncoding encoding) {
+  MeshAttributes attr;
+  attr.vertex_normal = cloud.N;
+  attr.vertex_color = cloud.C;
+  MeshWriteOptions options;
+  options.ply_encoding = encoding;
+  write_mesh(path, cloud.P, Eigen::MatrixX3i(0, 3), attr, options);
+}
+
+void write_pcd(const std::string& path, const PointCloud& cloud, int kind) {
+  pcl::PointCloud<pcl::PointXYZRGBNormal> pc;
+  for (Eigen::Index i = 0; i < cloud.P.rows(); ++i) {
+    pcl::PointXYZRGBNormal q;
+    q.x = static_cast<float>(cloud.P(i, 0));
+    q.y = static_cast<float>(cloud.P(i, 1));
+    q.z = static_cast<float>(cloud.P(i, 2));
+    q.normal_x = static_cast<float>(cloud.N(i, 0));
+    q.normal_y = static_cast<float>(cloud.N(i, 1));
+    q.normal_z = static_cast<float>(cloud.N(i, 2));
+    q.r = static_cast<std::uint8_t>(std::lround(cloud.C(i, 0) * 255));
+    q.g = static_cast<std::uint8_t>(std::lround(cloud.C(i, 1) * 255));
+    q.b = static_cast<std::uint8_t>(std::lround(cloud.C(i, 2) * 255));
+    pc.push_back(q);
+  }
+  int status = -1;
+  if (kind == 0) status = pcl::io::savePCDFileASCII(path, pc);
+  else if (kind == 1) status = pcl::io::savePCDFileBinary(path, pc);
+  else status = pcl::io::savePCDFileBinaryCompressed(path, pc);
+  ASSERT_EQ(status, 0) << path;
+}
+
+// The files of every format, written from the torus cloud.
+std::vector<std::string> write_every_format(const test::ScratchDir& dir) {
+  const PointCloud cloud = torus_cloud();
+  std::vector<std::string> paths = {dir.path("le.ply"), dir.path("be.ply"), dir.path("ascii.ply"),
+                                    dir.path("ascii.pcd"), dir.path("binary.pcd"), dir.path("compressed.pcd"),
+                                    dir.path("cloud.xyz")};
+  write_ply(paths[0], cloud, PlyEncoding::binary_little_endian);
+  write_ply(paths[1], cloud, PlyEncoding::binary_big_endian);
+  write_ply(paths[2], cloud, PlyEncoding::ascii);
+  for (int kind = 0; kind < 3; ++kind) write_pcd(paths[3 + kind], cloud, kind);
+  write_cloud_xyz(paths[6], cloud);
+  return paths;
+}
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const IOError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(CloudStream, EveryFormatBuiltInCodeMatchesReadCloud) {
+  test::ScratchDir dir("cloud_stream_formats");
+  for (const auto& path : write_every_format(dir)) {
+    SCOPED_TRACE(path);
+    const PointCloud whole = read_cloud(path);
+    ASSERT_EQ(whole.P.rows(), 2000);
+    ASSERT_TRUE(whole.has_normals());
+    expect_stream_matches_read_cloud(path);
+  }
+  // Colours travel through PLY and PCD (XYZ has none).
+  for (const char* name : {"le.ply", "be.ply", "ascii.ply", "ascii.pcd", "binary.pcd", "compressed.pcd"}) {
+    CloudChunkReader reader(dir.path(name));
+    EXPECT_TRUE(reader.has_colours()) << name;
+    EXPECT_EQ(reader.points_in_file(), 2000) << name;
+  }
+}
+
+TEST(CloudStream, EveryRealCloudFileMatchesReadCloud) {
+  const fs::path dir = fs::path(test::data_path("clouds/kitten.xyz")).parent_path();
+  std::vector<std::string> files;
+  for (const auto& entry : fs::directory_iterator(dir)) files.push_back(entry.path().string());
+  std::sort(files.begin(), files.end());
+  ASSERT_GE(files.size(), 30u);
+  for (const auto& path : files) {
+    SCOPED_TRACE(path);
+    expect_stream_matches_read_cloud(path);
+  }
+}
+
+TEST(CloudStream, XyzNormalsOnlyWhenEveryLineHasThem) {
+  test::ScratchDir dir("cloud_stream_xyz");
+  const std::string path = dir.path("mixed.xyz");
+  {
+    std::ofstream out(path);
+    out << "3\n# comment\n0 0 0 0 0 1\n\n1 0 0\n0 1 0 0 0 1\n";
+  }
+  bool complete = true;
+  PointCloud streamed = stream_all(path, 2, &complete);
+  EXPECT_FALSE(complete);
+  const PointCloud whole = read_cloud(path);
+  EXPECT_FALSE(whole.has_normals());
+  clean_cloud(streamed);
+  EXPECT_TRUE(identical(streamed.P, whole.P));
+  EXPECT_FALSE(streamed.has_normals());
+}
+
+TEST(CloudStream, TruncatedFileGivesOneIOErrorNamingTheFile) {
+  test::ScratchDir dir("cloud_stream_truncated");
+  for (const auto& path : write_every_format(dir)) {
+    SCOPED_TRACE(path);
+    const auto size = fs::file_size(path);
+    // Cut inside the data: XYZ files carry no count, so the cut leaves a line of two numbers.
+    std::string data;
+    {
+      std::ifstream in(path, std::ios::binary);
+      data.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    std::size_t cut = size * 6 / 10;
+    if (path.size() > 4 && path.substr(path.size() - 4) == ".xyz") {
+      cut = data.find('\n', cut) + 1;
+      cut = data.find(' ', data.find(' ', cut) + 1);
+    }
+    const std::string truncated = path + ".cut" + fs::path(path).extension().string();
+    {
+      std::ofstream out(truncated, std::ios::binary);
+      out.write(data.data(), static_cast<std::streamsize>(cut));
+    }
+    for (std::int64_t chunk : {1, 7, 1000}) {
+      int errors = 0;
+      std::string message;
+      std::int64_t points = 0;
+      try {
+        StreamReaderOptions options;
+        options.chunk_points = chunk;
+        CloudChunkReader reader(truncated, options);
+        CloudChunk c;
+        while (reader.next(c)) points += c.rows();
+      } catch (const IOError& e) {
+        ++errors;
+        message = e.what();
+      }
+      EXPECT_EQ(errors, 1);
+      EXPECT_EQ(message.rfind(truncated + ": ", 0), 0u) << message;
+      EXPECT_LT(points, 2000);
+      // The same error read_cloud gives.
+      EXPECT_EQ(message, error_of([&] { read_cloud(truncated); }));
+    }
+  }
+}
+
+TEST(CloudStream, BadInputsGiveReadCloudsErrors) {
+  test::ScratchDir dir("cloud_stream_bad");
+  const std::string missing = dir.path("missing.ply");
+  EXPECT_EQ(error_of([&] { CloudChunkReader r(missing); }), error_of([&] { read_cloud(missing); }));
+  const std::string unknown = dir.path("cloud.abc");
+  { std::ofstream(unknown) << "0 0 0\n"; }
+  EXPECT_EQ(error_of([&] { CloudChunkReader r(unknown); }), error_of([&] { read_cloud(unknown); }));
+  const std::string bad_number = dir.path("bad.xyz");
+  { std::ofstream(bad_number) << "0 0 0\n1 x 0\n"; }
+  const std::string message = error_of([&] {
+    CloudChunkReader r(bad_number);
+    CloudChunk c;
+    while (r.next(c)) {
+    }
+  });
+  EXPECT_EQ(message, error_of([&] { read_cloud(bad_number); }));
+  EXPECT_NE(message.find("line 2"), std::string::npos) << message;
+  const std::string bad_index = dir.path("bad_face.ply");
+  { std::ofstream(bad_index) << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                                "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n"; }
+  const std::string face_message = error_of([&] {
+    CloudChunkReader r(bad_index);
+    CloudChunk c;
+    while (r.next(c)) {
+    }
+  });
+  EXPECT_EQ(face_message, error_of([&] { read_cloud(bad_index); }));
+  EXPECT_NE(face_message.find("out of range"), std::string::npos) << face_message;
+}
