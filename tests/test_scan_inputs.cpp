@@ -21,6 +21,7 @@
 #include "heatcvt/normals.h"
 #include "heatcvt/reconstruct.h"
 #include "heatcvt/scan_merge.h"
+#include "heatcvt/validate.h"
 #include "heatcvt/vertex_attributes.h"
 #include "test_support.h"
 
@@ -343,4 +344,26 @@ TEST(Cloud2MeshScans, BadPosesGiveOneErrorLineAndNoOutput) {
     EXPECT_NE(r.err.find(c.needle), std::string::npos) << r.err;
     EXPECT_FALSE(std::filesystem::exists(out)) << c.args;
   }
+}
+
+// A cloud larger than the whole-cloud path keeps in memory (StreamOptions::max_raw_points) is
+// streamed into a voxel summary by cloud2mesh; the mesh meets the same checks.
+TEST(Cloud2MeshScans, ALargeCloudIsStreamedIntoAVoxelSummary) {
+  test::ScratchDir dir("c2m_stream");
+  const TriangleMesh sphere = test::icosphere(5);
+  const std::string cloud = dir.path("big.xyz"), out = dir.path("big.ply"), rep = dir.path("big.json");
+  write_points_xyz(cloud, sample_surface(sphere.V, sphere.F, 400000, 9, 0.001));
+  const auto r = test::run_tool("cloud2mesh", cloud + " -n 600 -q -o " + out + " --report " + rep);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(rep);
+  const std::string json((std::istreambuf_iterator<char>(in)), {});
+  EXPECT_NE(json.find("\"streamed\": true"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"peak_memory_mb\""), std::string::npos);
+  const TriangleMesh m = read_mesh(out);
+  ValidationOptions vo;
+  const ValidationReport v = validate_triangle_mesh(m.V, m.F, vo);
+  EXPECT_TRUE(v.ok()) << v.summary();
+  EXPECT_EQ(v.boundary_loops, 0);
+  EXPECT_EQ(v.genus, 0);
+  EXPECT_GE(m.V.rows(), 0.95 * 600);
 }

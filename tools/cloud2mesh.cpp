@@ -9,6 +9,8 @@
 #include <cstdio>
 #include <iostream>
 #include <map>
+#include <memory>
+#include <sys/resource.h>
 #include <string>
 #include <vector>
 
@@ -20,6 +22,7 @@
 #include "heatcvt/mesh_io.h"
 #include "heatcvt/mesh.h"
 #include "heatcvt/reconstruct.h"
+#include "heatcvt/reconstruct_stream.h"
 #include "heatcvt/scan_merge.h"
 #include "heatcvt/vertex_attributes.h"
 #include "report_json.h"
@@ -124,6 +127,61 @@ cli::Json make_report(const std::string& cloud_path, const std::vector<std::stri
 
 }  // namespace
 
+// Progress weights of the reconstruction's stages (their typical share of the time).
+ReconstructionCallback stage_progress(cli::Progress& bar) {
+  return [&bar](const std::string& stage, double f) {
+    double done = 0;
+    if (stage == "preprocess") done = 0;
+    else if (stage == "laplacian") done = 0.02 + 0.08 * f;
+    else if (stage == "cvt") done = 0.10 + 0.80 * f;
+    else if (stage == "mesh") done = 0.90 + 0.05 * f;
+    else done = 0.95 + 0.05 * f;
+    bar.update(static_cast<long>(1000 * done));
+  };
+}
+
+// Bytes per point assumed for a text cloud (no point count in its header) when deciding whether
+// to stream it: "x y z" with about 7 significant digits per coordinate.
+constexpr double kTextBytesPerPoint = 30.0;
+
+// Whether one input file is larger than the whole-cloud path keeps in memory
+// (StreamOptions::max_raw_points): then it is streamed into a voxel summary (reconstruct_stream.h).
+bool should_stream(const std::vector<ScanInput>& scans, const ReconstructionOptions& opt, const StreamOptions& stream) {
+  if (scans.size() != 1 || !scans[0].pose.isApprox(Eigen::Isometry3d::Identity()) || opt.denoise || opt.voxel_size > 0)
+    return false;
+  const CloudChunkReader probe(scans[0].path);
+  const double points = probe.points_in_file() >= 0 ? static_cast<double>(probe.points_in_file())
+                                                    : static_cast<double>(probe.bytes_total()) / kTextBytesPerPoint;
+  return points > static_cast<double>(stream.max_raw_points);
+}
+
+// The streamed reconstruction of one large file, with reading progress (bytes) per pass.
+StreamedReconstruction reconstruct_streamed(const std::string& path, const ReconstructionOptions& opt, bool quiet) {
+  StreamOptions stream;
+  std::unique_ptr<cli::Progress> reading;
+  int reading_pass = 0;
+  stream.progress = [&](int pass, const StreamProgress& p) {
+    if (pass != reading_pass) {
+      if (reading) reading->finish();
+      reading = std::make_unique<cli::Progress>("reading (pass " + std::to_string(pass) + ")", p.bytes_total, quiet);
+      reading_pass = pass;
+    }
+    reading->update(p.bytes_read);
+  };
+  cli::Progress bar("reconstructing", 1000, quiet);
+  StreamedReconstruction s = cli::on_file(path, [&] { return reconstruct_surface_streamed(path, opt, stream, stage_progress(bar)); });
+  if (reading) reading->finish();
+  bar.finish();
+  return s;
+}
+
+// Peak resident memory of this process in MB (getrusage).
+double peak_memory_mb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_maxrss) / 1024.0;
+}
+
 int main(int argc, char** argv) {
   CLI::App app{"cloud2mesh: reconstruct a triangle mesh from a point cloud with a heat-diffusion centroidal "
                "Voronoi tessellation of the points (Herholz et al. 2017, §7-8)"};
@@ -216,29 +274,28 @@ int main(int argc, char** argv) {
     const std::string cloud_path = scans.size() == 1 ? scans[0].path : !conf_path.empty() ? conf_path
                                    : scans[0].path + " (+" + std::to_string(scans.size() - 1) + " more)";
     CloudReadReport rr;
-    PointCloud cloud = read_scans(scans, &rr);
-    if (!quiet)
-      std::cerr << "read " << cloud_path << ": " << rr.points_in_file << " points, " << rr.non_finite_dropped
-                << " non-finite dropped, " << rr.duplicates_merged << " duplicates merged" << std::endl;
-    reject_far_outliers(cloud.P, cloud_path);
-    if (opt.sites > cloud.P.rows())
-      throw InvalidInputError(cloud_path + ": -n " + std::to_string(opt.sites) + " exceeds the " +
-                              std::to_string(cloud.P.rows()) + " usable points");
-    reject_tiny_voxel(cloud.P, opt.voxel_size, cloud_path);
-
+    PointCloud cloud;
     ReconstructionResult res;
-    {
+    StreamedReconstruction streamed;
+    const bool stream = should_stream(scans, opt, StreamOptions());
+    if (stream) {
+      streamed = reconstruct_streamed(scans[0].path, opt, quiet);
+      res = std::move(streamed.result);
+      cloud = std::move(streamed.cloud);
+      rr.format = CloudChunkReader(scans[0].path).format();
+      rr.points_in_file = streamed.points_read;
+    } else {
+      cloud = read_scans(scans, &rr);
+      if (!quiet)
+        std::cerr << "read " << cloud_path << ": " << rr.points_in_file << " points, " << rr.non_finite_dropped
+                  << " non-finite dropped, " << rr.duplicates_merged << " duplicates merged" << std::endl;
+      reject_far_outliers(cloud.P, cloud_path);
+      if (opt.sites > cloud.P.rows())
+        throw InvalidInputError(cloud_path + ": -n " + std::to_string(opt.sites) + " exceeds the " +
+                                std::to_string(cloud.P.rows()) + " usable points");
+      reject_tiny_voxel(cloud.P, opt.voxel_size, cloud_path);
       cli::Progress bar("reconstructing", 1000, quiet);
-      // Stages weighted by their typical share of the time.
-      res = cli::on_file(cloud_path, [&] { return reconstruct_surface(cloud.P, opt, [&](const std::string& stage, double f) {
-        double done = 0;
-        if (stage == "preprocess") done = 0;
-        else if (stage == "laplacian") done = 0.02 + 0.08 * f;
-        else if (stage == "cvt") done = 0.10 + 0.80 * f;
-        else if (stage == "mesh") done = 0.90 + 0.05 * f;
-        else done = 0.95 + 0.05 * f;
-        bar.update(static_cast<long>(1000 * done));
-      }); });
+      res = cli::on_file(cloud_path, [&] { return reconstruct_surface(cloud.P, opt, stage_progress(bar)); });
       bar.finish();
     }
     const double total_s = cli::seconds_since(t_start);
@@ -258,6 +315,9 @@ int main(int argc, char** argv) {
     const std::vector<cli::CheckRecord> checks = cli::check_records(val);
     cli::Json j = make_report(cloud_path, {out_path, report_path}, rr, opt, res, per_iter, total_s);
     j["inputs"] = static_cast<long>(scans.size());
+    j["streamed"] = stream;
+    j["voxel_size"] = streamed.voxel_size;
+    j["peak_memory_mb"] = peak_memory_mb();
     j["colours"] = cloud.has_colours();
     j["filled_hole_edges"] = res.filled_hole_edges;
     const int status = cli::finish_report(j, res.stage_seconds, checks);
@@ -283,6 +343,11 @@ int main(int argc, char** argv) {
                   static_cast<long>(res.mesh.V.rows()), static_cast<long>(res.mesh.F.rows()), val.components,
                   val.boundary_loops, val.genus, res.holes_filled, res.unused_sites);
       std::printf("  quality: phi_min %.2f deg, phi_m %.2f deg\n", res.min_angle_deg, res.mean_min_angle_deg);
+      if (stream)
+        std::printf("  streamed: %ld points in %d passes into voxels of %g, reconstructed from %ld voxel points\n",
+                    static_cast<long>(streamed.points_read), streamed.passes, streamed.voxel_size,
+                    static_cast<long>(cloud.P.rows()));
+      std::printf("  peak memory: %.0f MB\n", peak_memory_mb());
       cli::print_checks(checks);
       std::printf("  wrote %s%s\n", out_path.c_str(), report_path.empty() ? "" : (", " + report_path).c_str());
     }
