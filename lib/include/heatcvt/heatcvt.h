@@ -34,9 +34,12 @@
 #include "heatcvt/parallel.h"
 #include "heatcvt/point_laplacian.h"
 #include "heatcvt/reconstruct.h"
+#include "heatcvt/reconstruct_stream.h"
+#include "heatcvt/scan_merge.h"
 #include "heatcvt/shapes.h"
 #include "heatcvt/subdivision.h"
 #include "heatcvt/validate.h"
+#include "heatcvt/vertex_attributes.h"
 #include "heatcvt/voronoi.h"
 
 namespace heatcvt {
