@@ -29,6 +29,43 @@ enum class CvtInitialization {
 };
 
 
+/// The numeric constants of the CVT's safeguards and heuristics (CvtOptions::tuning). Lengths
+/// are in units of the site spacing sqrt(area / sites).
+struct CvtTuning {
+  /// A site is settled (its Voronoi diffusion needs only voronoi_rings_settled rings) once it and
+  /// its neighbours moved less than this. Default 0.25.
+  double settled_move = 0.25;
+  /// Over-relaxed and Anderson steps (and the surface Lloyd's) go at most this far beyond the
+  /// centroid. Default 0.5.
+  double max_extra_step = 0.5;
+  /// Safeguard of the over-relaxation: when the energy proxy grows, ω − 1 is multiplied by this
+  /// (default 0.5) and ω drops to 1 once ω − 1 falls below relaxation_floor (default 0.05).
+  double relaxation_decay = 0.5;
+  double relaxation_floor = 0.05;
+  /// Index set of the Voronoi diffusion of a site whose cell is empty: a graph ball of this
+  /// radius around its face. Default 3.
+  double empty_cell_radius = 3.0;
+  /// split_nonmanifold_cells stops for good when the spots exceed spot_growth_factor × the fewest
+  /// seen + spot_growth_slack. Defaults 2 and 10.
+  double spot_growth_factor = 2.0;
+  int spot_growth_slack = 10;
+  /// quality_patience: an evaluation counts as progress when φm grows by more than this
+  /// (degrees). Default 0.02.
+  double patience_gain_deg = 0.02;
+  /// refine_small_angles: at most this fraction of the sites (at least one) per round. Default 0.01.
+  double refine_fraction_per_round = 0.01;
+  /// A split cell's new site must be farther than split_min_distance × spacing from the cell's
+  /// site. Default 1e-6.
+  double split_min_distance = 1e-6;
+  /// Greedy closest-point walks (over-relaxed steps): at most this many face moves, each must
+  /// lower the squared distance by a relative walk_min_gain. Defaults 256 and 1e-12.
+  int walk_max_steps = 256;
+  double walk_min_gain = 1e-12;
+  /// Blocks of faces per thread in the per-iteration clipping of the cells (load balance; the
+  /// result does not depend on it). Default 64.
+  int face_blocks_per_thread = 64;
+};
+
 /// Options of centroidal_voronoi(). Defaults follow the paper (100 iterations, t = h̄²).
 struct CvtOptions {
   /// Number of sites (generators). Default 1000.
@@ -153,6 +190,8 @@ struct CvtOptions {
   int quality_patience = 0;
   /// With quality_every: the first evaluation happens only after this many iterations. Default 0.
   int quality_start = 0;
+  /// Constants of the safeguards and heuristics above (CvtTuning).
+  CvtTuning tuning;
 };
 
 /// The best measured configuration for remeshing (meshcvt's defaults): farthest-point sampling,
@@ -245,12 +284,10 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
 Laplacian anisotropic_laplacian(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, double lambda,
                                 Eigen::VectorXd* face_metric_area = nullptr);
 
-/// Initial sites: area-uniform random points (seeded) or farthest-point sampling (graph geodesics).
-/// \throw InvalidInputError if count < 1.
-std::vector<SurfacePoint> initial_sites(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, int count,
-                                        CvtInitialization method, std::uint32_t seed);
-
 /// Variance of the cell areas (population variance over the cells).
 double cell_area_variance(const VoronoiDiagram& diagram);
 
 }  // namespace heatcvt
+
+#include "heatcvt/cvt/anisotropic_lift.h"  // lifted_laplacian(): the R⁶ lift shared with the point path
+#include "heatcvt/cvt/start.h"             // initial_sites()

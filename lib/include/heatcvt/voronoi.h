@@ -29,9 +29,11 @@ HeatField heat_field_from_dense(const Eigen::MatrixXd& U, int keep = 8);
 
 /// Builds a field from per-site sparse heat: `indices[s]`/`values[s]` are the vertices where
 /// site s's heat is known and the values there (e.g. from localized solves). Keeps the `keep`
-/// hottest sites per vertex.
+/// hottest sites per vertex (exact zeros are not stored). `threads`: for the per-vertex sorts
+/// (0 = all); the result does not depend on it.
+/// \throw InvalidInputError on keep < 1, mismatched sizes, a vertex out of range or a non-finite value.
 HeatField heat_field_from_sparse(int num_vertices, const std::vector<std::vector<int>>& indices,
-                                 const std::vector<std::vector<double>>& values, int keep = 8);
+                                 const std::vector<std::vector<double>>& values, int keep = 8, int threads = 0);
 
 /// Options of tessellate() / heat_voronoi().
 struct VoronoiOptions {
@@ -49,6 +51,25 @@ struct VoronoiOptions {
   int max_cut_depth = 24;
   /// Threads for the per-face work; 0 = all. Default 0.
   int threads = 0;
+  /// heat_voronoi(): point-source solves per batch (columns of one multi-right-hand-side solve).
+  /// Default 64.
+  int solve_block = 64;
+
+  // --- numerical tolerances of the exact cutting (barycentric units of a face) ---
+  /// Switch points of an edge's upper envelope closer than this (in the edge parameter) to the
+  /// previous one or to the edge's end are merged into it. Default 1e-12.
+  double edge_merge_tolerance = 1e-12;
+  /// A triple point (three cells meeting) within this of the face boundary is snapped to the
+  /// edge's canonical point, and one within this of an existing point is welded to it. Default 1e-10.
+  double weld_tolerance = 1e-10;
+  /// A polygon vertex whose two neighbours span less than this (twice the barycentric area) is
+  /// flat: the polygon is fanned from its centroid. Default 1e-13.
+  double flat_tolerance = 1e-13;
+  /// Validity check of a cut face: every piece's (doubled barycentric) area must exceed
+  /// −orientation_tolerance (default 1e-14) and the pieces must sum to the face within
+  /// tiling_tolerance (default 1e-9); otherwise the face is fanned from its centroid.
+  double orientation_tolerance = 1e-14;
+  double tiling_tolerance = 1e-9;
 };
 
 /// A point of the refined mesh that lies inside (or on the boundary of) an original face.
