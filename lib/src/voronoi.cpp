@@ -597,36 +597,16 @@ FaceResult tessellate_face(const Eigen::MatrixX3i& F, const HeatField& field, in
 
 namespace {
 
-// Adjacency, Voronoi vertices, edges and areas of a refined mesh whose faces carry cells.
-// `interior[v]` (original vertices): every face around v took the fast path (one site strictly
-// hottest at its three corners), so all faces around v are whole faces of one cell (that site is
-// v's strict top). Such a vertex is no Voronoi vertex, and an edge joining two such vertices has
-// two whole faces of the same cell on its sides. Both are skipped: on a typical diagram that is
-// most of the mesh.
-void finish_diagram(VoronoiDiagram& d, int num_sites, const std::vector<char>& interior) {
-  const int nrv = static_cast<int>(d.V.rows()), nrf = static_cast<int>(d.F.rows());
-  const int nv = static_cast<int>(interior.size());
-  auto skipped = [&](int v) { return v < nv && interior[v]; };
-  d.cell_area = Eigen::VectorXd::Zero(num_sites);
-  for (int r = 0; r < nrf; ++r)
-    if (d.face_cell[r] >= 0) d.cell_area[d.face_cell[r]] += d.face_area[r];
-
-  // incident refined faces per refined vertex
-  std::vector<int> inc_off(nrv + 1, 0), inc;
-  for (int r = 0; r < nrf; ++r)
-    for (int k = 0; k < 3; ++k) ++inc_off[d.F(r, k) + 1];
-  for (int v = 0; v < nrv; ++v) inc_off[v + 1] += inc_off[v];
-  inc.resize(inc_off[nrv]);
-  {
-    std::vector<int> fill(inc_off.begin(), inc_off.end() - 1);
-    for (int r = 0; r < nrf; ++r)
-      for (int k = 0; k < 3; ++k) inc[fill[d.F(r, k)]++] = r;
-  }
+// Voronoi vertices: refined vertices (other than `skipped` ones) where ≥ 3 cells meet.
+std::vector<char> find_voronoi_vertices(VoronoiDiagram& d, const std::vector<char>& interior) {
+  const int nrv = static_cast<int>(d.V.rows()), nv = static_cast<int>(interior.size());
+  std::vector<int> inc_off, inc;
+  refined_vertex_faces(d, inc_off, inc);
   d.voronoi_vertices.clear();
   std::vector<char> is_vvertex(nrv, 0);
   std::vector<int> cells;
   for (int v = 0; v < nrv; ++v) {
-    if (skipped(v)) continue;
+    if (v < nv && interior[v]) continue;
     cells.clear();
     for (int i = inc_off[v]; i < inc_off[v + 1]; ++i)
       if (d.face_cell[inc[i]] >= 0) cells.push_back(d.face_cell[inc[i]]);
@@ -644,9 +624,16 @@ void finish_diagram(VoronoiDiagram& d, int num_sites, const std::vector<char>& i
     vv.cells = cells;
     d.voronoi_vertices.push_back(std::move(vv));
   }
+  return is_vvertex;
+}
 
-  // refined edges that may separate cells: (min, max, face), sorted; bucketed by the smaller
-  // vertex (counting sort), then each small bucket sorted
+// Cell adjacency and the refined edges separating two cells: (cell a, cell b, v0, v1), cell a <
+// cell b, v0 < v1, sorted. Edges between two skipped vertices are not looked at. The refined edges
+// (min, max, face) are bucketed by the smaller vertex (counting sort), then each bucket sorted.
+std::vector<std::array<int, 4>> separating_edges(VoronoiDiagram& d, int num_sites, const std::vector<char>& interior) {
+  const int nrv = static_cast<int>(d.V.rows()), nrf = static_cast<int>(d.F.rows());
+  const int nv = static_cast<int>(interior.size());
+  auto skipped = [&](int v) { return v < nv && interior[v]; };
   std::vector<int> bucket(nrv + 1, 0);
   for (int r = 0; r < nrf; ++r)
     for (int k = 0; k < 3; ++k) {
@@ -666,7 +653,8 @@ void finish_diagram(VoronoiDiagram& d, int num_sites, const std::vector<char>& i
   for (int v = 0; v < nrv; ++v)
     if (bucket[v + 1] - bucket[v] > 1) std::sort(half.begin() + bucket[v], half.begin() + bucket[v + 1]);
   d.cell_adjacency.assign(num_sites, {});
-  std::vector<std::array<int, 4>> separating;  // (cell a, cell b, v0, v1), cell a < cell b, v0 < v1
+  std::vector<std::array<int, 4>> separating;
+  std::vector<int> cells;
   for (size_t i = 0; i < half.size();) {
     size_t j = i;
     while (j < half.size() && half[j][0] == half[i][0] && half[j][1] == half[i][1]) ++j;
@@ -688,10 +676,14 @@ void finish_diagram(VoronoiDiagram& d, int num_sites, const std::vector<char>& i
     adj.erase(std::unique(adj.begin(), adj.end()), adj.end());
   }
   std::sort(separating.begin(), separating.end());
+  return separating;
+}
 
-  // chain the separating edges of each pair of cells into polylines (pairs in increasing order;
-  // within a pair: start at chain ends in increasing vertex order, neighbours in increasing order,
-  // then the closed loops)
+// Chains the separating edges of each pair of cells into polylines (pairs in increasing order;
+// within a pair: start at chain ends in increasing vertex order, neighbours in increasing order,
+// then the closed loops). A polyline ends at Voronoi vertices and at branch points.
+void chain_edges(VoronoiDiagram& d, const std::vector<std::array<int, 4>>& separating,
+                 const std::vector<char>& is_vvertex) {
   d.edges.clear();
   std::vector<std::array<int, 3>> adj;  // (vertex, neighbour, edge slot) sorted
   std::vector<char> used;
@@ -745,6 +737,21 @@ void finish_diagram(VoronoiDiagram& d, int num_sites, const std::vector<char>& i
       if (!used[adj[k][2]]) walk(adj[k][0], adj[k][1], adj[k][2]);
     i = j;
   }
+}
+
+
+// Adjacency, Voronoi vertices, edges and areas of a refined mesh whose faces carry cells.
+// `interior[v]` (original vertices): every face around v took the fast path (one site strictly
+// hottest at its three corners), so all faces around v are whole faces of one cell (that site is
+// v's strict top). Such a vertex is no Voronoi vertex, and an edge joining two such vertices has
+// two whole faces of the same cell on its sides. Both are skipped: on a typical diagram that is
+// most of the mesh.
+void finish_diagram(VoronoiDiagram& d, int num_sites, const std::vector<char>& interior) {
+  d.cell_area = Eigen::VectorXd::Zero(num_sites);
+  for (int r = 0; r < d.F.rows(); ++r)
+    if (d.face_cell[r] >= 0) d.cell_area[d.face_cell[r]] += d.face_area[r];
+  const std::vector<char> is_vvertex = find_voronoi_vertices(d, interior);
+  chain_edges(d, separating_edges(d, num_sites, interior), is_vvertex);
 }
 
 }  // namespace
@@ -937,6 +944,18 @@ std::vector<std::pair<int, double>> cell_load_vector(const VoronoiDiagram& diagr
     }
   }
   return {acc.begin(), acc.end()};
+}
+
+void refined_vertex_faces(const VoronoiDiagram& d, std::vector<int>& offsets, std::vector<int>& faces) {
+  const int nrv = static_cast<int>(d.V.rows()), nrf = static_cast<int>(d.F.rows());
+  offsets.assign(nrv + 1, 0);
+  for (int r = 0; r < nrf; ++r)
+    for (int k = 0; k < 3; ++k) ++offsets[d.F(r, k) + 1];
+  for (int v = 0; v < nrv; ++v) offsets[v + 1] += offsets[v];
+  faces.resize(offsets[nrv]);
+  std::vector<int> fill(offsets.begin(), offsets.end() - 1);
+  for (int r = 0; r < nrf; ++r)
+    for (int k = 0; k < 3; ++k) faces[fill[d.F(r, k)]++] = r;
 }
 
 std::vector<std::vector<int>> cell_faces(const VoronoiDiagram& diagram) {

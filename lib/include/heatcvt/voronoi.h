@@ -134,6 +134,10 @@ std::vector<std::pair<int, double>> cell_load_vector(const VoronoiDiagram& diagr
 std::vector<std::vector<std::pair<int, double>>> cell_load_vectors(const VoronoiDiagram& diagram,
                                                                     const Eigen::MatrixX3i& F);
 
+/// The refined faces around every refined vertex, compressed rows: the faces of vertex v are
+/// `faces[offsets[v] .. offsets[v+1])`, in increasing order.
+void refined_vertex_faces(const VoronoiDiagram& diagram, std::vector<int>& offsets, std::vector<int>& faces);
+
 /// The refined faces of every cell: result[c] lists indices into diagram.F.
 std::vector<std::vector<int>> cell_faces(const VoronoiDiagram& diagram);
 
