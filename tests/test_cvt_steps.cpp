@@ -403,3 +403,25 @@ TEST(CvtLift, ZeroLambdaIsTheCotanLaplacianAndTheMeshPathScalesFirst) {
   EXPECT_THROW(lifted_laplacian(m.V, vertex_normals(m.V, m.F), m.F, -1.0), InvalidInputError);
   EXPECT_THROW(lifted_laplacian(m.V, Eigen::MatrixX3d::Zero(3, 3), m.F, 0.1), InvalidInputError);
 }
+
+TEST(CvtDriver, RejectsBadTuningAndTolerances) {
+  const test::UnitSphere sphere = test::unit_area_sphere(2);
+  CvtOptions o;
+  o.sites = 10;
+  o.iterations = 1;
+  o.tuning.relaxation_decay = 1.0;
+  EXPECT_THROW(centroidal_voronoi(sphere.mesh.V, sphere.mesh.F, sphere.laplacian, o), InvalidInputError);
+  o.tuning = CvtTuning();
+  o.tuning.empty_cell_radius = std::nan("");
+  EXPECT_THROW(centroidal_voronoi(sphere.mesh.V, sphere.mesh.F, sphere.laplacian, o), InvalidInputError);
+  o.tuning = CvtTuning();
+  o.tuning.face_blocks_per_thread = 0;
+  EXPECT_THROW(centroidal_voronoi(sphere.mesh.V, sphere.mesh.F, sphere.laplacian, o), InvalidInputError);
+  o.tuning = CvtTuning();
+  const CvtResult r = centroidal_voronoi(sphere.mesh.V, sphere.mesh.F, sphere.laplacian, o);
+  EXPECT_EQ(r.sites.size(), 10u);
+  VoronoiOptions vo;
+  vo.weld_tolerance = -1;
+  EXPECT_THROW(tessellate(sphere.mesh.V, sphere.mesh.F, heat_field_from_sparse(static_cast<int>(sphere.mesh.V.rows()), {{0}}, {{1.0}}), vo),
+               InvalidInputError);
+}

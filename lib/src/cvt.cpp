@@ -54,9 +54,21 @@ void validate_cvt_inputs(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, c
   if (!(options.surface_lloyd_relaxation >= 1.0 && options.surface_lloyd_relaxation < 2.0))
     throw InvalidInputError("centroidal_voronoi: surface_lloyd_relaxation must be in [1, 2), got " +
                             std::to_string(options.surface_lloyd_relaxation));
+  const CvtTuning& t = options.tuning;
+  auto need = [](bool ok, const char* what) {
+    if (!ok) throw InvalidInputError(std::string("centroidal_voronoi: tuning.") + what);
+  };
+  need(t.settled_move >= 0 && t.max_extra_step >= 0, "settled_move and max_extra_step must be >= 0");
+  need(t.relaxation_decay >= 0 && t.relaxation_decay < 1 && t.relaxation_floor >= 0,
+       "relaxation_decay must be in [0, 1) and relaxation_floor >= 0");
+  need(t.empty_cell_radius > 0, "empty_cell_radius must be > 0");
+  need(t.spot_growth_factor >= 1 && t.spot_growth_slack >= 0, "spot_growth_factor must be >= 1 and spot_growth_slack >= 0");
+  need(t.patience_gain_deg >= 0 && t.refine_fraction_per_round >= 0 && t.split_min_distance >= 0,
+       "patience_gain_deg, refine_fraction_per_round and split_min_distance must be >= 0");
+  need(t.walk_max_steps >= 0 && t.walk_min_gain >= 0 && t.face_blocks_per_thread >= 1,
+       "walk_max_steps and walk_min_gain must be >= 0 and face_blocks_per_thread >= 1");
   const std::vector<SurfacePoint>& sites = given_sites;
-  const bool generate = sites.empty();
-  if (generate) {
+  if (sites.empty()) {
     if (options.sites < 1 || options.sites > n)
       throw InvalidInputError("centroidal_voronoi: the number of sites must be in [1, #V = " + std::to_string(n) +
                               "], got " + std::to_string(options.sites));

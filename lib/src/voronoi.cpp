@@ -48,6 +48,25 @@ bool hotter(const SiteHeat& x, const SiteHeat& y) {
   return x.site < y.site;
 }
 
+// A field from per-vertex rows already in `hotter` order: row v has kept[v] entries at(v, i).
+template <class At>
+HeatField pack_field(int num_sites, const std::vector<int>& kept, At at) {
+  const int n = static_cast<int>(kept.size());
+  HeatField field;
+  field.num_sites = num_sites;
+  field.offsets.assign(n + 1, 0);
+  for (int v = 0; v < n; ++v) field.offsets[v + 1] = field.offsets[v] + kept[v];
+  field.site.resize(field.offsets[n]);
+  field.heat.resize(field.offsets[n]);
+  for (int v = 0; v < n; ++v)
+    for (int i = 0; i < kept[v]; ++i) {
+      const SiteHeat e = at(v, i);
+      field.site[field.offsets[v] + i] = e.site;
+      field.heat[field.offsets[v] + i] = e.heat;
+    }
+  return field;
+}
+
 // The `keep` hottest sites per vertex, merged column block by column block (columns must be
 // added in increasing site order, so ties keep the smaller site first: the order of
 // hotter). Column-major friendly: each thread owns a range of vertices.
@@ -82,18 +101,10 @@ class TopKField {
   }
 
   HeatField finish(int num_sites) const {
-    HeatField field;
-    field.num_sites = num_sites;
-    field.offsets.assign(nv_ + 1, 0);
-    for (int v = 0; v < nv_; ++v) field.offsets[v + 1] = field.offsets[v] + count_[v];
-    field.site.resize(field.offsets[nv_]);
-    field.heat.resize(field.offsets[nv_]);
-    for (int v = 0; v < nv_; ++v)
-      for (int i = 0; i < count_[v]; ++i) {
-        field.site[field.offsets[v] + i] = site_[static_cast<size_t>(v) * keep_ + i];
-        field.heat[field.offsets[v] + i] = heat_[static_cast<size_t>(v) * keep_ + i];
-      }
-    return field;
+    return pack_field(num_sites, count_, [&](int v, int i) {
+      const size_t k = static_cast<size_t>(v) * keep_ + i;
+      return SiteHeat{site_[k], heat_[k]};
+    });
   }
 
  private:
@@ -152,18 +163,7 @@ HeatField heat_field_from_sparse(int num_vertices, const std::vector<std::vector
     std::partial_sort(first, first + m, last, hotter);
     kept[v] = m;
   }
-  HeatField field;
-  field.num_sites = ns;
-  field.offsets.assign(n + 1, 0);
-  for (int v = 0; v < n; ++v) field.offsets[v + 1] = field.offsets[v] + kept[v];
-  field.site.resize(field.offsets[n]);
-  field.heat.resize(field.offsets[n]);
-  for (int v = 0; v < n; ++v)
-    for (int k = 0; k < kept[v]; ++k) {
-      field.site[field.offsets[v] + k] = pairs[count[v] + k].site;
-      field.heat[field.offsets[v] + k] = pairs[count[v] + k].heat;
-    }
-  return field;
+  return pack_field(ns, kept, [&](int v, int k) { return pairs[count[v] + k]; });
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -772,6 +772,9 @@ VoronoiDiagram tessellate(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, 
                               " out of range [0, " + std::to_string(field.num_sites) + ")");
     if (!std::isfinite(field.heat[k])) throw InvalidInputError("tessellate: heat field has a non-finite value");
   }
+  if (!(options.edge_merge_tolerance >= 0) || !(options.weld_tolerance >= 0) || !(options.flat_tolerance >= 0) ||
+      !(options.orientation_tolerance >= 0) || !(options.tiling_tolerance >= 0))
+    throw InvalidInputError("tessellate: the tolerances of VoronoiOptions must be >= 0");
   const int threads = resolve_threads(options.threads);
 
   std::vector<FaceResult> results(nf);

@@ -116,7 +116,7 @@ VoronoiDiagram tessellate(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, 
                           const VoronoiOptions& options = {});
 
 /// One diffusion per site with the solver (point sources, eq. 8: rhs = barycentric vector),
-/// batched in blocks of 64 columns whose `keep_sites_per_vertex` hottest sites per vertex are
+/// batched in blocks of options.solve_block columns whose `keep_sites_per_vertex` hottest sites per vertex are
 /// merged (memory #V·(keep + 64), result identical to heat_field_from_dense of the full
 /// matrix), then tessellate().
 /// \throw InvalidInputError if a site's face index is out of range, its barycentric
