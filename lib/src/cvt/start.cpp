@@ -259,9 +259,11 @@ struct FaceMoments {
 // bisector planes of their corner labels: u_i = −|x − p_i|² differs from a linear function on the
 // face by a term common to all sites, so u_i − u_j is linear, as the heat differences of eq. 20 are.
 // `whole_moment`: area · centroid of face f (the first moment when one cell holds the face).
+// `fns`, `pieces`, `scratch`: per-thread work space.
 void restricted_face_moments(const std::vector<Eigen::Vector3d>& X, const Eigen::MatrixX3i& F, int f, double area,
                              const Eigen::Vector3d& whole_moment, const std::vector<int>& label,
-                             const std::vector<Eigen::Vector3d>& P, FaceMoments& out) {
+                             const std::vector<Eigen::Vector3d>& P, FaceMoments& out, std::vector<FaceFunction>& fns,
+                             std::vector<FacePiece>& pieces, FaceClipScratch& scratch) {
   out.count = 0;
   const int c[3] = {F(f, 0), F(f, 1), F(f, 2)};
   const int l[3] = {label[c[0]], label[c[1]], label[c[2]]};
@@ -273,9 +275,6 @@ void restricted_face_moments(const std::vector<Eigen::Vector3d>& X, const Eigen:
     out.count = 1;
     return;
   }
-  thread_local std::vector<FaceFunction> fns;
-  thread_local std::vector<FacePiece> pieces;
-  thread_local FaceClipScratch scratch;
   fns.clear();
   for (int k = 0; k < 3; ++k) {
     bool seen = false;
@@ -396,9 +395,16 @@ std::vector<SurfacePoint> surface_lloyd(const CvtSurface& surface, std::vector<S
     double energy = 0;
     for (int v = 0; v < n; ++v)
       if (label[v] >= 0) energy += surface.vertex_area[v] * key[v];
-#pragma omp parallel for schedule(dynamic, 1024) num_threads(threads)
-    for (int f = 0; f < nf; ++f)
-      restricted_face_moments(X, F, f, surface.face_area[f], whole_moment[f], label, P, moments[f]);
+#pragma omp parallel num_threads(threads)
+    {
+      std::vector<FaceFunction> fns;
+      std::vector<FacePiece> pieces;
+      FaceClipScratch scratch;
+#pragma omp for schedule(dynamic, 1024)
+      for (int f = 0; f < nf; ++f)
+        restricted_face_moments(X, F, f, surface.face_area[f], whole_moment[f], label, P, moments[f], fns, pieces,
+                                scratch);
+    }
     for (int f = 0; f < nf; ++f)
       for (int i = 0; i < moments[f].count; ++i) {
         sum[moments[f].cell[i]] += moments[f].sum[i];
