@@ -47,22 +47,31 @@ bool clip_face_region(const std::vector<FaceFunction>& functions, const std::vec
   region.clear();
   for (int c = 0; c < 3; ++c) region.push_back({Eigen::Vector3d::Unit(c), -1 - (c + 2) % 3, -1 - c, -1 - c});
   const FaceFunction& fs = functions[s];
-  double g[64];
+  constexpr size_t kStack = 64;  // corners kept on the stack (a region has at most 3 + #others)
+  double g_stack[kStack];
+  unsigned char in_stack[kStack];
   std::vector<double> g_heap;
+  std::vector<unsigned char> in_heap;
   for (int r : others) {
     if (r == s) continue;
     const FaceFunction& fr = functions[r];
-    const Eigen::Vector3d d(fs.value[0] - fr.value[0], fs.value[1] - fr.value[1], fs.value[2] - fr.value[2]);
-    double* gv = g;
-    if (region.size() > 64) {
-      g_heap.resize(region.size());
-      gv = g_heap.data();
+    const double d0 = fs.value[0] - fr.value[0], d1 = fs.value[1] - fr.value[1], d2 = fs.value[2] - fr.value[2];
+    const size_t np = region.size();
+    double* g = g_stack;
+    unsigned char* in = in_stack;
+    if (np > kStack) {
+      g_heap.resize(np);
+      in_heap.resize(np);
+      g = g_heap.data();
+      in = in_heap.data();
     }
     bool all_in = true, all_out = true;
-    for (size_t i = 0; i < region.size(); ++i) {
-      gv[i] = d.dot(region[i].bary);
-      if (wins_at(gv[i], fs, fr)) all_out = false;
-      else all_in = false;
+    for (size_t i = 0; i < np; ++i) {
+      const Eigen::Vector3d& x = region[i].bary;
+      g[i] = x[0] * d0 + x[1] * d1 + x[2] * d2;
+      in[i] = wins_at(g[i], fs, fr);
+      all_out = all_out && !in[i];
+      all_in = all_in && in[i];
     }
     if (all_in) continue;
     if (all_out) {
@@ -70,16 +79,15 @@ bool clip_face_region(const std::vector<FaceFunction>& functions, const std::vec
       return false;
     }
     scratch.clear();
-    for (size_t i = 0; i < region.size(); ++i) {
-      const size_t j = (i + 1) % region.size();
-      const bool in_i = wins_at(gv[i], fs, fr), in_j = wins_at(gv[j], fs, fr);
+    for (size_t i = 0; i < np; ++i) {
+      const size_t j = i + 1 == np ? 0 : i + 1;
       const int L = region[i].line_out;
-      if (in_i) scratch.push_back(region[i]);
-      if (in_i != in_j) {
-        const double lambda = gv[i] / (gv[i] - gv[j]);
+      if (in[i]) scratch.push_back(region[i]);
+      if (in[i] != in[j]) {
+        const double lambda = g[i] / (g[i] - g[j]);
         const Eigen::Vector3d x = region[i].bary + lambda * (region[j].bary - region[i].bary);
         // leaving the region: the new side runs along the bisector; entering: along L again
-        scratch.push_back({x, L, r, in_i ? r : L});
+        scratch.push_back({x, L, r, in[i] ? r : L});
       }
     }
     region.swap(scratch);
