@@ -7,21 +7,13 @@
 #include <limits>
 #include <string>
 
+#include "heatcvt/cvt/surface_graph.h"
 #include "heatcvt/errors.h"
 #include "heatcvt/parallel.h"
 
 namespace heatcvt {
 
 namespace {
-
-SurfacePoint vertex_point(const Eigen::MatrixX3i& F, const std::vector<int>& faces_of_v, int v) {
-  SurfacePoint p;
-  p.face = faces_of_v.front();
-  int k = 0;
-  while (F(p.face, k) != v) ++k;
-  p.bary = Eigen::Vector3d::Unit(k);
-  return p;
-}
 
 // Barycentric coordinates of x in the 2D triangle (a, b, c); false when degenerate.
 bool bary2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c, const Eigen::Vector2d& x,
@@ -107,13 +99,14 @@ SurfacePoint refine_hottest_vertex(const Eigen::MatrixX3d& V, const Eigen::Matri
                             " entries but the mesh has " + std::to_string(V.rows()) + " vertices");
   const std::vector<int>& faces = vertex_faces[v];
   if (faces.empty()) throw InvalidInputError("refine_hottest_vertex: vertex " + std::to_string(v) + " has no faces");
-  const SurfacePoint fallback = vertex_point(F, faces, v);
+  const SurfacePoint fallback = vertex_point(F, vertex_faces, v);
 
   // tangent frame of the area-weighted normal (of the locally oriented fan on non-orientable surfaces)
   Eigen::Vector3d n = vertex_normals.row(v).transpose();
   locally_oriented_normal(V, F, faces, v, n);
   if (!(n.norm() > 0) || !n.allFinite()) return fallback;
   n.normalize();
+  // first tangent axis from a coordinate axis not nearly parallel to n (any such axis works)
   Eigen::Vector3d e1 = std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
   e1 = (e1 - e1.dot(n) * n).normalized();
   const Eigen::Vector3d e2 = n.cross(e1);
@@ -207,7 +200,7 @@ std::vector<SurfacePoint> heat_centroids(const Eigen::MatrixX3d& V, const Eigen:
   const auto vf = vertex_faces(nv, F);
   const Eigen::MatrixX3d N = vertex_normals(V, F);
   std::vector<SurfacePoint> out(nc);  // face −1 for empty cells
-  const int block = 64;
+  const int block = std::max(1, options.solve_block);
   const int threads = resolve_threads(options.threads);
   for (int c0 = 0; c0 < nc; c0 += block) {
     const int nb = std::min(block, nc - c0);
@@ -224,7 +217,7 @@ std::vector<SurfacePoint> heat_centroids(const Eigen::MatrixX3d& V, const Eigen:
       for (int w : cand[c])
         if (U(w, j) > U(hot, j)) hot = w;
       const Eigen::VectorXd h = U.col(j);
-      out[c] = options.quadratic_refinement ? refine_hottest_vertex(V, F, vf, N, h, hot) : vertex_point(F, vf[hot], hot);
+      out[c] = options.quadratic_refinement ? refine_hottest_vertex(V, F, vf, N, h, hot) : vertex_point(F, vf, hot);
     }
   }
   return out;
@@ -248,7 +241,7 @@ SurfacePoint heat_centroid_of_faces(const Eigen::MatrixX3d& V, const Eigen::Matr
   u.maxCoeff(&hot);
   const auto vf = vertex_faces(static_cast<int>(V.rows()), F);
   if (vf[hot].empty()) throw InvalidInputError("heat_centroid_of_faces: the hottest vertex has no faces");
-  if (!options.quadratic_refinement) return vertex_point(F, vf[hot], hot);
+  if (!options.quadratic_refinement) return vertex_point(F, vf, hot);
   return refine_hottest_vertex(V, F, vf, vertex_normals(V, F), u, hot);
 }
 

@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <unordered_set>
 
@@ -31,6 +32,86 @@ struct TripleHash {
   }
 };
 
+// The refined faces around refined vertex v (incidence `faces`) in fan order. The walk goes
+// through shared link vertices without assuming a consistent orientation (so that non-orientable
+// surfaces such as the Klein bottle work): its direction is the orientation of the start face, and
+// faces traversed against it are flagged in `backward`. On a consistently oriented fan this is the
+// counter-clockwise order: face (v, a, b) is followed by the face (v, b, c). Start: a face whose
+// "a" is a free end of the link (boundary), else any face with a free end, else the first one.
+// Faces the walk misses (non-manifold spot) are appended so every cell is considered.
+struct FanWalk {
+  std::vector<int> ring;
+  std::vector<char> backward;
+  bool closed_cycle = false;  // manifold, no boundary, every face reached
+};
+
+FanWalk walk_fan(const VoronoiDiagram& d, int v, const std::vector<int>& faces) {
+  std::vector<std::array<int, 3>> fan;  // (face, next vertex after v, previous vertex)
+  for (int r : faces) {
+    int k = 0;
+    while (d.F(r, k) != v) ++k;
+    fan.push_back({r, d.F(r, (k + 1) % 3), d.F(r, (k + 2) % 3)});
+  }
+  bool manifold = true, has_boundary = false;
+  int start = 0, start_entry = fan[0][1];
+  auto count = [&](int x) {
+    int c = 0;
+    for (const auto& e : fan) c += (e[1] == x) + (e[2] == x);
+    return c;
+  };
+  int free_b = -1;
+  for (size_t i = 0; i < fan.size(); ++i) {
+    const int ca = count(fan[i][1]), cb = count(fan[i][2]);
+    if (ca > 2 || cb > 2) manifold = false;
+    if (ca == 1 && !has_boundary) start = static_cast<int>(i), start_entry = fan[i][1], has_boundary = true;
+    if (cb == 1 && free_b < 0) free_b = static_cast<int>(i);
+  }
+  if (!has_boundary && free_b >= 0) start = free_b, start_entry = fan[free_b][2], has_boundary = true;
+  FanWalk w;
+  std::vector<char> used(fan.size(), 0);
+  int cur = start, entry = start_entry;
+  while (cur >= 0 && !used[cur]) {
+    used[cur] = 1;
+    w.ring.push_back(fan[cur][0]);
+    const bool forward = fan[cur][1] == entry;
+    w.backward.push_back(forward ? 0 : 1);
+    const int exit = forward ? fan[cur][2] : fan[cur][1];
+    int next = -1;
+    for (size_t j = 0; j < fan.size(); ++j)
+      if (!used[j] && (fan[j][1] == exit || fan[j][2] == exit)) {
+        next = static_cast<int>(j);
+        break;
+      }
+    cur = next;
+    entry = exit;
+  }
+  w.closed_cycle = manifold && !has_boundary && w.ring.size() == fan.size();
+  for (size_t j = 0; j < fan.size(); ++j)
+    if (!used[j]) {
+      w.ring.push_back(fan[j][0]);
+      w.backward.push_back(0);
+    }
+  return w;
+}
+
+// Apex of the fan over the cyclic cells `cyc` that maximises the fan's smallest angle (site
+// positions P); the first cell with best_fan off or k = 3.
+int fan_apex(const std::vector<int>& cyc, const Eigen::MatrixX3d& P, bool best_fan) {
+  const int k = static_cast<int>(cyc.size());
+  int apex = 0;
+  if (k <= 3 || !best_fan) return apex;
+  double best = -1;
+  for (int a = 0; a < k; ++a) {
+    double worst = std::numeric_limits<double>::infinity();
+    for (int i = 1; i + 1 < k; ++i) {
+      const int x = cyc[a], y = cyc[(a + i) % k], z = cyc[(a + i + 1) % k];
+      worst = std::min(worst, min_angle(P.row(x), P.row(y), P.row(z)));
+    }
+    if (worst > best) best = worst, apex = a;
+  }
+  return apex;
+}
+
 }  // namespace
 
 DualMesh dual_mesh(const VoronoiDiagram& d, const Eigen::MatrixX3d& sites, const DualMeshOptions& options) {
@@ -38,27 +119,17 @@ DualMesh dual_mesh(const VoronoiDiagram& d, const Eigen::MatrixX3d& sites, const
   if (sites.rows() < nc)
     throw InvalidInputError("dual_mesh: " + std::to_string(sites.rows()) + " site positions for " +
                             std::to_string(nc) + " cells");
-  const int nrv = static_cast<int>(d.V.rows()), nrf = static_cast<int>(d.F.rows());
+  const int nrv = static_cast<int>(d.V.rows());
   DualMesh out;
   out.V = sites.topRows(nc);
 
-  // incident refined faces per refined vertex (CSR)
-  std::vector<int> off(nrv + 1, 0), inc;
-  for (int r = 0; r < nrf; ++r)
-    for (int k = 0; k < 3; ++k) ++off[d.F(r, k) + 1];
-  for (int v = 0; v < nrv; ++v) off[v + 1] += off[v];
-  inc.resize(off[nrv]);
-  {
-    std::vector<int> fill(off.begin(), off.end() - 1);
-    for (int r = 0; r < nrf; ++r)
-      for (int k = 0; k < 3; ++k) inc[fill[d.F(r, k)]++] = r;
-  }
+  std::vector<int> off, inc;
+  refined_vertex_faces(d, off, inc);
 
   std::vector<std::array<int, 3>> tris;
   std::vector<int> source;
   std::unordered_set<std::array<int, 3>, TripleHash> seen;
-  std::vector<int> ring, cyc, distinct;
-  std::vector<std::array<int, 3>> fan;  // (face, next vertex after v, previous vertex)
+  std::vector<int> cyc, distinct, faces;
   for (int v = 0; v < nrv; ++v) {
     const int deg = off[v + 1] - off[v];
     if (deg < 3) continue;
@@ -70,70 +141,12 @@ DualMesh dual_mesh(const VoronoiDiagram& d, const Eigen::MatrixX3d& sites, const
     if (distinct.size() < 3) continue;
     ++out.voronoi_vertices;
 
-    // Order the incident faces counter-clockwise: face (v, a, b) is followed by the face (v, b, c).
-    fan.clear();
-    for (int i = off[v]; i < off[v + 1]; ++i) {
-      const int r = inc[i];
-      int k = 0;
-      while (d.F(r, k) != v) ++k;
-      fan.push_back({r, d.F(r, (k + 1) % 3), d.F(r, (k + 2) % 3)});
-    }
-    // Walk the fan through shared link vertices without assuming a consistent orientation (so
-    // that non-orientable surfaces such as the Klein bottle work): the walk direction is the
-    // orientation of the start face, and faces traversed against it are remembered (`backward`).
-    // On a consistently oriented fan this is the counter-clockwise order: face (v, a, b) is
-    // followed by the face (v, b, c).
-    // Start: a face whose "a" is a free end of the link (boundary), else any face with a free end,
-    // else the first one.
-    bool manifold = true, has_boundary = false;
-    int start = 0, start_entry = fan[0][1];
-    {
-      auto count = [&](int x) {
-        int c = 0;
-        for (const auto& e : fan) c += (e[1] == x) + (e[2] == x);
-        return c;
-      };
-      int free_b = -1;
-      for (size_t i = 0; i < fan.size(); ++i) {
-        const int ca = count(fan[i][1]), cb = count(fan[i][2]);
-        if (ca > 2 || cb > 2) manifold = false;
-        if (ca == 1 && !has_boundary) {
-          start = static_cast<int>(i), start_entry = fan[i][1], has_boundary = true;
-        }
-        if (cb == 1 && free_b < 0) free_b = static_cast<int>(i);
-      }
-      if (!has_boundary && free_b >= 0) {
-        start = free_b, start_entry = fan[free_b][2], has_boundary = true;
-      }
-    }
-    ring.clear();
-    std::vector<char> used(fan.size(), 0), backward_face;
-    int cur = start, entry = start_entry;
-    while (cur >= 0 && !used[cur]) {
-      used[cur] = 1;
-      ring.push_back(fan[cur][0]);
-      const bool forward = fan[cur][1] == entry;
-      backward_face.push_back(forward ? 0 : 1);
-      const int exit = forward ? fan[cur][2] : fan[cur][1];
-      int next = -1;
-      for (size_t j = 0; j < fan.size(); ++j)
-        if (!used[j] && (fan[j][1] == exit || fan[j][2] == exit)) {
-          next = static_cast<int>(j);
-          break;
-        }
-      cur = next;
-      entry = exit;
-    }
-    const bool closed_cycle = manifold && !has_boundary && ring.size() == fan.size();
-    if (!closed_cycle) ++out.open_fans;
-    if (ring.size() != fan.size()) {
-      // non-manifold spot: append the faces the walk missed so every cell is considered
-      for (size_t j = 0; j < fan.size(); ++j)
-        if (!used[j]) {
-          ring.push_back(fan[j][0]);
-          backward_face.push_back(0);
-        }
-    }
+    faces.assign(inc.begin() + off[v], inc.begin() + off[v + 1]);
+    const FanWalk w = walk_fan(d, v, faces);
+    if (!w.closed_cycle) ++out.open_fans;
+    const std::vector<int>& ring = w.ring;
+    const std::vector<char>& backward_face = w.backward;
+    const bool closed_cycle = w.closed_cycle;
     // cyclic sequence of cells, consecutive repeats collapsed, unreached faces skipped
     cyc.clear();
     for (int r : ring) {
@@ -147,18 +160,7 @@ DualMesh dual_mesh(const VoronoiDiagram& d, const Eigen::MatrixX3d& sites, const
     if (cyc.size() < 3) continue;
     const int k = static_cast<int>(cyc.size());
     if (k > 3) ++out.split_vertices;
-    int apex = 0;
-    if (k > 3 && options.best_fan) {
-      double best = -1;
-      for (int a = 0; a < k; ++a) {
-        double worst = 1e300;
-        for (int i = 1; i + 1 < k; ++i) {
-          const int x = cyc[a], y = cyc[(a + i) % k], z = cyc[(a + i + 1) % k];
-          worst = std::min(worst, min_angle(out.V.row(x), out.V.row(y), out.V.row(z)));
-        }
-        if (worst > best) best = worst, apex = a;
-      }
-    }
+    const int apex = fan_apex(cyc, out.V, options.best_fan);
     // reference normal: the refined faces around v, oriented like the walk (= like the input on
     // an oriented surface)
     Eigen::Vector3d normal = Eigen::Vector3d::Zero();

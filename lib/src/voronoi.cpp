@@ -26,6 +26,7 @@
 #include <string>
 
 #include "heatcvt/errors.h"
+#include "heatcvt/face_clipper.h"
 #include "heatcvt/parallel.h"
 
 namespace heatcvt {
@@ -41,18 +42,34 @@ struct SiteHeat {
   double heat;
 };
 
-// Sorts by decreasing heat, ties by increasing site index, and truncates to `keep`.
-void keep_hottest(std::vector<SiteHeat>& row, int keep) {
-  std::sort(row.begin(), row.end(), [](const SiteHeat& x, const SiteHeat& y) {
-    if (x.heat != y.heat) return x.heat > y.heat;
-    return x.site < y.site;
-  });
-  if (static_cast<int>(row.size()) > keep) row.resize(keep);
+// Order of a heat field row: decreasing heat, ties by increasing site index.
+bool hotter(const SiteHeat& x, const SiteHeat& y) {
+  if (x.heat != y.heat) return x.heat > y.heat;
+  return x.site < y.site;
+}
+
+// A field from per-vertex rows already in `hotter` order: row v has kept[v] entries at(v, i).
+template <class At>
+HeatField pack_field(int num_sites, const std::vector<int>& kept, At at) {
+  const int n = static_cast<int>(kept.size());
+  HeatField field;
+  field.num_sites = num_sites;
+  field.offsets.assign(n + 1, 0);
+  for (int v = 0; v < n; ++v) field.offsets[v + 1] = field.offsets[v] + kept[v];
+  field.site.resize(field.offsets[n]);
+  field.heat.resize(field.offsets[n]);
+  for (int v = 0; v < n; ++v)
+    for (int i = 0; i < kept[v]; ++i) {
+      const SiteHeat e = at(v, i);
+      field.site[field.offsets[v] + i] = e.site;
+      field.heat[field.offsets[v] + i] = e.heat;
+    }
+  return field;
 }
 
 // The `keep` hottest sites per vertex, merged column block by column block (columns must be
 // added in increasing site order, so ties keep the smaller site first: the order of
-// keep_hottest). Column-major friendly: each thread owns a range of vertices.
+// hotter). Column-major friendly: each thread owns a range of vertices.
 class TopKField {
  public:
   TopKField(int num_vertices, int keep)
@@ -84,18 +101,10 @@ class TopKField {
   }
 
   HeatField finish(int num_sites) const {
-    HeatField field;
-    field.num_sites = num_sites;
-    field.offsets.assign(nv_ + 1, 0);
-    for (int v = 0; v < nv_; ++v) field.offsets[v + 1] = field.offsets[v] + count_[v];
-    field.site.resize(field.offsets[nv_]);
-    field.heat.resize(field.offsets[nv_]);
-    for (int v = 0; v < nv_; ++v)
-      for (int i = 0; i < count_[v]; ++i) {
-        field.site[field.offsets[v] + i] = site_[static_cast<size_t>(v) * keep_ + i];
-        field.heat[field.offsets[v] + i] = heat_[static_cast<size_t>(v) * keep_ + i];
-      }
-    return field;
+    return pack_field(num_sites, count_, [&](int v, int i) {
+      const size_t k = static_cast<size_t>(v) * keep_ + i;
+      return SiteHeat{site_[k], heat_[k]};
+    });
   }
 
  private:
@@ -116,37 +125,45 @@ HeatField heat_field_from_dense(const Eigen::MatrixXd& U, int keep) {
 }
 
 HeatField heat_field_from_sparse(int num_vertices, const std::vector<std::vector<int>>& indices,
-                                 const std::vector<std::vector<double>>& values, int keep) {
+                                 const std::vector<std::vector<double>>& values, int keep, int threads) {
   if (keep < 1) throw InvalidInputError("heat_field_from_sparse: keep must be >= 1, got " + std::to_string(keep));
   if (indices.size() != values.size())
     throw InvalidInputError("heat_field_from_sparse: indices and values have different numbers of sites");
-  std::vector<std::vector<SiteHeat>> rows(std::max(num_vertices, 0));
-  for (size_t s = 0; s < indices.size(); ++s) {
+  const int n = std::max(num_vertices, 0), ns = static_cast<int>(indices.size());
+  // Counting sort of the (site, heat) pairs by vertex (site order within a vertex), then each
+  // row sorted by `hotter` and truncated, without per-vertex allocations.
+  std::vector<int> count(n + 1, 0);
+  for (int s = 0; s < ns; ++s) {
     if (indices[s].size() != values[s].size())
       throw InvalidInputError("heat_field_from_sparse: site " + std::to_string(s) +
                               " has different numbers of indices and values");
     for (size_t k = 0; k < indices[s].size(); ++k) {
       const int v = indices[s][k];
-      if (v < 0 || v >= num_vertices)
+      if (v < 0 || v >= n)
         throw InvalidInputError("heat_field_from_sparse: site " + std::to_string(s) + " has vertex index " +
                                 std::to_string(v) + " out of range [0, " + std::to_string(num_vertices) + ")");
       if (!std::isfinite(values[s][k]))
         throw InvalidInputError("heat_field_from_sparse: site " + std::to_string(s) + " has a non-finite value");
-      if (values[s][k] != 0.0) rows[v].push_back({static_cast<int>(s), values[s][k]});  // absent means 0
+      if (values[s][k] != 0.0) ++count[v + 1];  // absent means 0
     }
   }
-  HeatField field;
-  field.num_sites = static_cast<int>(indices.size());
-  field.offsets.assign(rows.size() + 1, 0);
-  for (size_t v = 0; v < rows.size(); ++v) {
-    keep_hottest(rows[v], keep);
-    for (const SiteHeat& e : rows[v]) {
-      field.site.push_back(e.site);
-      field.heat.push_back(e.heat);
-    }
-    field.offsets[v + 1] = static_cast<int>(field.site.size());
+  for (int v = 0; v < n; ++v) count[v + 1] += count[v];
+  std::vector<SiteHeat> pairs(count[n]);
+  {
+    std::vector<int> fill(count.begin(), count.end() - 1);
+    for (int s = 0; s < ns; ++s)
+      for (size_t i = 0; i < indices[s].size(); ++i)
+        if (values[s][i] != 0.0) pairs[fill[indices[s][i]]++] = {s, values[s][i]};
   }
-  return field;
+  std::vector<int> kept(n);
+#pragma omp parallel for schedule(static) num_threads(resolve_threads(threads))
+  for (int v = 0; v < n; ++v) {
+    const auto first = pairs.begin() + count[v], last = pairs.begin() + count[v + 1];
+    const int m = std::min<int>(keep, static_cast<int>(last - first));
+    std::partial_sort(first, first + m, last, hotter);
+    kept[v] = m;
+  }
+  return pack_field(ns, kept, [&](int v, int k) { return pairs[count[v] + k]; });
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -170,7 +187,7 @@ struct EdgePoint {
 
 // 1D upper envelope of the sites known at a or b, walked from a to b. Deterministic function
 // of (a, b, field) only, so both faces of the edge obtain identical points.
-std::vector<EdgePoint> edge_switch_points(const HeatField& field, int a, int b) {
+std::vector<EdgePoint> edge_switch_points(const HeatField& field, int a, int b, double merge_tol) {
   std::vector<int> sites;
   for (int k = field.offsets[a]; k < field.offsets[a + 1]; ++k) sites.push_back(field.site[k]);
   for (int k = field.offsets[b]; k < field.offsets[b + 1]; ++k) sites.push_back(field.site[k]);
@@ -191,7 +208,6 @@ std::vector<EdgePoint> edge_switch_points(const HeatField& field, int a, int b) 
     if (ua[i] > ua[w] || (ua[i] == ua[w] && si > sw)) w = i;
   }
   double tcur = 0.0;
-  const double merge_tol = 1e-12;
   for (int guard = 0; guard < m; ++guard) {
     int best = -1;
     double best_t = std::numeric_limits<double>::infinity();
@@ -237,218 +253,212 @@ struct FaceResult {
   std::vector<int> cells;
 };
 
-// Label of corner c (eq. 19): largest heat; ties broken by the heat at the face's other two
-// corners (a perturbation toward the face interior), then by the smaller site index.
-int corner_label(const std::vector<int>& sites, const std::vector<std::array<double, 3>>& U, int c) {
-  int best = -1;
-  for (int i = 0; i < static_cast<int>(sites.size()); ++i) {
-    if (best < 0) {
-      best = i;
-      continue;
-    }
-    const double vi = U[i][c], vb = U[best][c];
-    if (vi > vb) {
-      best = i;
-    } else if (vi == vb) {
-      const double pi = U[i][(c + 1) % 3] + U[i][(c + 2) % 3];
-      const double pb = U[best][(c + 1) % 3] + U[best][(c + 2) % 3];
-      if (pi > pb) best = i;
-    }
-  }
-  return best;
-}
-
 double bary_det(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1, const Eigen::Vector3d& x2) {
   return (x1[1] - x0[1]) * (x2[2] - x0[2]) - (x2[1] - x0[1]) * (x1[2] - x0[2]);
 }
 
-FaceResult tessellate_face(const Eigen::MatrixX3i& F, const HeatField& field, int f, const VoronoiOptions& opt) {
-  FaceResult res;
-  const int vtx[3] = {F(f, 0), F(f, 1), F(f, 2)};
-  // Fast path (most faces): one site is strictly hottest, with positive heat, at all three
-  // corners. It beats every other site at every corner (absent sites count as 0), hence on the
-  // whole face (linear interpolation), which is what the general path below would conclude.
-  {
-    int top = -1;
-    bool whole = true;
-    for (int c = 0; c < 3 && whole; ++c) {
-      const int b = field.offsets[vtx[c]], e = field.offsets[vtx[c] + 1];
-      whole = e > b && field.heat[b] > 0.0 && (e - b == 1 || field.heat[b] > field.heat[b + 1]) &&
-              (top < 0 || field.site[b] == top);
-      if (whole) top = field.site[b];
-    }
-    if (whole) {
-      res.whole = true;
-      res.fast = true;
-      res.cell = top;
-      return res;
-    }
+// Fast path (most faces): one site is strictly hottest, with positive heat, at all three
+// corners. It beats every other site at every corner (absent sites count as 0), hence on the
+// whole face (linear interpolation), which is what the general path would conclude. Returns
+// that site or −1.
+int strict_face_winner(const HeatField& field, const int vtx[3]) {
+  int top = -1;
+  for (int c = 0; c < 3; ++c) {
+    const int b = field.offsets[vtx[c]], e = field.offsets[vtx[c] + 1];
+    const bool strict = e > b && field.heat[b] > 0.0 && (e - b == 1 || field.heat[b] > field.heat[b + 1]) &&
+                        (top < 0 || field.site[b] == top);
+    if (!strict) return -1;
+    top = field.site[b];
   }
-  // candidate sites: union of the three rows (scratch buffers reused per thread)
+  return top;
+}
+
+// The sites known at the three corners, sorted by site, with their heat at the corners.
+void face_functions(const HeatField& field, const int vtx[3], std::vector<FaceFunction>& out) {
   thread_local std::vector<int> sites;
-  thread_local std::vector<std::array<double, 3>> U;
   sites.clear();
   for (int c = 0; c < 3; ++c)
     for (int k = field.offsets[vtx[c]]; k < field.offsets[vtx[c] + 1]; ++k) sites.push_back(field.site[k]);
   std::sort(sites.begin(), sites.end());
   sites.erase(std::unique(sites.begin(), sites.end()), sites.end());
-  U.resize(sites.size());
-  for (size_t i = 0; i < sites.size(); ++i)
-    for (int c = 0; c < 3; ++c) U[i][c] = field_value(field, vtx[c], sites[i]);
+  out.resize(sites.size());
+  for (size_t i = 0; i < sites.size(); ++i) {
+    out[i].label = sites[i];
+    for (int c = 0; c < 3; ++c) out[i].value[c] = field_value(field, vtx[c], sites[i]);
+  }
+}
 
-  auto add_corners = [&]() {
+// Guard of the exact cutting: keeps the max_cut_depth functions with the largest corner heat
+// (stable, then back in site order).
+void truncate_functions(std::vector<FaceFunction>& fns, int max_cut_depth) {
+  const int limit = std::max(max_cut_depth, 2);
+  if (static_cast<int>(fns.size()) <= limit) return;
+  auto peak = [](const FaceFunction& x) { return std::max({x.value[0], x.value[1], x.value[2]}); };
+  std::stable_sort(fns.begin(), fns.end(), [&](const FaceFunction& x, const FaceFunction& y) { return peak(x) > peak(y); });
+  fns.resize(limit);
+  std::sort(fns.begin(), fns.end(), [](const FaceFunction& x, const FaceFunction& y) { return x.label < y.label; });
+}
+
+// The refined points and triangles of one cut face. Every clipped polygon vertex lies on two
+// lines (face edges, or bisectors with a local function, face_clipper.h) and gets a canonical
+// key: a corner, a point on face edge k of the pair {s, r}, or the triple point {s, r, q} where
+// three heat functions agree. The position of a key is computed once from the key alone, so all
+// polygons of the face share bit-identical vertices even where near-parallel bisectors make the
+// clipped positions ill-conditioned (nearly coincident sites).
+class CutFace {
+ public:
+  CutFace(const HeatField& field, const int vtx[3], const std::vector<FaceFunction>& fns, const VoronoiOptions& opt,
+          FaceResult& res)
+      : field_(field), fns_(fns), opt_(opt), res_(res) {
+    for (int c = 0; c < 3; ++c) vtx_[c] = vtx[c];
+    add_canonical_points();
+  }
+
+  // Triangles of the region of local function s (fan from a corner, or from the region's
+  // centroid when a vertex is flat).
+  void add_region(int s, const std::vector<ClipVertex>& poly) {
+    std::vector<int> ids;
+    for (const ClipVertex& pv : poly) {
+      const int id = vertex_id(s, pv.line_a, pv.line_b);
+      if (ids.empty() || ids.back() != id) ids.push_back(id);
+    }
+    while (ids.size() > 1 && ids.back() == ids.front()) ids.pop_back();
+    if (ids.size() < 3) return;
+    // Fan from a corner of the polygon, unless a vertex is flat (lies on a straight side, e.g.
+    // an edge point where a measure-zero cell touches): then fan from the polygon's centroid,
+    // a point private to this polygon, so no zero-area triangle turns a side into a diagonal.
+    const size_t np = ids.size();
+    bool flat = false;
+    for (size_t i = 0; i < np && !flat; ++i)
+      flat = std::abs(bary_det(res_.points[ids[(i + np - 1) % np]].bary, res_.points[ids[i]].bary,
+                               res_.points[ids[(i + 1) % np]].bary)) < opt_.flat_tolerance;
+    if (np > 3 && flat) {
+      LocalPoint c;
+      c.kind = LocalPoint::Interior;
+      c.bary = Eigen::Vector3d::Zero();
+      for (int id : ids) c.bary += res_.points[id].bary;
+      c.bary /= static_cast<double>(np);
+      const int ci = static_cast<int>(res_.points.size());
+      res_.points.push_back(c);
+      for (size_t i = 0; i < np; ++i) {
+        res_.tris.push_back({ci, ids[i], ids[(i + 1) % np]});
+        res_.cells.push_back(fns_[s].label);
+      }
+      return;
+    }
+    for (size_t i = 1; i + 1 < np; ++i) {
+      if (ids[0] == ids[i] || ids[i] == ids[i + 1] || ids[0] == ids[i + 1]) continue;
+      res_.tris.push_back({ids[0], ids[i], ids[i + 1]});
+      res_.cells.push_back(fns_[s].label);
+    }
+  }
+
+  // Safety net for near-degenerate configurations (nearly coincident sites, ties under
+  // truncation): the pieces must tile the face exactly once, positively oriented, and meet the
+  // face boundary exactly in the canonical edge points. Otherwise the face is fanned from its
+  // centroid over the canonical boundary points, each triangle labelled by its own centroid:
+  // still conforming and area-exact, only the cut inside this one face is approximate.
+  void finish(const std::vector<int>& alive) {
+    const std::vector<int> chain = boundary_chain();
+    if (tiles_face(chain)) return;
+    res_.tris.clear();
+    res_.cells.clear();
+    LocalPoint centre;
+    centre.kind = LocalPoint::Interior;
+    centre.bary = Eigen::Vector3d::Constant(1.0 / 3);
+    const int ci = static_cast<int>(res_.points.size());
+    res_.points.push_back(centre);
+    for (size_t i = 0; i < chain.size(); ++i) {
+      const int a = chain[i], b = chain[(i + 1) % chain.size()];
+      const Eigen::Vector3d x = (centre.bary + res_.points[a].bary + res_.points[b].bary) / 3.0;
+      int best = alive[0];
+      double best_u = -std::numeric_limits<double>::infinity();
+      for (int r : alive) {
+        const auto& U = fns_[r].value;
+        const double u = U[0] * x[0] + U[1] * x[1] + U[2] * x[2];
+        if (u > best_u) {
+          best_u = u;
+          best = r;
+        }
+      }
+      res_.tris.push_back({ci, a, b});
+      res_.cells.push_back(fns_[best].label);
+    }
+  }
+
+ private:
+  // Corners, then the switch points of each edge (edge k = corners k, k+1).
+  void add_canonical_points() {
     for (int c = 0; c < 3; ++c) {
       LocalPoint p;
       p.kind = LocalPoint::Corner;
-      p.vertex = vtx[c];
+      p.vertex = vtx_[c];
       p.bary = Eigen::Vector3d::Unit(c);
-      res.points.push_back(p);
+      res_.points.push_back(p);
     }
-  };
-
-  if (sites.empty()) {
-    res.whole = true;
-    res.cell = -1;
-    return res;
-  }
-
-  if (!opt.exact) {
-    // label of the face centroid (mean of the corner values), ties by smaller site index
-    int best = 0;
-    for (size_t i = 1; i < sites.size(); ++i)
-      if (U[i][0] + U[i][1] + U[i][2] > U[best][0] + U[best][1] + U[best][2]) best = static_cast<int>(i);
-    res.whole = true;
-    res.cell = sites[best];
-    return res;
-  }
-
-  const int l0 = corner_label(sites, U, 0), l1 = corner_label(sites, U, 1), l2 = corner_label(sites, U, 2);
-  if (l0 == l1 && l1 == l2) {
-    // u_l is the largest at all three corners, hence (linear functions) on the whole face
-    res.whole = true;
-    res.cell = sites[l0];
-    return res;
-  }
-
-  // Guard: keep the max_cut_depth hottest candidates.
-  std::vector<int> cand(sites.size());
-  std::iota(cand.begin(), cand.end(), 0);
-  const int limit = std::max(opt.max_cut_depth, 2);
-  if (static_cast<int>(cand.size()) > limit) {
-    auto peak = [&](int i) { return std::max({U[i][0], U[i][1], U[i][2]}); };
-    std::stable_sort(cand.begin(), cand.end(), [&](int x, int y) { return peak(x) > peak(y); });
-    cand.resize(limit);
-    std::sort(cand.begin(), cand.end());
-  }
-  // A site whose heat equals a smaller site's at all three corners can win nowhere in this face
-  // (ties go to the smaller site) and its bisectors coincide with the smaller site's: drop it.
-  {
-    std::vector<int> distinct;
-    for (int r : cand) {
-      bool dup = false;
-      for (int q : distinct) dup = dup || (U[q][0] == U[r][0] && U[q][1] == U[r][1] && U[q][2] == U[r][2]);
-      if (!dup) distinct.push_back(r);
-    }
-    cand.swap(distinct);
-  }
-  // A candidate below another one at all three corners wins nowhere in this face (linear
-  // interpolation) and its bisectors never bound the winners' regions: drop it before clipping
-  // (most cut faces keep 2–3 of up to 24 candidates; clipping is quadratic in their number).
-  {
-    std::vector<int> alive;
-    for (int r : cand) {
-      bool dominated = false;
-      for (int q : cand)
-        if (q != r && U[q][0] > U[r][0] && U[q][1] > U[r][1] && U[q][2] > U[r][2]) {
-          dominated = true;
-          break;
-        }
-      if (!dominated) alive.push_back(r);
-    }
-    cand.swap(alive);
-  }
-
-  // Canonical points: corners, then the switch points of each edge (edge k = corners k, k+1).
-  std::array<std::vector<EdgePoint>, 3> edge_points;
-  for (int k = 0; k < 3; ++k) {
-    const int a = vtx[k], b = vtx[(k + 1) % 3];
-    edge_points[k] = edge_switch_points(field, std::min(a, b), std::max(a, b));
-  }
-  add_corners();
-  std::array<std::vector<int>, 3> edge_point_ids;  // ordered from the canonical a to b
-  for (int k = 0; k < 3; ++k) {
-    const int ca = k, cb = (k + 1) % 3;
-    const int a = std::min(vtx[ca], vtx[cb]), b = std::max(vtx[ca], vtx[cb]);
-    const int corner_a = vtx[ca] == a ? ca : cb, corner_b = corner_a == ca ? cb : ca;
-    for (const EdgePoint& e : edge_points[k]) {
-      LocalPoint p;
-      p.kind = LocalPoint::OnEdge;
-      p.key = {a, b, e.p, e.q};
-      p.t = e.t;
-      p.bary = Eigen::Vector3d::Zero();
-      p.bary[corner_a] = 1.0 - e.t;
-      p.bary[corner_b] = e.t;
-      edge_point_ids[k].push_back(static_cast<int>(res.points.size()));
-      res.points.push_back(p);
+    for (int k = 0; k < 3; ++k) {
+      const int ca = k, cb = (k + 1) % 3;
+      const int a = std::min(vtx_[ca], vtx_[cb]), b = std::max(vtx_[ca], vtx_[cb]);
+      const int corner_a = vtx_[ca] == a ? ca : cb, corner_b = corner_a == ca ? cb : ca;
+      for (const EdgePoint& e : edge_switch_points(field_, a, b, opt_.edge_merge_tolerance)) {
+        LocalPoint p;
+        p.kind = LocalPoint::OnEdge;
+        p.key = {a, b, e.p, e.q};
+        p.t = e.t;
+        p.bary = Eigen::Vector3d::Zero();
+        p.bary[corner_a] = 1.0 - e.t;
+        p.bary[corner_b] = e.t;
+        edge_point_ids_[k].push_back(static_cast<int>(res_.points.size()));
+        res_.points.push_back(p);
+      }
     }
   }
 
-  // Clipping with combinatorial bookkeeping. Every polygon edge knows its supporting line
-  // (face edge k = corners k, k+1, encoded −1−k; or the bisector with local site r, encoded r),
-  // every vertex is the intersection of two lines and gets a canonical key: a corner, a point on
-  // face edge k of the pair {s, r}, or the triple point {s, r, q} where three heat functions
-  // agree. The position of a key is computed once from the key alone, so all polygons of the
-  // face share bit-identical vertices even where near-parallel bisectors make the clipped
-  // positions ill-conditioned (nearly coincident sites).
-  struct PolyVertex {
-    Eigen::Vector3d x;  // position used by the clipping
-    int line_a, line_b; // the two lines through it (for the key)
-    int line_out;       // support of the edge to the next vertex
-  };
-  std::map<std::array<int, 4>, int> key_ids;
-  auto common_corner = [](int k1, int k2) {
+  static int common_corner(int k1, int k2) {
     for (int c : {k1, (k1 + 1) % 3})
       if (c == k2 || c == (k2 + 1) % 3) return c;
     return k1;
-  };
-  // nearest canonical point (corner or walk point) of face edge k at parameter t from its
-  // smaller to its larger vertex
-  auto snap_to_edge = [&](int k, double t) -> int {
+  }
+
+  // Nearest canonical point (corner or walk point) of face edge k at parameter t from its
+  // smaller to its larger vertex.
+  int snap_to_edge(int k, double t) const {
     const int ca = k, cb = (k + 1) % 3;
-    const int a = std::min(vtx[ca], vtx[cb]);
-    const int corner_a = vtx[ca] == a ? ca : cb, corner_b = corner_a == ca ? cb : ca;
+    const int a = std::min(vtx_[ca], vtx_[cb]);
+    const int corner_a = vtx_[ca] == a ? ca : cb, corner_b = corner_a == ca ? cb : ca;
     int best = corner_a;
     double best_d = std::abs(t);
     if (std::abs(1.0 - t) < best_d) {
       best = corner_b;
       best_d = std::abs(1.0 - t);
     }
-    for (int id : edge_point_ids[k]) {
-      const double dd = std::abs(res.points[id].t - t);
+    for (int id : edge_point_ids_[k]) {
+      const double dd = std::abs(res_.points[id].t - t);
       if (dd < best_d) {
         best = id;
         best_d = dd;
       }
     }
     return best;
-  };
-  auto point_on_edge = [&](int k, int p, int q) -> int {
-    // the walk of edge k is the canonical truth; look the pair up, else snap to the nearest point
+  }
+
+  // The walk of edge k is the canonical truth: look the pair up, else snap to the nearest point.
+  int point_on_edge(int k, int p, int q) const {
     const int ca = k, cb = (k + 1) % 3;
-    const int a = std::min(vtx[ca], vtx[cb]), b = std::max(vtx[ca], vtx[cb]);
-    const int gp = sites[std::min(p, q)], gq = sites[std::max(p, q)];
-    for (int id : edge_point_ids[k]) {
-      const LocalPoint& lp = res.points[id];
+    const int a = std::min(vtx_[ca], vtx_[cb]), b = std::max(vtx_[ca], vtx_[cb]);
+    const int gp = fns_[std::min(p, q)].label, gq = fns_[std::max(p, q)].label;
+    for (int id : edge_point_ids_[k]) {
+      const LocalPoint& lp = res_.points[id];
       if (lp.key[2] == gp && lp.key[3] == gq) return id;
     }
-    const double da = field_value(field, a, gp) - field_value(field, a, gq);
-    const double db = field_value(field, b, gp) - field_value(field, b, gq);
+    const double da = field_value(field_, a, gp) - field_value(field_, a, gq);
+    const double db = field_value(field_, b, gp) - field_value(field_, b, gq);
     double t = da / (da - db);
     if (!std::isfinite(t)) t = 0.5;
     return snap_to_edge(k, t);
-  };
-  const double weld_tol = 1e-10;
-  auto vertex_id = [&](int s, int l1, int l2) -> int {
+  }
+
+  int vertex_id(int s, int l1, int l2) {
     if (l1 < 0 && l2 < 0) return common_corner(-1 - l1, -1 - l2);
     if (l1 < 0 || l2 < 0) {
       const int k = l1 < 0 ? -1 - l1 : -1 - l2, r = l1 < 0 ? l2 : l1;
@@ -457,187 +467,125 @@ FaceResult tessellate_face(const Eigen::MatrixX3i& F, const HeatField& field, in
     std::array<int, 3> tri = {s, l1, l2};
     std::sort(tri.begin(), tri.end());
     const std::array<int, 4> key = {tri[0], tri[1], tri[2], 0};
-    auto it = key_ids.find(key);
-    if (it != key_ids.end()) return it->second;
-    // u_a = u_b = u_c, Σβ = 1
+    auto it = key_ids_.find(key);
+    if (it != key_ids_.end()) return it->second;
+    const int id = triple_point(tri);
+    key_ids_.emplace(key, id);
+    return id;
+  }
+
+  // The point where u_a = u_b = u_c (Σβ = 1): a canonical edge point when it lies on the face
+  // boundary, an existing point when several triples meet there (≥ 4 cells), else a new point.
+  int triple_point(const std::array<int, 3>& tri) {
     Eigen::Matrix3d A;
     for (int c = 0; c < 3; ++c) {
-      A(0, c) = U[tri[0]][c] - U[tri[1]][c];
-      A(1, c) = U[tri[0]][c] - U[tri[2]][c];
+      A(0, c) = fns_[tri[0]].value[c] - fns_[tri[1]].value[c];
+      A(1, c) = fns_[tri[0]].value[c] - fns_[tri[2]].value[c];
       A(2, c) = 1.0;
     }
     Eigen::Vector3d x = A.fullPivLu().solve(Eigen::Vector3d(0, 0, 1));
     if (!x.allFinite()) x = Eigen::Vector3d::Constant(1.0 / 3);
     x = x.cwiseMax(0.0);
     x /= x.sum();
-    int id = -1;
     int cmin = 0;
-    if (x.minCoeff(&cmin) <= weld_tol) {
-      // a triple point on the face boundary is the edge's switch point (or a corner)
+    if (x.minCoeff(&cmin) <= opt_.weld_tolerance) {
       const int k = (cmin + 1) % 3, ca = k, cb = (k + 1) % 3;
-      const int corner_a = vtx[ca] < vtx[cb] ? ca : cb, corner_b = corner_a == ca ? cb : ca;
-      id = snap_to_edge(k, x[corner_b] / (x[corner_a] + x[corner_b]));
-    } else {
-      // several triples at one point (≥ 4 cells meeting): weld
-      for (int i = 0; i < static_cast<int>(res.points.size()) && id < 0; ++i)
-        if ((res.points[i].bary - x).cwiseAbs().maxCoeff() < weld_tol) id = i;
+      const int corner_a = vtx_[ca] < vtx_[cb] ? ca : cb, corner_b = corner_a == ca ? cb : ca;
+      return snap_to_edge(k, x[corner_b] / (x[corner_a] + x[corner_b]));
     }
-    if (id >= 0) {
-      key_ids.emplace(key, id);
-      return id;
-    }
+    for (int i = 0; i < static_cast<int>(res_.points.size()); ++i)
+      if ((res_.points[i].bary - x).cwiseAbs().maxCoeff() < opt_.weld_tolerance) return i;
     LocalPoint p;
     p.kind = LocalPoint::Interior;
     p.bary = x;
-    res.points.push_back(p);
-    key_ids.emplace(key, static_cast<int>(res.points.size()) - 1);
-    return static_cast<int>(res.points.size()) - 1;
-  };
+    res_.points.push_back(p);
+    return static_cast<int>(res_.points.size()) - 1;
+  }
 
-  std::vector<PolyVertex> poly, next;
-  std::vector<double> g;
-  for (int s : cand) {
-    // triangle: vertex c lies on edges c−1 and c; the edge from vertex c to c+1 is edge c
-    poly.clear();
-    for (int c = 0; c < 3; ++c) poly.push_back({Eigen::Vector3d::Unit(c), -1 - (c + 2) % 3, -1 - c, -1 - c});
-    for (int r : cand) {
-      if (r == s) continue;
-      const Eigen::Vector3d d(U[s][0] - U[r][0], U[s][1] - U[r][1], U[s][2] - U[r][2]);
-      // inside: u_s > u_r, or an exact tie and s is the smaller site (identical heat functions,
-      // e.g. coincident sites, must not both claim the region)
-      const bool ties_in = s < r;
-      auto inside = [&](double gi) { return gi > 0 || (gi == 0 && ties_in); };
-      g.resize(poly.size());
-      bool all_in = true, all_out = true;
-      for (size_t i = 0; i < poly.size(); ++i) {
-        g[i] = d.dot(poly[i].x);
-        if (inside(g[i]))
-          all_out = false;
-        else
-          all_in = false;
-      }
-      if (all_in) continue;
-      if (all_out) {
-        poly.clear();
-        break;
-      }
-      next.clear();
-      for (size_t i = 0; i < poly.size(); ++i) {
-        const size_t j = (i + 1) % poly.size();
-        const bool in_i = inside(g[i]), in_j = inside(g[j]);
-        const int L = poly[i].line_out;
-        if (in_i) next.push_back(poly[i]);
-        if (in_i != in_j) {
-          const double lambda = g[i] / (g[i] - g[j]);
-          const Eigen::Vector3d x = poly[i].x + lambda * (poly[j].x - poly[i].x);
-          // leaving: the new edge runs along the bisector; entering: along L again
-          next.push_back({x, L, r, in_i ? r : L});
-        }
-      }
-      poly.swap(next);
-      if (poly.size() < 3) {
-        poly.clear();
-        break;
-      }
+  // Boundary points counter-clockwise: corner k, the points of edge k, ...
+  std::vector<int> boundary_chain() const {
+    std::vector<int> chain;
+    for (int k = 0; k < 3; ++k) {
+      chain.push_back(k);
+      if (vtx_[k] < vtx_[(k + 1) % 3])
+        chain.insert(chain.end(), edge_point_ids_[k].begin(), edge_point_ids_[k].end());
+      else
+        chain.insert(chain.end(), edge_point_ids_[k].rbegin(), edge_point_ids_[k].rend());
     }
-    if (poly.size() < 3) continue;
-    std::vector<int> ids;
-    for (const PolyVertex& pv : poly) {
-      const int id = vertex_id(s, pv.line_a, pv.line_b);
-      if (ids.empty() || ids.back() != id) ids.push_back(id);
-    }
-    while (ids.size() > 1 && ids.back() == ids.front()) ids.pop_back();
-    if (ids.size() < 3) continue;
-    // Fan from a corner of the polygon, unless a vertex is flat (lies on a straight side, e.g.
-    // an edge point where a measure-zero cell touches): then fan from the polygon's centroid,
-    // a point private to this polygon, so no zero-area triangle turns a side into a diagonal.
-    const size_t np = ids.size();
-    bool flat = false;
-    for (size_t i = 0; i < np && !flat; ++i)
-      flat = std::abs(bary_det(res.points[ids[(i + np - 1) % np]].bary, res.points[ids[i]].bary,
-                               res.points[ids[(i + 1) % np]].bary)) < 1e-13;
-    if (np > 3 && flat) {
-      LocalPoint c;
-      c.kind = LocalPoint::Interior;
-      c.bary = Eigen::Vector3d::Zero();
-      for (int id : ids) c.bary += res.points[id].bary;
-      c.bary /= static_cast<double>(np);
-      const int ci = static_cast<int>(res.points.size());
-      res.points.push_back(c);
-      for (size_t i = 0; i < np; ++i) {
-        res.tris.push_back({ci, ids[i], ids[(i + 1) % np]});
-        res.cells.push_back(sites[s]);
-      }
-      continue;
-    }
-    for (size_t i = 1; i + 1 < np; ++i) {
-      if (ids[0] == ids[i] || ids[i] == ids[i + 1] || ids[0] == ids[i + 1]) continue;
-      res.tris.push_back({ids[0], ids[i], ids[i + 1]});
-      res.cells.push_back(sites[s]);
-    }
+    return chain;
   }
-  // Safety net for near-degenerate configurations (nearly coincident sites, ties under
-  // truncation): the pieces must tile the face exactly once, positively oriented, and meet the
-  // face boundary exactly in the canonical edge points. Otherwise the face is fanned from its
-  // centroid over the canonical boundary points, each triangle labelled by its own centroid:
-  // still conforming and area-exact, only the cut inside this one face is approximate.
-  std::vector<int> chain;  // boundary points counter-clockwise: corner k, points of edge k, ...
-  for (int k = 0; k < 3; ++k) {
-    chain.push_back(k);
-    const bool forward = vtx[k] < vtx[(k + 1) % 3];
-    if (forward)
-      chain.insert(chain.end(), edge_point_ids[k].begin(), edge_point_ids[k].end());
-    else
-      chain.insert(chain.end(), edge_point_ids[k].rbegin(), edge_point_ids[k].rend());
-  }
-  bool valid = !res.tris.empty();
-  if (valid) {
-    // every directed edge once; an edge without its reverse must be a boundary step of `chain`,
-    // and every boundary step must be covered (sorted vectors: small, allocation-light)
+
+  // Every directed edge once; an edge without its reverse must be a boundary step of `chain`,
+  // every boundary step must be covered, all triangles positive and their areas sum to the face.
+  bool tiles_face(const std::vector<int>& chain) const {
+    if (res_.tris.empty()) return false;
     std::vector<std::pair<int, int>> directed, boundary;
     double total = 0;
-    for (const auto& t : res.tris) {
-      const double det = bary_det(res.points[t[0]].bary, res.points[t[1]].bary, res.points[t[2]].bary);
+    for (const auto& t : res_.tris) {
+      const double det = bary_det(res_.points[t[0]].bary, res_.points[t[1]].bary, res_.points[t[2]].bary);
       total += det;
-      if (!(det > -1e-14)) valid = false;
+      if (!(det > -opt_.orientation_tolerance)) return false;
       for (int c = 0; c < 3; ++c) directed.push_back({t[c], t[(c + 1) % 3]});
     }
-    if (std::abs(total - 1.0) > 1e-9) valid = false;
+    if (std::abs(total - 1.0) > opt_.tiling_tolerance) return false;
     std::sort(directed.begin(), directed.end());
-    if (std::adjacent_find(directed.begin(), directed.end()) != directed.end()) valid = false;
+    if (std::adjacent_find(directed.begin(), directed.end()) != directed.end()) return false;
     for (size_t i = 0; i < chain.size(); ++i) boundary.push_back({chain[i], chain[(i + 1) % chain.size()]});
     std::sort(boundary.begin(), boundary.end());
     for (const auto& e : directed) {
       if (std::binary_search(directed.begin(), directed.end(), std::make_pair(e.second, e.first))) continue;
-      if (!std::binary_search(boundary.begin(), boundary.end(), e)) valid = false;  // a crack or a T-junction
+      if (!std::binary_search(boundary.begin(), boundary.end(), e)) return false;  // a crack or a T-junction
     }
     for (const auto& e : boundary)
-      if (!std::binary_search(directed.begin(), directed.end(), e)) valid = false;
+      if (!std::binary_search(directed.begin(), directed.end(), e)) return false;
+    return true;
   }
-  if (!valid) {
-    res.tris.clear();
-    res.cells.clear();
-    LocalPoint centre;
-    centre.kind = LocalPoint::Interior;
-    centre.bary = Eigen::Vector3d::Constant(1.0 / 3);
-    const int ci = static_cast<int>(res.points.size());
-    res.points.push_back(centre);
-    for (size_t i = 0; i < chain.size(); ++i) {
-      const int a = chain[i], b = chain[(i + 1) % chain.size()];
-      const Eigen::Vector3d x = (centre.bary + res.points[a].bary + res.points[b].bary) / 3.0;
-      int best = cand[0];
-      double best_u = -std::numeric_limits<double>::infinity();
-      for (int r : cand) {
-        const double u = U[r][0] * x[0] + U[r][1] * x[1] + U[r][2] * x[2];
-        if (u > best_u) {
-          best_u = u;
-          best = r;
-        }
-      }
-      res.tris.push_back({ci, a, b});
-      res.cells.push_back(sites[best]);
-    }
+
+  const HeatField& field_;
+  const std::vector<FaceFunction>& fns_;
+  const VoronoiOptions& opt_;
+  FaceResult& res_;
+  int vtx_[3];
+  std::array<std::vector<int>, 3> edge_point_ids_;  // ordered from the canonical a to b
+  std::map<std::array<int, 4>, int> key_ids_;
+};
+
+FaceResult tessellate_face(const Eigen::MatrixX3i& F, const HeatField& field, int f, const VoronoiOptions& opt) {
+  FaceResult res;
+  const int vtx[3] = {F(f, 0), F(f, 1), F(f, 2)};
+  const int fast = strict_face_winner(field, vtx);
+  if (fast >= 0) {
+    res.whole = res.fast = true;
+    res.cell = fast;
+    return res;
   }
+  thread_local std::vector<FaceFunction> fns;
+  face_functions(field, vtx, fns);
+  res.whole = true;
+  if (fns.empty()) return res;  // no site known here: cell −1
+  if (!opt.exact) {
+    // label of the face centroid (mean of the corner values), ties by smaller site index
+    int best = 0;
+    for (size_t i = 1; i < fns.size(); ++i)
+      if (fns[i].value[0] + fns[i].value[1] + fns[i].value[2] > fns[best].value[0] + fns[best].value[1] + fns[best].value[2])
+        best = static_cast<int>(i);
+    res.cell = fns[best].label;
+    return res;
+  }
+  const int l0 = corner_winner(fns, 0), l1 = corner_winner(fns, 1), l2 = corner_winner(fns, 2);
+  if (l0 == l1 && l1 == l2) {
+    // u_l is the largest at all three corners, hence (linear functions) on the whole face
+    res.cell = fns[l0].label;
+    return res;
+  }
+  res.whole = false;
+  truncate_functions(fns, opt.max_cut_depth);
+  thread_local FaceClipScratch clip;
+  face_candidates(fns, clip.alive);
+  CutFace cut(field, vtx, fns, opt, res);
+  for (int s : clip.alive)
+    if (clip_face_region(fns, clip.alive, s, clip.region, clip.next)) cut.add_region(s, clip.region);
+  cut.finish(clip.alive);
   return res;
 }
 
@@ -649,36 +597,16 @@ FaceResult tessellate_face(const Eigen::MatrixX3i& F, const HeatField& field, in
 
 namespace {
 
-// Adjacency, Voronoi vertices, edges and areas of a refined mesh whose faces carry cells.
-// `interior[v]` (original vertices): every face around v took the fast path (one site strictly
-// hottest at its three corners), so all faces around v are whole faces of one cell (that site is
-// v's strict top). Such a vertex is no Voronoi vertex, and an edge joining two such vertices has
-// two whole faces of the same cell on its sides. Both are skipped: on a typical diagram that is
-// most of the mesh.
-void finish_diagram(VoronoiDiagram& d, int num_sites, const std::vector<char>& interior) {
-  const int nrv = static_cast<int>(d.V.rows()), nrf = static_cast<int>(d.F.rows());
-  const int nv = static_cast<int>(interior.size());
-  auto skipped = [&](int v) { return v < nv && interior[v]; };
-  d.cell_area = Eigen::VectorXd::Zero(num_sites);
-  for (int r = 0; r < nrf; ++r)
-    if (d.face_cell[r] >= 0) d.cell_area[d.face_cell[r]] += d.face_area[r];
-
-  // incident refined faces per refined vertex
-  std::vector<int> inc_off(nrv + 1, 0), inc;
-  for (int r = 0; r < nrf; ++r)
-    for (int k = 0; k < 3; ++k) ++inc_off[d.F(r, k) + 1];
-  for (int v = 0; v < nrv; ++v) inc_off[v + 1] += inc_off[v];
-  inc.resize(inc_off[nrv]);
-  {
-    std::vector<int> fill(inc_off.begin(), inc_off.end() - 1);
-    for (int r = 0; r < nrf; ++r)
-      for (int k = 0; k < 3; ++k) inc[fill[d.F(r, k)]++] = r;
-  }
+// Voronoi vertices: refined vertices (other than `skipped` ones) where ≥ 3 cells meet.
+std::vector<char> find_voronoi_vertices(VoronoiDiagram& d, const std::vector<char>& interior) {
+  const int nrv = static_cast<int>(d.V.rows()), nv = static_cast<int>(interior.size());
+  std::vector<int> inc_off, inc;
+  refined_vertex_faces(d, inc_off, inc);
   d.voronoi_vertices.clear();
   std::vector<char> is_vvertex(nrv, 0);
   std::vector<int> cells;
   for (int v = 0; v < nrv; ++v) {
-    if (skipped(v)) continue;
+    if (v < nv && interior[v]) continue;
     cells.clear();
     for (int i = inc_off[v]; i < inc_off[v + 1]; ++i)
       if (d.face_cell[inc[i]] >= 0) cells.push_back(d.face_cell[inc[i]]);
@@ -696,9 +624,16 @@ void finish_diagram(VoronoiDiagram& d, int num_sites, const std::vector<char>& i
     vv.cells = cells;
     d.voronoi_vertices.push_back(std::move(vv));
   }
+  return is_vvertex;
+}
 
-  // refined edges that may separate cells: (min, max, face), sorted; bucketed by the smaller
-  // vertex (counting sort), then each small bucket sorted
+// Cell adjacency and the refined edges separating two cells: (cell a, cell b, v0, v1), cell a <
+// cell b, v0 < v1, sorted. Edges between two skipped vertices are not looked at. The refined edges
+// (min, max, face) are bucketed by the smaller vertex (counting sort), then each bucket sorted.
+std::vector<std::array<int, 4>> separating_edges(VoronoiDiagram& d, int num_sites, const std::vector<char>& interior) {
+  const int nrv = static_cast<int>(d.V.rows()), nrf = static_cast<int>(d.F.rows());
+  const int nv = static_cast<int>(interior.size());
+  auto skipped = [&](int v) { return v < nv && interior[v]; };
   std::vector<int> bucket(nrv + 1, 0);
   for (int r = 0; r < nrf; ++r)
     for (int k = 0; k < 3; ++k) {
@@ -718,7 +653,8 @@ void finish_diagram(VoronoiDiagram& d, int num_sites, const std::vector<char>& i
   for (int v = 0; v < nrv; ++v)
     if (bucket[v + 1] - bucket[v] > 1) std::sort(half.begin() + bucket[v], half.begin() + bucket[v + 1]);
   d.cell_adjacency.assign(num_sites, {});
-  std::vector<std::array<int, 4>> separating;  // (cell a, cell b, v0, v1), cell a < cell b, v0 < v1
+  std::vector<std::array<int, 4>> separating;
+  std::vector<int> cells;
   for (size_t i = 0; i < half.size();) {
     size_t j = i;
     while (j < half.size() && half[j][0] == half[i][0] && half[j][1] == half[i][1]) ++j;
@@ -740,10 +676,14 @@ void finish_diagram(VoronoiDiagram& d, int num_sites, const std::vector<char>& i
     adj.erase(std::unique(adj.begin(), adj.end()), adj.end());
   }
   std::sort(separating.begin(), separating.end());
+  return separating;
+}
 
-  // chain the separating edges of each pair of cells into polylines (pairs in increasing order;
-  // within a pair: start at chain ends in increasing vertex order, neighbours in increasing order,
-  // then the closed loops)
+// Chains the separating edges of each pair of cells into polylines (pairs in increasing order;
+// within a pair: start at chain ends in increasing vertex order, neighbours in increasing order,
+// then the closed loops). A polyline ends at Voronoi vertices and at branch points.
+void chain_edges(VoronoiDiagram& d, const std::vector<std::array<int, 4>>& separating,
+                 const std::vector<char>& is_vvertex) {
   d.edges.clear();
   std::vector<std::array<int, 3>> adj;  // (vertex, neighbour, edge slot) sorted
   std::vector<char> used;
@@ -799,6 +739,21 @@ void finish_diagram(VoronoiDiagram& d, int num_sites, const std::vector<char>& i
   }
 }
 
+
+// Adjacency, Voronoi vertices, edges and areas of a refined mesh whose faces carry cells.
+// `interior[v]` (original vertices): every face around v took the fast path (one site strictly
+// hottest at its three corners), so all faces around v are whole faces of one cell (that site is
+// v's strict top). Such a vertex is no Voronoi vertex, and an edge joining two such vertices has
+// two whole faces of the same cell on its sides. Both are skipped: on a typical diagram that is
+// most of the mesh.
+void finish_diagram(VoronoiDiagram& d, int num_sites, const std::vector<char>& interior) {
+  d.cell_area = Eigen::VectorXd::Zero(num_sites);
+  for (int r = 0; r < d.F.rows(); ++r)
+    if (d.face_cell[r] >= 0) d.cell_area[d.face_cell[r]] += d.face_area[r];
+  const std::vector<char> is_vvertex = find_voronoi_vertices(d, interior);
+  chain_edges(d, separating_edges(d, num_sites, interior), is_vvertex);
+}
+
 }  // namespace
 
 VoronoiDiagram tessellate(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const HeatField& field,
@@ -817,6 +772,9 @@ VoronoiDiagram tessellate(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, 
                               " out of range [0, " + std::to_string(field.num_sites) + ")");
     if (!std::isfinite(field.heat[k])) throw InvalidInputError("tessellate: heat field has a non-finite value");
   }
+  if (!(options.edge_merge_tolerance >= 0) || !(options.weld_tolerance >= 0) || !(options.flat_tolerance >= 0) ||
+      !(options.orientation_tolerance >= 0) || !(options.tiling_tolerance >= 0))
+    throw InvalidInputError("tessellate: the tolerances of VoronoiOptions must be >= 0");
   const int threads = resolve_threads(options.threads);
 
   std::vector<FaceResult> results(nf);
@@ -934,7 +892,7 @@ VoronoiDiagram heat_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F
   // block, so memory is #V·(keep + block) instead of #V·#sites. Same result as
   // heat_field_from_dense on the full matrix (order: heat descending, then site ascending).
   const int nv = static_cast<int>(V.rows()), ns = static_cast<int>(sites.size());
-  const int block = 64;
+  const int block = std::max(1, options.solve_block);
   const int threads = resolve_threads(options.threads);
   TopKField top(nv, options.keep_sites_per_vertex);
   for (int s0 = 0; s0 < ns; s0 += block) {
@@ -989,6 +947,18 @@ std::vector<std::pair<int, double>> cell_load_vector(const VoronoiDiagram& diagr
     }
   }
   return {acc.begin(), acc.end()};
+}
+
+void refined_vertex_faces(const VoronoiDiagram& d, std::vector<int>& offsets, std::vector<int>& faces) {
+  const int nrv = static_cast<int>(d.V.rows()), nrf = static_cast<int>(d.F.rows());
+  offsets.assign(nrv + 1, 0);
+  for (int r = 0; r < nrf; ++r)
+    for (int k = 0; k < 3; ++k) ++offsets[d.F(r, k) + 1];
+  for (int v = 0; v < nrv; ++v) offsets[v + 1] += offsets[v];
+  faces.resize(offsets[nrv]);
+  std::vector<int> fill(offsets.begin(), offsets.end() - 1);
+  for (int r = 0; r < nrf; ++r)
+    for (int k = 0; k < 3; ++k) faces[fill[d.F(r, k)]++] = r;
 }
 
 std::vector<std::vector<int>> cell_faces(const VoronoiDiagram& diagram) {

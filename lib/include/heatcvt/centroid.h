@@ -20,6 +20,9 @@ struct CentroidOptions {
   bool quadratic_refinement = true;
   /// Threads (parallel over cells); 0 = all. Default 0.
   int threads = 0;
+  /// Cells whose diffusions are solved together (columns of one multi-right-hand-side solve).
+  /// Default 64.
+  int solve_block = 64;
 };
 
 /// Given heat values at the vertices (dense #V; only the neighbourhood of `hottest_vertex`
@@ -35,7 +38,7 @@ SurfacePoint refine_hottest_vertex(const Eigen::MatrixX3d& V, const Eigen::Matri
                                    int hottest_vertex);
 
 /// Heat centroid of every cell of the diagram with full solves: one area-source diffusion per
-/// cell (load vector of its refined pieces, cell_load_vectors(); solved in blocks of 64 columns
+/// cell (load vector of its refined pieces, cell_load_vectors(); solved in blocks of solve_block columns
 /// with solver.solve(MatrixXd); `steps` > 1 repeats h ← u, i.e. rhs = M u), hottest vertex among
 /// the vertices of the cell's parent faces, optional refinement (refine_hottest_vertex).
 ///   F is the original mesh of the diagram (diagram.face_parent indexes it).

@@ -29,6 +29,43 @@ enum class CvtInitialization {
 };
 
 
+/// The numeric constants of the CVT's safeguards and heuristics (CvtOptions::tuning). Lengths
+/// are in units of the site spacing sqrt(area / sites).
+struct CvtTuning {
+  /// A site is settled (its Voronoi diffusion needs only voronoi_rings_settled rings) once it and
+  /// its neighbours moved less than this. Default 0.25.
+  double settled_move = 0.25;
+  /// Over-relaxed and Anderson steps (and the surface Lloyd's) go at most this far beyond the
+  /// centroid. Default 0.5.
+  double max_extra_step = 0.5;
+  /// Safeguard of the over-relaxation: when the energy proxy grows, ω − 1 is multiplied by this
+  /// (default 0.5) and ω drops to 1 once ω − 1 falls below relaxation_floor (default 0.05).
+  double relaxation_decay = 0.5;
+  double relaxation_floor = 0.05;
+  /// Index set of the Voronoi diffusion of a site whose cell is empty: a graph ball of this
+  /// radius around its face. Default 3.
+  double empty_cell_radius = 3.0;
+  /// split_nonmanifold_cells stops for good when the spots exceed spot_growth_factor × the fewest
+  /// seen + spot_growth_slack. Defaults 2 and 10.
+  double spot_growth_factor = 2.0;
+  int spot_growth_slack = 10;
+  /// quality_patience: an evaluation counts as progress when φm grows by more than this
+  /// (degrees). Default 0.02.
+  double patience_gain_deg = 0.02;
+  /// refine_small_angles: at most this fraction of the sites (at least one) per round. Default 0.01.
+  double refine_fraction_per_round = 0.01;
+  /// A split cell's new site must be farther than split_min_distance × spacing from the cell's
+  /// site. Default 1e-6.
+  double split_min_distance = 1e-6;
+  /// Greedy closest-point walks (over-relaxed steps): at most this many face moves, each must
+  /// lower the squared distance by a relative walk_min_gain. Defaults 256 and 1e-12.
+  int walk_max_steps = 256;
+  double walk_min_gain = 1e-12;
+  /// Blocks of faces per thread in the per-iteration clipping of the cells (load balance; the
+  /// result does not depend on it). Default 64.
+  int face_blocks_per_thread = 64;
+};
+
 /// Options of centroidal_voronoi(). Defaults follow the paper (100 iterations, t = h̄²).
 struct CvtOptions {
   /// Number of sites (generators). Default 1000.
@@ -55,10 +92,10 @@ struct CvtOptions {
   /// Index set of a cell's centroid diffusion: the cell plus this many rings of cells. Default 1.
   int centroid_rings = 1;
   /// Index set of the Voronoi diffusions once the sites have settled: the cell plus this many
-  /// rings, for every site once all moved less than a quarter of the spacing, and before that
-  /// for each site that moved that little together with all its neighbouring sites. Default 1
-  /// (measured: same cells as 2 rings, about half the cost). Set it to voronoi_rings to keep the
-  /// paper's 2 rings throughout.
+  /// rings, for every site once all moved less than tuning.settled_move spacings, and before that
+  /// for each site that moved that little together with all its neighbouring sites (each
+  /// bisector then moved less than that, so one ring of cells covers the new cell). Default 1.
+  /// Set it to voronoi_rings to keep the paper's 2 rings throughout.
   int voronoi_rings_settled = 1;
   /// Quadratic sub-vertex refinement of the centroid (§7.1 "Centroids on faces"). Default true.
   bool quadratic_refinement = true;
@@ -130,12 +167,11 @@ struct CvtOptions {
   /// In those start rounds, when only φmin misses its target (no non-manifold spot, φm met): a new
   /// site at the Voronoi vertex dual to every triangle whose smallest angle is below
   /// target_phi_min_deg (circumcentre insertion of Delaunay refinement, placed where the three
-  /// heat cells meet, snapped to the nearest input vertex; worst first, at most 1 % of the sites per
-  /// round, within max_inserted_fraction), then the
-  /// same surface-Lloyd iterations and a new evaluation. The result stays the dual of the heat
-  /// Voronoi diagram of all final sites. Default false. Measured: armadillo, 1,000 sites, φmin
-  /// 19.7° → 26.4° (2 sites added); with a far-off target on a sphere (many bad triangles) it can
-  /// lower φmin, the inserted sites not settling in a few surface-Lloyd iterations.
+  /// heat cells meet, snapped to the nearest input vertex; worst first, at most
+  /// tuning.refine_fraction_per_round of the sites per round, within max_inserted_fraction), then
+  /// the same surface-Lloyd iterations and a new evaluation. The result stays the dual of the heat
+  /// Voronoi diagram of all final sites. With a far-off target (many bad triangles) it can lower
+  /// φmin, the inserted sites not settling in a few surface-Lloyd iterations. Default false.
   bool refine_small_angles = false;
   /// Split cells too big for thin parts: at each quality evaluation, every cell incident to a
   /// non-manifold spot of the dual (an edge with more than two triangles or a boundary edge on a
@@ -144,18 +180,23 @@ struct CvtOptions {
   /// max_inserted_fraction · initial sites in total). The quality target is then only accepted
   /// for a dual without such spots. The result's dual is always the dual of the heat Voronoi
   /// diagram of the final sites. Not done on inputs with non-manifold edges (no manifold dual
-  /// exists), and stopped for good when the spots grow beyond 2 × the fewest seen + 10.
-  /// Default false (fixed site count, as in the paper).
+  /// exists), and stopped for good when the spots grow beyond tuning.spot_growth_factor × the
+  /// fewest seen + tuning.spot_growth_slack. Default false (fixed site count, as in the paper).
   bool split_nonmanifold_cells = false;
+  /// Sites added by split_nonmanifold_cells and refine_small_angles, at most this fraction of the
+  /// initial sites in total. Default 0.25.
   double max_inserted_fraction = 0.25;
   /// Convergence test on the quality (needs quality_every > 0): stop when φm has not improved by
-  /// more than 0.02° over this many consecutive evaluations (result.stalled). 0 = off. Default 0.
+  /// more than tuning.patience_gain_deg over this many consecutive evaluations (result.stalled).
+  /// 0 = off. Default 0.
   int quality_patience = 0;
   /// With quality_every: the first evaluation happens only after this many iterations. Default 0.
   int quality_start = 0;
+  /// Constants of the safeguards and heuristics above (CvtTuning).
+  CvtTuning tuning;
 };
 
-/// The best measured configuration for remeshing (meshcvt's defaults): farthest-point sampling,
+/// The configuration for remeshing (meshcvt's defaults; docs/benchmarks.md has its measurements): farthest-point sampling,
 /// surface-Lloyd pre-relaxation (60 iterations, ω = 1.5) during the factorisation, a quality check of
 /// the start sites before the first heat iteration (with up to 12 rounds of splitting cells too big
 /// for thin parts or inserting sites at small-angle Voronoi vertices + 3 surface-Lloyd iterations), over-relaxed Lloyd (ω = 1.5), quality
@@ -245,12 +286,10 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
 Laplacian anisotropic_laplacian(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, double lambda,
                                 Eigen::VectorXd* face_metric_area = nullptr);
 
-/// Initial sites: area-uniform random points (seeded) or farthest-point sampling (graph geodesics).
-/// \throw InvalidInputError if count < 1.
-std::vector<SurfacePoint> initial_sites(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, int count,
-                                        CvtInitialization method, std::uint32_t seed);
-
 /// Variance of the cell areas (population variance over the cells).
 double cell_area_variance(const VoronoiDiagram& diagram);
 
 }  // namespace heatcvt
+
+#include "heatcvt/cvt/anisotropic_lift.h"  // lifted_laplacian(): the R⁶ lift shared with the point path
+#include "heatcvt/cvt/start.h"             // initial_sites()

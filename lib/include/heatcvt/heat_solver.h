@@ -33,13 +33,11 @@ struct HeatSolverOptions {
   /// restored afterwards (OpenBLAS only, found at run time; other BLAS libraries are left alone).
   /// 0 = leave the BLAS library's own setting. Default 1: the factorisation usually overlaps
   /// other work (meshcvt's surface Lloyd), and idle OpenBLAS threads spin-wait on the cores our
-  /// OpenMP loops need. Measured on 2 cores, cloud2mesh -n 3000 on a 50k-point kitten cloud
-  /// (bench_reconstruct): 14.4–14.9 s with 1 BLAS thread against 17.0–18.0 s with OpenBLAS's
-  /// default 2 (measured before this option existed).
+  /// OpenMP loops need (docs/benchmarks.md).
   int blas_threads = 1;
-  /// Fill-reducing ordering. Default automatic (CHOLMOD picks AMD on meshes). METIS: measured on
-  /// kitten Loop ×2 (151k vertices) 98 instead of 140 MB of factor, heat Lloyd iterations 0.57 s
-  /// instead of 0.69 s, factorisation 1.65 s instead of 1.36 s (bench_cvt with CVT_ORDERING).
+  /// Fill-reducing ordering. Default automatic (CHOLMOD picks AMD on meshes). METIS usually gives
+  /// less fill (a smaller factor and cheaper solves) for a slower analysis (docs/benchmarks.md,
+  /// bench_cvt with CVT_ORDERING).
   FillOrdering ordering = FillOrdering::automatic;
 };
 

@@ -30,11 +30,9 @@ namespace heatcvt {
 /// Options of the localized solves.
 struct LocalizedSolveOptions {
   /// Forward columns with |a_j| ≤ drop_tolerance · max_k |a_k| (max over the columns visited so
-  /// far) are not scattered into their ancestors. 0 = exact forward solve. Default 1e-12:
-  /// measured on a 164k-vertex sphere (bench_localized) this cuts a single-source forward solve
-  /// from ~2M factor entries (0.95 ms) to ~0.09 ms, with results equal to the exact solve to
-  /// ~1e-12 relative. (Batching sources into one forward pass was measured slower than pruned
-  /// single solves for spatially spread sources; it is kept as solve_batch().)
+  /// far) are not scattered into their ancestors. 0 = exact forward solve. Default 1e-12: a
+  /// single-source forward solve then visits a small part of the factor, with results equal to
+  /// the exact solve to about 1e-12 relative (bench_localized; docs/benchmarks.md).
   double drop_tolerance = 1e-12;
 };
 

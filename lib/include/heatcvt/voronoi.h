@@ -29,9 +29,11 @@ HeatField heat_field_from_dense(const Eigen::MatrixXd& U, int keep = 8);
 
 /// Builds a field from per-site sparse heat: `indices[s]`/`values[s]` are the vertices where
 /// site s's heat is known and the values there (e.g. from localized solves). Keeps the `keep`
-/// hottest sites per vertex.
+/// hottest sites per vertex (exact zeros are not stored). `threads`: for the per-vertex sorts
+/// (0 = all); the result does not depend on it.
+/// \throw InvalidInputError on keep < 1, mismatched sizes, a vertex out of range or a non-finite value.
 HeatField heat_field_from_sparse(int num_vertices, const std::vector<std::vector<int>>& indices,
-                                 const std::vector<std::vector<double>>& values, int keep = 8);
+                                 const std::vector<std::vector<double>>& values, int keep = 8, int threads = 0);
 
 /// Options of tessellate() / heat_voronoi().
 struct VoronoiOptions {
@@ -49,6 +51,25 @@ struct VoronoiOptions {
   int max_cut_depth = 24;
   /// Threads for the per-face work; 0 = all. Default 0.
   int threads = 0;
+  /// heat_voronoi(): point-source solves per batch (columns of one multi-right-hand-side solve).
+  /// Default 64.
+  int solve_block = 64;
+
+  // --- numerical tolerances of the exact cutting (barycentric units of a face) ---
+  /// Switch points of an edge's upper envelope closer than this (in the edge parameter) to the
+  /// previous one or to the edge's end are merged into it. Default 1e-12.
+  double edge_merge_tolerance = 1e-12;
+  /// A triple point (three cells meeting) within this of the face boundary is snapped to the
+  /// edge's canonical point, and one within this of an existing point is welded to it. Default 1e-10.
+  double weld_tolerance = 1e-10;
+  /// A polygon vertex whose two neighbours span less than this (twice the barycentric area) is
+  /// flat: the polygon is fanned from its centroid. Default 1e-13.
+  double flat_tolerance = 1e-13;
+  /// Validity check of a cut face: every piece's (doubled barycentric) area must exceed
+  /// −orientation_tolerance (default 1e-14) and the pieces must sum to the face within
+  /// tiling_tolerance (default 1e-9); otherwise the face is fanned from its centroid.
+  double orientation_tolerance = 1e-14;
+  double tiling_tolerance = 1e-9;
 };
 
 /// A point of the refined mesh that lies inside (or on the boundary of) an original face.
@@ -95,7 +116,7 @@ VoronoiDiagram tessellate(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, 
                           const VoronoiOptions& options = {});
 
 /// One diffusion per site with the solver (point sources, eq. 8: rhs = barycentric vector),
-/// batched in blocks of 64 columns whose `keep_sites_per_vertex` hottest sites per vertex are
+/// batched in blocks of options.solve_block columns whose `keep_sites_per_vertex` hottest sites per vertex are
 /// merged (memory #V·(keep + 64), result identical to heat_field_from_dense of the full
 /// matrix), then tessellate().
 /// \throw InvalidInputError if a site's face index is out of range, its barycentric
@@ -112,6 +133,10 @@ std::vector<std::pair<int, double>> cell_load_vector(const VoronoiDiagram& diagr
 /// cell_load_vector(diagram, F, c) returns, pairs sorted by vertex.
 std::vector<std::vector<std::pair<int, double>>> cell_load_vectors(const VoronoiDiagram& diagram,
                                                                     const Eigen::MatrixX3i& F);
+
+/// The refined faces around every refined vertex, compressed rows: the faces of vertex v are
+/// `faces[offsets[v] .. offsets[v+1])`, in increasing order.
+void refined_vertex_faces(const VoronoiDiagram& diagram, std::vector<int>& offsets, std::vector<int>& faces);
 
 /// The refined faces of every cell: result[c] lists indices into diagram.F.
 std::vector<std::vector<int>> cell_faces(const VoronoiDiagram& diagram);
