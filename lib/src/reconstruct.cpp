@@ -25,6 +25,7 @@
 #include "heatcvt/closest_point.h"
 #include "heatcvt/cloud_io.h"
 #include "heatcvt/cvt.h"
+#include "heatcvt/cvt/anisotropic_lift.h"
 #include "heatcvt/errors.h"
 #include "heatcvt/laplacian.h"
 #include "heatcvt/normals.h"
@@ -275,22 +276,6 @@ PointLaplacian cvt_point_laplacian(const CvtPoints& c, const ReconstructionOptio
   return point_laplacian(c.PC, lopt);
 }
 
-// Anisotropic Laplacian (paper §7.1): cotan weights from the edge lengths of the local triangles
-// lifted to (p, λ n) ∈ R⁶, and the lifted triangle areas (Heron) as the metric's face areas.
-Laplacian lifted_laplacian(const CvtPoints& c, const Eigen::MatrixX3i& T, double lambda, Eigen::VectorXd& metric_area) {
-  const int nc = static_cast<int>(c.PC.rows());
-  Eigen::MatrixXd X(nc, 6);
-  X.leftCols(3) = c.PC;
-  X.rightCols(3) = lambda * c.NC;
-  const Eigen::MatrixX3d lengths = face_edge_lengths(X, T);
-  metric_area.resize(T.rows());
-  for (Eigen::Index f = 0; f < T.rows(); ++f) {
-    const double a = lengths(f, 0), b = lengths(f, 1), cc = lengths(f, 2), s = 0.5 * (a + b + cc);
-    metric_area[f] = std::sqrt(std::max(0.0, s * (s - a) * (s - b) * (s - cc)));
-  }
-  return cotan_laplacian_from_lengths(lengths, T, nc);
-}
-
 // The sites on the fitted surface (positions, fitted normals) as the vertices of the working
 // mesh, each anchored at the cloud point of its site's nearest point-triangle corner.
 WorkingMesh sites_on_surface(const CvtResult& cvt, const Eigen::MatrixX3i& T, const CvtPoints& c,
@@ -428,7 +413,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   stage.done("point laplacian");
   const Eigen::MatrixX3i& T = pl.triangles;
   Eigen::VectorXd metric_area;
-  const Laplacian lap = options.anisotropy > 0 ? lifted_laplacian(cp, T, options.anisotropy, metric_area)
+  const Laplacian lap = options.anisotropy > 0 ? lifted_laplacian(cp.PC, cp.NC, T, options.anisotropy, &metric_area)
                                                : std::move(pl.laplacian);
   res.laplacian_seconds = since(t0);
   report("laplacian", 1);
