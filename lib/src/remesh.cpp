@@ -1,0 +1,182 @@
+#include "heatcvt/remesh.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "heatcvt/errors.h"
+#include "heatcvt/laplacian.h"
+#include "heatcvt/subdivision.h"
+
+namespace heatcvt {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// The checks a dual must pass to be a 2-manifold (with the input's boundary): the ones whose
+// offending elements name cells (dual vertices) that break the closed-ball property.
+const char* const kManifoldChecks[] = {"manifold_edges", "manifold_vertices", "closed", "all_vertices_used"};
+
+// Validation options of the dual against the input's topology.
+ValidationOptions dual_checks(const SurfaceDescription& input) {
+  ValidationOptions o;
+  o.require_closed = input.closed();
+  o.expected_genus = input.genus;
+  o.allow_non_orientable = input.non_orientable;
+  return o;
+}
+
+// Cells of the dual's vertices at non-manifold spots: the endpoints of edges with more than two
+// triangles (or border edges of a closed input), vertices whose triangles do not form one fan and
+// sites in no triangle. Empty when the dual is a 2-manifold with the input's boundary.
+std::vector<int> cells_breaking_closed_ball(const DualMesh& dual, const SurfaceDescription& input) {
+  ValidationOptions o = dual_checks(input);
+  o.check_self_intersections = false;
+  o.expected_genus = -1;
+  o.max_listed = static_cast<int>(dual.V.rows());
+  std::vector<int> cells;
+  if (dual.F.rows() == 0) return cells;
+  const ValidationReport rep = validate_triangle_mesh(dual.V, dual.F, o);
+  for (const char* name : kManifoldChecks) {
+    const MeshCheck* c = rep.find(name);
+    if (!c || c->passed) continue;
+    for (const auto& where : c->where) cells.insert(cells.end(), where.begin(), where.end());
+  }
+  std::sort(cells.begin(), cells.end());
+  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+  return cells;
+}
+
+// For each cell in `cells`, the point of the tessellation (a corner of a refined face of the
+// cell) farthest from its site: where a cell that wraps a thin part or is split needs a new site.
+// Cells without such a point (no faces, or all within `min_distance` of the site) get none.
+std::vector<SurfacePoint> farthest_points_of_cells(const VoronoiDiagram& d, const Eigen::MatrixX3d& site_positions,
+                                                   const std::vector<int>& cells, double min_distance) {
+  std::vector<int> slot(static_cast<std::size_t>(d.num_cells()), -1);
+  for (std::size_t i = 0; i < cells.size(); ++i)
+    if (cells[i] >= 0 && cells[i] < d.num_cells()) slot[static_cast<std::size_t>(cells[i])] = static_cast<int>(i);
+  std::vector<double> best(cells.size(), min_distance * min_distance);
+  std::vector<SurfacePoint> found(cells.size());
+  for (Eigen::Index r = 0; r < d.F.rows(); ++r) {
+    const int c = d.face_cell[r];
+    if (c < 0 || slot[static_cast<std::size_t>(c)] < 0) continue;
+    const int i = slot[static_cast<std::size_t>(c)];
+    for (int k = 0; k < 3; ++k) {
+      const double dist = (d.V.row(d.F(r, k)) - site_positions.row(c)).squaredNorm();
+      if (dist <= best[static_cast<std::size_t>(i)]) continue;
+      best[static_cast<std::size_t>(i)] = dist;
+      found[static_cast<std::size_t>(i)].face = d.face_parent[r];
+      found[static_cast<std::size_t>(i)].bary = d.face_bary.row(3 * r + k).transpose();
+    }
+  }
+  found.erase(std::remove_if(found.begin(), found.end(), [](const SurfacePoint& p) { return p.face < 0; }), found.end());
+  return found;
+}
+
+// Whether (V, F) has edges with more than two faces (then no manifold dual exists).
+bool has_nonmanifold_edges(const SurfaceDescription& input) { return input.topology.nonmanifold_edges > 0; }
+
+}  // namespace
+
+std::string SurfaceDescription::genus_text() const {
+  if (genus >= 0) return "genus " + std::to_string(genus);
+  if (non_orientable) return "non-orientable, Euler characteristic " + std::to_string(topology.euler_characteristic());
+  return "genus undefined (not a manifold)";
+}
+
+SurfaceDescription describe_surface(const TriangleMesh& mesh) {
+  SurfaceDescription d;
+  const int nv = static_cast<int>(mesh.V.rows());
+  d.topology = mesh_topology(mesh.F, nv);
+  d.genus = mesh_genus(mesh.F, nv);
+  if (d.topology.inconsistent_edges > 0 && d.topology.nonmanifold_edges == 0) {
+    ValidationOptions o;
+    o.check_self_intersections = false;
+    o.allow_non_orientable = true;
+    d.non_orientable = validate_triangle_mesh(mesh.V, mesh.F, o).orientable == 0;
+  }
+  return d;
+}
+
+RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options, const CvtCallback& progress) {
+  validate_mesh(mesh.V, mesh.F, "mesh");
+  const int sites = options.cvt.sites;
+  if (sites < 1) throw InvalidInputError("remesh_cvt: the number of sites must be >= 1, got " + std::to_string(sites));
+  if (!(options.min_vertices_per_site >= 0) || !std::isfinite(options.min_vertices_per_site))
+    throw InvalidInputError("remesh_cvt: min_vertices_per_site must be a number >= 0");
+  if (options.max_refinement_levels < 0 || options.repair_rounds < 0 || !(options.max_repair_fraction >= 0))
+    throw InvalidInputError("remesh_cvt: max_refinement_levels, repair_rounds and max_repair_fraction must be >= 0");
+  RemeshResult out;
+  auto t = Clock::now();
+  out.input = describe_surface(mesh);
+
+  // Enough resolution under every cell: midpoint subdivision keeps the surface and its topology.
+  TriangleMesh refined;
+  const TriangleMesh* work = &mesh;
+  while (options.min_vertices_per_site > 0 && out.refinement_levels < options.max_refinement_levels &&
+         static_cast<double>(work->V.rows()) < options.min_vertices_per_site * sites) {
+    refined = midpoint_subdivide(*work);
+    work = &refined;
+    ++out.refinement_levels;
+  }
+  out.cvt_vertices = static_cast<int>(work->V.rows());
+  if (sites > out.cvt_vertices)
+    throw InvalidInputError("remesh_cvt: " + std::to_string(sites) + " sites exceed the " +
+                            std::to_string(out.cvt_vertices) + " vertices of the " +
+                            (out.refinement_levels ? "refined " : "") + "input (raise max_refinement_levels)");
+  out.stage_seconds.emplace_back("refine", seconds_since(t));
+
+  t = Clock::now();
+  Eigen::VectorXd metric;
+  const Laplacian laplacian = options.anisotropy > 0 ? anisotropic_laplacian(work->V, work->F, options.anisotropy, &metric)
+                                                     : cotan_laplacian(work->V, work->F);
+  out.degenerate_faces = static_cast<int>(laplacian.degenerate_faces.size());
+  out.stage_seconds.emplace_back("laplacian", seconds_since(t));
+
+  t = Clock::now();
+  out.cvt = centroidal_voronoi(work->V, work->F, laplacian, options.cvt, {}, progress, metric);
+  out.stage_seconds.emplace_back("cvt", seconds_since(t));
+
+  // Closed-ball repair: split the cells at non-manifold spots and run the CVT again from all sites.
+  t = Clock::now();
+  if (options.cvt.build_dual && !has_nonmanifold_edges(out.input)) {
+    const int budget = static_cast<int>(options.max_repair_fraction * sites);
+    CvtOptions again = options.cvt;
+    again.surface_lloyd_iterations = std::min(again.surface_lloyd_iterations, again.surface_lloyd_split_iterations);
+    const double spacing = std::sqrt(surface_area(work->V, work->F) / sites);
+    while (out.repair_rounds < options.repair_rounds && out.repair_sites < budget) {
+      std::vector<int> bad = cells_breaking_closed_ball(out.cvt.dual, out.input);
+      if (bad.empty()) break;
+      if (static_cast<int>(bad.size()) > budget - out.repair_sites) bad.resize(static_cast<std::size_t>(budget - out.repair_sites));
+      std::vector<SurfacePoint> added = farthest_points_of_cells(out.cvt.diagram, out.cvt.positions, bad, 1e-6 * spacing);
+      if (added.empty()) break;
+      std::vector<SurfacePoint> start = out.cvt.sites;
+      start.insert(start.end(), added.begin(), added.end());
+      out.cvt = centroidal_voronoi(work->V, work->F, laplacian, again, start, progress, metric);
+      out.repair_sites += static_cast<int>(added.size());
+      ++out.repair_rounds;
+    }
+  }
+  out.stage_seconds.emplace_back("repair", seconds_since(t));
+
+  t = Clock::now();
+  out.mesh.V = out.cvt.dual.V;
+  out.mesh.F = out.cvt.dual.F;
+  out.quality = triangle_quality(out.mesh.V, out.mesh.F);
+  if (options.cvt.build_dual) out.checks = validate_triangle_mesh(out.mesh.V, out.mesh.F, dual_checks(out.input));
+  out.stage_seconds.emplace_back("checks", seconds_since(t));
+  out.iterations = static_cast<int>(out.cvt.iterations.size());
+  out.converged = out.cvt.converged;
+  out.sites = out.cvt.sites;
+  for (SurfacePoint& p : out.sites)
+    for (int level = 0; level < out.refinement_levels; ++level) p = subdivision_parent(p);
+  return out;
+}
+
+}  // namespace heatcvt
