@@ -197,6 +197,9 @@ int main(int argc, char** argv) {
     for (int comp : r.diagram.unreached_components)
       log("warning: connected component " + std::to_string(comp) + " of " + mesh_path +
           " has no site and gets no cell");
+    if (res.mesh.F.rows() == 0)
+      throw InvalidInputError(mesh_path + ": the dual of the CVT has no triangles (no point where three cells meet); "
+                              "try more sites");
     const ValidationReport& checks = res.checks;
     const TriangleQuality& q = res.quality;
 

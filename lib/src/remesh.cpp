@@ -41,7 +41,10 @@ std::vector<int> cells_breaking_closed_ball(const DualMesh& dual, const SurfaceD
   o.expected_genus = -1;
   o.max_listed = static_cast<int>(dual.V.rows());
   std::vector<int> cells;
-  if (dual.F.rows() == 0) return cells;
+  if (dual.F.rows() == 0) {  // no Voronoi vertex at all (e.g. every cell a ring around a thin tube)
+    for (int s = 0; s < static_cast<int>(dual.V.rows()); ++s) cells.push_back(s);
+    return cells;
+  }
   const ValidationReport rep = validate_triangle_mesh(dual.V, dual.F, o);
   for (const char* name : kManifoldChecks) {
     const MeshCheck* c = rep.find(name);
@@ -169,7 +172,14 @@ RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options, 
   out.mesh.V = out.cvt.dual.V;
   out.mesh.F = out.cvt.dual.F;
   out.quality = triangle_quality(out.mesh.V, out.mesh.F);
-  if (options.cvt.build_dual) out.checks = validate_triangle_mesh(out.mesh.V, out.mesh.F, dual_checks(out.input));
+  if (options.cvt.build_dual && out.mesh.F.rows() > 0) {
+    out.checks = validate_triangle_mesh(out.mesh.V, out.mesh.F, dual_checks(out.input));
+  } else if (options.cvt.build_dual) {
+    MeshCheck empty;
+    empty.name = "has_triangles";
+    empty.detail = "the dual has no triangles (no point where three cells meet)";
+    out.checks.checks.push_back(empty);
+  }
   out.stage_seconds.emplace_back("checks", seconds_since(t));
   out.iterations = static_cast<int>(out.cvt.iterations.size());
   out.converged = out.cvt.converged;

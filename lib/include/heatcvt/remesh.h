@@ -71,7 +71,9 @@ struct RemeshResult {
   TriangleMesh mesh;                 ///< the dual triangulation of the CVT: vertex i = sites[i] (input units)
   std::vector<SurfacePoint> sites;   ///< the final sites on the input mesh (faces and barycentric coordinates of the input)
   TriangleQuality quality;           ///< φmin, φm of `mesh`
-  ValidationReport checks;           ///< validate_triangle_mesh() of `mesh` against the input's topology
+  /// validate_triangle_mesh() of `mesh` against the input's topology; a dual without triangles
+  /// gets the one failed check "has_triangles" instead.
+  ValidationReport checks;
   SurfaceDescription input;          ///< topology of the input
   int iterations = 0;                ///< heat Lloyd iterations run (last CVT)
   bool converged = false;            ///< stopped by the tolerance (last CVT)
