@@ -234,7 +234,8 @@ int main(int argc, char** argv) {
           .add("flipped_triangles", r.dual.flipped_against_input)
           .add("unused_sites", static_cast<long>(r.dual.unused_sites.size()))
           .add("refinement_levels", res.refinement_levels).add("cvt_vertices", res.cvt_vertices)
-          .add("repair_rounds", res.repair_rounds).add("repair_sites", res.repair_sites);
+          .add("repair_rounds", res.repair_rounds).add("repair_sites", res.repair_sites)
+          .add("repair_dropped_sites", res.repair_dropped_sites);
       cli::JsonObject stages;
       for (const auto& [name, seconds] : res.stage_seconds) stages.add(name, seconds);
       rep.add_object("stages", stages);
@@ -264,7 +265,8 @@ int main(int argc, char** argv) {
       for (const auto& [name, seconds] : res.stage_seconds) std::printf(" %s %.2f s;", name.c_str(), seconds);
       std::printf("\n");
       if (res.repair_rounds)
-        std::printf("  %d sites added in %d closed-ball repair rounds\n", res.repair_sites, res.repair_rounds);
+        std::printf("  %d sites added, %d dropped in %d closed-ball repair rounds\n", res.repair_sites,
+                    res.repair_dropped_sites, res.repair_rounds);
       std::printf("  quality: phi_min %.2f deg, phi_m %.2f deg, %.2f%% of triangles below 30 deg\n", q.min_angle_deg,
                   q.mean_min_angle_deg, 100.0 * q.below_30_fraction);
       std::printf("  cell-area variance %.4g%s\n", r.final_area_variance,

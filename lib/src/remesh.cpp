@@ -85,6 +85,40 @@ std::vector<SurfacePoint> farthest_points_of_cells(const VoronoiDiagram& d, cons
 // Whether (V, F) has edges with more than two faces (then no manifold dual exists).
 bool has_nonmanifold_edges(const SurfaceDescription& input) { return input.topology.nonmanifold_edges > 0; }
 
+// Closed-ball repair (RemeshOptions::repair_rounds): while the dual of out.cvt is not a manifold,
+// a new site at the farthest point of every cell at a non-manifold spot, the sites in no triangle
+// (cells enclosed by another cell, which is then an annulus) dropped, and the CVT again from
+// these sites with a few surface-Lloyd iterations (as after the CVT's own splits).
+void repair_closed_ball(const TriangleMesh& work, const Laplacian& laplacian, const Eigen::VectorXd& metric,
+                        const RemeshOptions& options, const CvtCallback& progress, RemeshResult& out) {
+  const int budget = static_cast<int>(options.max_repair_fraction * options.cvt.sites);
+  CvtOptions again = options.cvt;
+  again.surface_lloyd_iterations = std::min(again.surface_lloyd_iterations, again.surface_lloyd_split_iterations);
+  const double spacing = std::sqrt(surface_area(work.V, work.F) / options.cvt.sites);
+  while (out.repair_rounds < options.repair_rounds && out.repair_sites < budget) {
+    const int ns = static_cast<int>(out.cvt.sites.size());
+    std::vector<int> bad = cells_breaking_closed_ball(out.cvt.dual, out.input);
+    if (bad.empty()) break;
+    std::vector<unsigned char> drop(static_cast<std::size_t>(ns), 0);
+    if (out.cvt.dual.F.rows() > 0)
+      for (int s : out.cvt.dual.unused_sites) drop[static_cast<std::size_t>(s)] = 1;
+    bad.erase(std::remove_if(bad.begin(), bad.end(), [&](int s) { return drop[static_cast<std::size_t>(s)] != 0; }),
+              bad.end());
+    if (static_cast<int>(bad.size()) > budget - out.repair_sites) bad.resize(static_cast<std::size_t>(budget - out.repair_sites));
+    const std::vector<SurfacePoint> added = farthest_points_of_cells(out.cvt.diagram, out.cvt.positions, bad, 1e-6 * spacing);
+    std::vector<SurfacePoint> start;
+    for (int s = 0; s < ns; ++s)
+      if (!drop[static_cast<std::size_t>(s)]) start.push_back(out.cvt.sites[static_cast<std::size_t>(s)]);
+    const int dropped = ns - static_cast<int>(start.size());
+    if (added.empty() && dropped == 0) break;
+    start.insert(start.end(), added.begin(), added.end());
+    out.cvt = centroidal_voronoi(work.V, work.F, laplacian, again, start, progress, metric);
+    out.repair_sites += static_cast<int>(added.size());
+    out.repair_dropped_sites += dropped;
+    ++out.repair_rounds;
+  }
+}
+
 }  // namespace
 
 std::string SurfaceDescription::genus_text() const {
@@ -146,26 +180,8 @@ RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options, 
   out.cvt = centroidal_voronoi(work->V, work->F, laplacian, options.cvt, {}, progress, metric);
   out.stage_seconds.emplace_back("cvt", seconds_since(t));
 
-  // Closed-ball repair: split the cells at non-manifold spots and run the CVT again from all sites.
   t = Clock::now();
-  if (options.cvt.build_dual && !has_nonmanifold_edges(out.input)) {
-    const int budget = static_cast<int>(options.max_repair_fraction * sites);
-    CvtOptions again = options.cvt;
-    again.surface_lloyd_iterations = std::min(again.surface_lloyd_iterations, again.surface_lloyd_split_iterations);
-    const double spacing = std::sqrt(surface_area(work->V, work->F) / sites);
-    while (out.repair_rounds < options.repair_rounds && out.repair_sites < budget) {
-      std::vector<int> bad = cells_breaking_closed_ball(out.cvt.dual, out.input);
-      if (bad.empty()) break;
-      if (static_cast<int>(bad.size()) > budget - out.repair_sites) bad.resize(static_cast<std::size_t>(budget - out.repair_sites));
-      std::vector<SurfacePoint> added = farthest_points_of_cells(out.cvt.diagram, out.cvt.positions, bad, 1e-6 * spacing);
-      if (added.empty()) break;
-      std::vector<SurfacePoint> start = out.cvt.sites;
-      start.insert(start.end(), added.begin(), added.end());
-      out.cvt = centroidal_voronoi(work->V, work->F, laplacian, again, start, progress, metric);
-      out.repair_sites += static_cast<int>(added.size());
-      ++out.repair_rounds;
-    }
-  }
+  if (options.cvt.build_dual && !has_nonmanifold_edges(out.input)) repair_closed_ball(*work, laplacian, metric, options, progress, out);
   out.stage_seconds.emplace_back("repair", seconds_since(t));
 
   t = Clock::now();

@@ -57,9 +57,10 @@ struct RemeshOptions {
   double min_vertices_per_site = 8.0;
   /// At most this many midpoint subdivisions (each multiplies #F by 4). Default 4.
   int max_refinement_levels = 4;
-  /// Closed-ball repair: at most this many rounds of "a new site in every cell at a non-manifold
-  /// spot of the dual (cells wrapping a thin part, touching themselves or split), then the CVT
-  /// again from all sites" while the dual is not a manifold (on inputs without non-manifold
+  /// Closed-ball repair: at most this many rounds of "a new site at the farthest point of every
+  /// cell at a non-manifold spot of the dual (cells wrapping a thin part, touching themselves or
+  /// split), the sites in no dual triangle (a cell enclosed by another) dropped, then the CVT
+  /// again from these sites" while the dual is not a manifold (on inputs without non-manifold
   /// edges). 0 = off. Default 3.
   int repair_rounds = 3;
   /// Sites added by the repair rounds, at most this fraction of cvt.sites in total. Default 0.1.
@@ -82,6 +83,7 @@ struct RemeshResult {
   int degenerate_faces = 0;          ///< faces without heat conduction (Laplacian::degenerate_faces)
   int repair_rounds = 0;             ///< closed-ball repair rounds run
   int repair_sites = 0;              ///< sites added by them
+  int repair_dropped_sites = 0;      ///< sites in no dual triangle dropped by them (a cell enclosed by another)
   /// The last CVT: its heat Voronoi diagram lives on the refined mesh (cvt_vertices vertices),
   /// its sites on the refined mesh's faces; statistics of every iteration.
   CvtResult cvt;
