@@ -94,6 +94,7 @@ void repair_closed_ball(const TriangleMesh& work, const Laplacian& laplacian, co
   const int budget = static_cast<int>(options.max_repair_fraction * options.cvt.sites);
   CvtOptions again = options.cvt;
   again.surface_lloyd_iterations = std::min(again.surface_lloyd_iterations, again.surface_lloyd_split_iterations);
+  again.iterations = std::min(again.iterations, options.repair_iterations);
   const double spacing = std::sqrt(surface_area(work.V, work.F) / options.cvt.sites);
   while (out.repair_rounds < options.repair_rounds && out.repair_sites < budget) {
     const int ns = static_cast<int>(out.cvt.sites.size());
@@ -147,8 +148,10 @@ RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options, 
   if (sites < 1) throw InvalidInputError("remesh_cvt: the number of sites must be >= 1, got " + std::to_string(sites));
   if (!(options.min_vertices_per_site >= 0) || !std::isfinite(options.min_vertices_per_site))
     throw InvalidInputError("remesh_cvt: min_vertices_per_site must be a number >= 0");
-  if (options.max_refinement_levels < 0 || options.repair_rounds < 0 || !(options.max_repair_fraction >= 0))
-    throw InvalidInputError("remesh_cvt: max_refinement_levels, repair_rounds and max_repair_fraction must be >= 0");
+  if (options.max_refinement_levels < 0 || options.repair_rounds < 0 || options.repair_iterations < 0 ||
+      !(options.max_repair_fraction >= 0))
+    throw InvalidInputError(
+        "remesh_cvt: max_refinement_levels, repair_rounds, repair_iterations and max_repair_fraction must be >= 0");
   RemeshResult out;
   auto t = Clock::now();
   out.input = describe_surface(mesh);

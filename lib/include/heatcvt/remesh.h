@@ -63,6 +63,10 @@ struct RemeshOptions {
   /// again from these sites" while the dual is not a manifold (on inputs without non-manifold
   /// edges). 0 = off. Default 3.
   int repair_rounds = 3;
+  /// Heat Lloyd iterations of the CVT of a repair round, at most (its start from the previous
+  /// sites plus the new ones is already near a CVT: the round is there to give every cell a
+  /// site, the start's surface-Lloyd iterations settle them). Default 4.
+  int repair_iterations = 4;
   /// Sites added by the repair rounds, at most this fraction of cvt.sites in total. Default 0.1.
   double max_repair_fraction = 0.1;
 };
