@@ -1,8 +1,9 @@
 // Per-phase profile of the CVT on a point cloud (development aid for cloud2mesh's speed):
-//   bench_point_cvt_profile [mesh=kitten.obj] [points=50000] [sites=3000] [iterations=30] [threads=2]
+//   bench_point_cvt_profile [mesh=kitten.obj] [points=50000] [sites=3000] [iterations=6] [threads=2]
 // Samples `points` points (seed 11, no noise) from ../shared/data/meshes/<mesh>, builds the point
-// Laplacian, and runs the heat CVT with cloud2mesh's default Lloyd options (ReconstructionOptions),
-// printing the time of each Lloyd phase. The reconstruction steps after the CVT are not run.
+// Laplacian, and runs the heat CVT with cloud2mesh's CVT options (reconstruction_cvt_options() of the
+// default ReconstructionOptions: the surface-Lloyd start included), printing the time of each Lloyd
+// phase. The reconstruction steps after the CVT are not run.
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -19,15 +20,11 @@ using namespace heatcvt;
 int main(int argc, char** argv) {
   const std::string mesh = argc > 1 ? argv[1] : "kitten.obj";
   const int points = argc > 2 ? std::atoi(argv[2]) : 50000;
-  const ReconstructionOptions defaults;
-  CvtOptions o;
-  o.sites = argc > 3 ? std::atoi(argv[3]) : defaults.sites;
-  o.iterations = argc > 4 ? std::atoi(argv[4]) : defaults.iterations;
-  o.threads = argc > 5 ? std::atoi(argv[5]) : 2;
-  o.initialization = defaults.farthest_point_start ? CvtInitialization::farthest_point : CvtInitialization::random;
-  o.graph_lloyd_iterations = defaults.farthest_point_start ? 20 : 0;
-  o.relaxation = defaults.lloyd_relaxation;
-  o.build_dual = false;
+  ReconstructionOptions defaults;
+  if (argc > 3) defaults.sites = std::atoi(argv[3]);
+  if (argc > 4) defaults.iterations = std::atoi(argv[4]);
+  defaults.threads = argc > 5 ? std::atoi(argv[5]) : 2;
+  CvtOptions o = reconstruction_cvt_options(defaults);  // the CVT cloud2mesh runs (start included)
   if (const char* e = std::getenv("CVT_DROP_TOLERANCE")) o.drop_tolerance = std::atof(e);  // development override
   const TriangleMesh src = read_mesh(std::string(HEATCVT_DATA_DIR) + "/meshes/" + mesh);
   const Eigen::MatrixX3d P = sample_surface(src.V, src.F, points, 11);
@@ -48,14 +45,15 @@ int main(int argc, char** argv) {
     extrinsic.intrinsic_delaunay = false;
     (void)point_laplacian(P, extrinsic);
     const double extrinsic_seconds = bench::now_seconds() - t1;
+    const int fit_k = static_cast<int>(defaults.cloud.fit_cells * points / o.sites);
     t1 = bench::now_seconds();
-    (void)k_nearest_neighbors(P, 4 * points / o.sites, o.threads);
+    (void)k_nearest_neighbors(P, fit_k, o.threads);
     const double fit_knn_seconds = bench::now_seconds() - t1;
     t1 = bench::now_seconds();
     Eigen::MatrixX3d N = pl.normals;
-    orient_normals_mst(P, N, 10, o.threads);
+    orient_normals_mst(P, N, defaults.cloud.orientation_neighbors, o.threads);
     std::printf("without intrinsic Delaunay %.3f s; reconstruction's fit kNN (k = %d) %.3f s, MST orientation %.3f s\n",
-                extrinsic_seconds, 4 * points / o.sites, fit_knn_seconds, bench::now_seconds() - t1);
+                extrinsic_seconds, fit_k, fit_knn_seconds, bench::now_seconds() - t1);
   }
   const CvtResult r = centroidal_voronoi(P, pl.triangles, pl.laplacian, o, {}, [](const CvtIterationStats& s) {
     std::printf("it %3d  %.3f s (voronoi %.3f [solve %.3f tess %.3f], centroid %.3f)  |I| %.0f  max move %.3g\n",

@@ -217,6 +217,27 @@ int main(int argc, char** argv) {
     std::stringstream ss(pos[2]);
     for (std::string s; std::getline(ss, s, ',');) shapes.push_back(s);
   }
+  ReconstructionOptions heat_options;
+  heat_options.sites = sites;
+  heat_options.threads = threads;
+  if (anisotropy >= 0) heat_options.anisotropy = anisotropy;
+  if (iterations >= 0) heat_options.iterations = iterations;
+  if (relaxation >= 0) heat_options.lloyd_relaxation = relaxation;
+  if (tolerance >= 0) heat_options.lloyd_tolerance = tolerance;
+  if (random_start) heat_options.farthest_point_start = false;
+  if (fast_start) heat_options.farthest_point_start = true;
+  if (surface_lloyd >= 0) heat_options.surface_lloyd_iterations = surface_lloyd;
+  if (points_per_site >= 0) heat_options.cvt_points_per_site = points_per_site;
+  if (polish >= 0) heat_options.relaxation_iterations = polish;
+  if (no_smooth) heat_options.smooth_cvt_points = false;
+  {
+    const CvtOptions c = reconstruction_cvt_options(heat_options);  // what reconstruct_surface runs
+    std::fprintf(stderr, "heatcvt CVT: %d sites, %d heat iterations, %s start, %d surface-Lloyd iterations (omega %.2f), "
+                 "%d graph-Lloyd iterations, relaxation %.2f, Voronoi rings %d\n", c.sites, c.iterations,
+                 c.initialization == CvtInitialization::farthest_point ? "farthest-point" : "random",
+                 c.surface_lloyd_iterations, c.surface_lloyd_relaxation, c.graph_lloyd_iterations, c.relaxation,
+                 c.voronoi_rings);
+  }
   std::vector<double> noises;
   if (clean) noises.push_back(0.0);
   if (noisy) noises.push_back(0.0025);
@@ -255,20 +276,7 @@ int main(int argc, char** argv) {
       };
       ReconstructionResult heat;
       run("heatcvt (-n " + std::to_string(sites) + ")", [&]() {
-        ReconstructionOptions o;
-        o.sites = sites;
-        o.threads = threads;
-        if (anisotropy >= 0) o.anisotropy = anisotropy;
-        if (iterations >= 0) o.iterations = iterations;
-        if (relaxation >= 0) o.lloyd_relaxation = relaxation;
-        if (tolerance >= 0) o.lloyd_tolerance = tolerance;
-        if (random_start) o.farthest_point_start = false;
-        if (fast_start) o.farthest_point_start = true;
-        if (surface_lloyd >= 0) o.surface_lloyd_iterations = surface_lloyd;
-        if (points_per_site >= 0) o.cvt_points_per_site = points_per_site;
-        if (polish >= 0) o.relaxation_iterations = polish;
-        if (no_smooth) o.smooth_cvt_points = false;
-        heat = reconstruct_surface(P, o);
+        heat = reconstruct_surface(P, heat_options);
         return heat.mesh;
       });
       cell.back().heat = true;

@@ -54,25 +54,46 @@ Eigen::Vector3d closest_point_barycentric(const Eigen::Vector3d& p, const Eigen:
   return {1 - v - w, v, w};
 }
 
+struct ClosestPointTree::Impl {
+  Eigen::MatrixX3d V;
+  Eigen::MatrixX3i F;
+  std::vector<Triangle> triangles;
+  Tree tree;
+};
+
+ClosestPointTree::ClosestPointTree(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F) : impl_(new Impl) {
+  if (F.rows() == 0) throw InvalidInputError("closest_surface_points: the mesh has no faces");
+  impl_->V = V;
+  impl_->F = F;
+  impl_->triangles.reserve(F.rows());
+  auto P = [&](int i) { return Point(V(i, 0), V(i, 1), V(i, 2)); };
+  for (int f = 0; f < F.rows(); ++f) impl_->triangles.emplace_back(P(F(f, 0)), P(F(f, 1)), P(F(f, 2)));
+  impl_->tree.insert(impl_->triangles.cbegin(), impl_->triangles.cend());
+  impl_->tree.build();
+  impl_->tree.accelerate_distance_queries();
+}
+
+ClosestPointTree::~ClosestPointTree() = default;
+
+SurfacePoint ClosestPointTree::closest(const Eigen::Vector3d& p) const {
+  const auto hit = impl_->tree.closest_point_and_primitive(Point(p[0], p[1], p[2]));
+  SurfacePoint out;
+  out.face = static_cast<int>(hit.second - impl_->triangles.cbegin());
+  const Eigen::MatrixX3d& V = impl_->V;
+  const Eigen::MatrixX3i& F = impl_->F;
+  out.bary = closest_point_barycentric(p, V.row(F(out.face, 0)).transpose(), V.row(F(out.face, 1)).transpose(),
+                                       V.row(F(out.face, 2)).transpose());
+  return out;
+}
+
 std::vector<SurfacePoint> closest_surface_points(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
                                                  const Eigen::MatrixX3d& points) {
-  if (F.rows() == 0) throw InvalidInputError("closest_surface_points: the mesh has no faces");
-  std::vector<Triangle> triangles;
-  triangles.reserve(F.rows());
-  auto P = [&](int i) { return Point(V(i, 0), V(i, 1), V(i, 2)); };
-  for (int f = 0; f < F.rows(); ++f) triangles.emplace_back(P(F(f, 0)), P(F(f, 1)), P(F(f, 2)));
-  Tree tree(triangles.cbegin(), triangles.cend());
-  tree.accelerate_distance_queries();
+  const ClosestPointTree tree(V, F);
   std::vector<SurfacePoint> out(points.rows());
   for (int i = 0; i < points.rows(); ++i) {
     if (!points.row(i).allFinite())
       throw InvalidInputError("closest_surface_points: point " + std::to_string(i) + " is not finite");
-    const Point q(points(i, 0), points(i, 1), points(i, 2));
-    const auto hit = tree.closest_point_and_primitive(q);
-    const int f = static_cast<int>(hit.second - triangles.cbegin());
-    out[i].face = f;
-    out[i].bary = closest_point_barycentric(points.row(i).transpose(), V.row(F(f, 0)).transpose(),
-                                            V.row(F(f, 1)).transpose(), V.row(F(f, 2)).transpose());
+    out[i] = tree.closest(points.row(i).transpose());
   }
   return out;
 }

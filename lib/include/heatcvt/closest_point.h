@@ -2,11 +2,27 @@
 /// \file closest_point.h
 /// Snapping points in space to the surface (e.g. user-given generators, `--sites-file`).
 #include <Eigen/Core>
+#include <memory>
 #include <vector>
 
 #include "heatcvt/mesh.h"
 
 namespace heatcvt {
+
+/// Closest-point queries on one triangle mesh (CGAL AABB tree built once; exact point-triangle
+/// distance). Safe for concurrent queries.
+class ClosestPointTree {
+ public:
+  /// \throw InvalidInputError on a mesh without faces.
+  ClosestPointTree(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F);
+  ~ClosestPointTree();
+  /// The point of the mesh closest to p, as a face and barycentric coordinates.
+  SurfacePoint closest(const Eigen::Vector3d& p) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 /// For every row of `points` (#P by 3) the closest point on the triangle mesh (V, F), as a
 /// face and barycentric coordinates (CGAL AABB tree; exact point-triangle distance).

@@ -11,10 +11,44 @@
 #include <utility>
 #include <vector>
 
+#include "heatcvt/cvt.h"
 #include "heatcvt/mesh.h"
+#include "heatcvt/mesher/projector.h"
+#include "heatcvt/mesher/surface_mesher.h"
 #include "heatcvt/validate.h"
 
 namespace heatcvt {
+
+/// Tuning of the cloud side of reconstruct_surface() (before the surface mesher), each with its
+/// documented default.
+struct CloudPreparationOptions {
+  /// k of the MST normal orientation (orient_normals_mst(); at most `neighbors`). Default 10.
+  int orientation_neighbors = 10;
+  /// Offset penalty of the MST orientation (orient_normals_mst()): edges leaving the tangent
+  /// plane are taken last, so the two sides of a part thinner than the neighbourhood get opposite
+  /// normals. Default 1.
+  double orientation_offset_penalty = 1.0;
+  /// Fit neighbourhoods hold about this many cells' worth of points (about one output edge
+  /// length across, so that noise averages out instead of passing into the vertex positions),
+  /// at least `neighbors` points. Default 4.
+  double fit_cells = 4.0;
+  int max_fit_neighbors = 100;  ///< upper bound of the fit neighbourhood size. Default 100.
+  /// A CVT point is smoothed onto the fitted surface only when that moves it by at most its mean
+  /// distance to this many nearest CVT points (tips of thin parts, where the fit is not to be
+  /// trusted, keep their points). Default 6.
+  int smoothing_spacing_neighbors = 6;
+  /// The point Laplacian leaves out neighbours of opposite oriented normal (the other side of a
+  /// thin part) only when at most this fraction of the CVT points has one: where they are common
+  /// the orientation itself is unreliable (cluttered scenes). Default 0.08.
+  double max_crossing_fraction = 0.08;
+  /// The voxel subset of the CVT points is used only when it has fewer than this fraction of the
+  /// points. Default 0.8.
+  double max_subset_fraction = 0.8;
+  /// Graph-Lloyd iterations of the farthest-point start (`farthest_point_start`). Default 20.
+  int graph_lloyd_iterations = 20;
+  /// Over-relaxation ω of the surface Lloyd start (CvtOptions::surface_lloyd_relaxation). Default 1.5.
+  double surface_lloyd_relaxation = 1.5;
+};
 
 /// Options of reconstruct_surface(). Every default is the one `cloud2mesh --help` shows.
 struct ReconstructionOptions {
@@ -76,7 +110,23 @@ struct ReconstructionOptions {
   /// positions) before the Laplacian is built: noise of the scan does not reach the Laplacian,
   /// whose factor and localized solves are then as cheap as on a clean scan. Default true.
   bool smooth_cvt_points = true;
+  /// Tuning of normals, fit neighbourhoods, CVT points and the CVT start.
+  CloudPreparationOptions cloud;
+  /// Tuning of the cloud's local surface fit (the projector of the mesher). Its fit_neighbors,
+  /// walk_neighbors and threads are set by reconstruct_surface() from `neighbors`, `sites`,
+  /// cloud.fit_cells / max_fit_neighbors and `threads`.
+  CloudFitOptions fit;
+  /// Tuning of the post-CVT stages (mesher/surface_mesher.h). mesher.holes.max_hole_edges,
+  /// mesher.polish.relaxation_iterations and mesher.threads are set by reconstruct_surface() from
+  /// `max_hole_edges`, `relaxation_iterations` and `threads` above.
+  SurfaceMesherOptions mesher;
 };
+
+/// The CVT options reconstruct_surface() runs centroidal_voronoi() with (sites, iterations,
+/// seed, threads, time coefficient, start: the surface Lloyd on farthest-point sites, or the
+/// graph-Lloyd farthest-point start, or the paper's random start; over-relaxation, tolerance;
+/// no dual). Benchmarks of the CVT on clouds call it to run the same CVT.
+CvtOptions reconstruction_cvt_options(const ReconstructionOptions& options);
 
 /// Progress of a reconstruction: a stage name and a fraction in [0, 1].
 using ReconstructionCallback = std::function<void(const std::string& stage, double fraction)>;
@@ -116,32 +166,32 @@ struct ReconstructionResult {
 ///
 /// Pipeline (all in the cloud's bounding_box_frame, restored at the end):
 ///  1. exact duplicates merged; optional statistical outlier removal and voxel grid (PCL); the
-///     CVT points: a voxel subset of about `cvt_points_per_site` × `sites` points (steps 2-4 run
-///     on them; the fitted surface of step 5 and the polish use every point);
+///     CVT points: a voxel subset of about `cvt_points_per_site` × `sites` points (steps 2-3 and
+///     the candidates run on them; the fitted surface and the polish use every point);
 ///  2. point_laplacian() with k = `neighbors` (tufted intrinsic Delaunay, kNN via FLANN), PCA
 ///     normals oriented by orient_normals_mst() (edges leaving the tangent plane penalised) before
-///     it; where few points (<= 8 %) have a neighbour of opposite oriented normal (the two sides of
-///     a part thinner than the neighbourhood) those neighbours are left out of the local
-///     triangulations (PointLaplacianOptions::oriented_normals); with anisotropy λ > 0 the Laplacian is rebuilt
-///     from the edge lengths of the local triangles lifted to (p, λ n) ∈ R⁶ (paper §7.1);
-///  3. centroidal_voronoi() on (points, local triangles, Laplacian): `sites` sites, `iterations`
-///     heat Lloyd steps from seeded farthest-point sites relaxed by `surface_lloyd_iterations`
-///     of the cheap surface Lloyd (or the paper's seeded random start);
-///  4. dual triangles: every local triangle whose three corner points lie in three different cells,
-///     and every Voronoi vertex of the exact tessellation (each triple of its cells), witnesses
-///     the triangle of those three sites; candidates ordered by witness count, then
-///     by smallest angle, and accepted greedily when every edge stays shared by ≤ 2 triangles
-///     traversed in opposite directions (orientation from the MST-oriented normals);
-///  5. site positions projected to a weighted least-squares quadratic height field fitted to the
-///     k nearest points (PCA frame);
-///  6. non-manifold vertices resolved (largest fan kept), components of <= 4 triangles dropped,
-///     a second greedy pass over the remaining candidates (then also those turning around the rim
-///     of a thin part), holes filled (see max_hole_edges; max-min-angle triangulation),
-///     max-min-angle edge flips, then the polish of `relaxation_iterations` (tangential
-///     relaxation + flips, angle polish with the vertices of any self-intersection held, collapse
-///     of the edges of remaining slivers < 25°), components of < 20 triangles dropped, unused
-///     sites removed;
-///  7. validate_triangle_mesh() (require_closed = false: open scans legitimately keep boundaries).
+///     it; where few points (cloud.max_crossing_fraction) have a neighbour of opposite oriented
+///     normal (the two sides of a part thinner than the neighbourhood) those neighbours are left
+///     out of the local triangulations (PointLaplacianOptions::oriented_normals); with anisotropy
+///     λ > 0 the Laplacian is rebuilt from the edge lengths of the local triangles lifted to
+///     (p, λ n) ∈ R⁶ (paper §7.1);
+///  3. centroidal_voronoi() on (points, local triangles, Laplacian) with
+///     reconstruction_cvt_options(): `sites` sites, `iterations` heat Lloyd steps from seeded
+///     farthest-point sites relaxed by `surface_lloyd_iterations` of the cheap surface Lloyd (or
+///     the paper's seeded random start);
+///  4. site positions projected to the cloud's fitted surface (CloudSurfaceProjector: a weighted
+///     least-squares quadratic height field over the PCA plane of the nearest points); dual
+///     candidates (dual_candidates()): every local triangle whose three corner points lie in
+///     three different cells, and every Voronoi vertex of the exact tessellation (each triple of
+///     its cells), witnesses the triangle of those three sites;
+///  5. the surface mesher's stages with the fitted surface as projector (mesh_from_candidates(),
+///     finish_mesh(); each stage documented in its header under mesher/): greedy manifold
+///     extraction ordered by witness count then smallest angle, non-manifold vertices resolved,
+///     a second pass, hole filling (see max_hole_edges), untangling, valence-3 removal,
+///     max-min-angle flips, the polish of `relaxation_iterations` (tangential relaxation +
+///     flips, angle polish), sliver collapse, long-edge split, small pieces removed, closed
+///     pieces outward, unused sites removed;
+///  6. validate_triangle_mesh() (require_closed = false: open scans legitimately keep boundaries).
 /// Deterministic for a given input, options and seed, independent of `threads`.
 /// \throw InvalidInputError for empty / too small clouds, sites < 4 or > usable points, bad options.
 ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P, const ReconstructionOptions& options = {},

@@ -1,0 +1,32 @@
+#pragma once
+/// \file angle_polish.h
+/// Angle polish: vertices moved within their tangent plane to maximise the smallest angle of
+/// their one-ring, projected back to the surface.
+#include <vector>
+
+#include "heatcvt/mesher/projector.h"
+#include "heatcvt/mesher/working_mesh.h"
+
+namespace heatcvt {
+
+/// Options of angle_polish().
+struct AnglePolishOptions {
+  /// A ring's smallest angle counts only up to this cap; above it the sum of the ring's smallest
+  /// angles (what φm averages) decides. Default 35°.
+  double angle_cap_deg = 35;
+  double initial_step = 0.1;   ///< pattern-search step, times the ring's mean edge length. Default 0.1.
+  double final_step = 0.005;   ///< search stops below this step (times mean edge). Default 0.005.
+  int max_search_steps = 24;   ///< Default 24.
+};
+
+/// Gauss–Seidel rounds over the vertices in a fixed colouring (a greedy colouring of the vertex
+/// graph in index order; the vertices of one colour move in parallel, so the result does not
+/// depend on the thread count). Each interior vertex not `frozen` is moved by an 8-direction
+/// pattern search from the ring's area-weighted centroid and its position, in its tangent plane;
+/// the target is projected to the surface and kept only if, measured in 3D, (ring min capped,
+/// ring sum) improves and no ring triangle turns against the vertex normal. Stops after `rounds`
+/// or a round without moves. Returns the moves kept.
+int angle_polish(WorkingMesh& mesh, const SurfaceProjector& surface, int rounds, const std::vector<char>& frozen,
+                 const AnglePolishOptions& options = {}, int threads = 0);
+
+}  // namespace heatcvt

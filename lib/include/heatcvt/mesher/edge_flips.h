@@ -1,0 +1,32 @@
+#pragma once
+/// \file edge_flips.h
+/// Edge flips on a consistently oriented manifold mesh: max-min-angle (Delaunay-like) flips that
+/// repair the diagonals the discrete labels got wrong, and valence-equalising flips
+/// (Botsch–Kobbelt) for the polish.
+#include <vector>
+
+#include "heatcvt/mesher/working_mesh.h"
+
+namespace heatcvt {
+
+/// Options of flip_edges().
+struct FlipOptions {
+  int max_passes = 5;        ///< passes over the faces (stops earlier when one flips nothing). Default 5.
+  /// false: flip when the smallest angle of the pair increases. true: flip when it brings the
+  /// four valences closer to 6, on nearly flat pairs, keeping the pair's smallest angle above
+  /// `valence_min_angle_deg` or improving it. Default false.
+  bool valence_mode = false;
+  double flat_dihedral_deg = 20;       ///< "nearly flat" for valence flips. Default 20°.
+  double valence_min_angle_deg = 30;   ///< Default 30°.
+  /// No flip whose new triangles deviate more than this from the old pair's mean normal (no folds).
+  /// Default 30°.
+  double max_normal_deviation_deg = 30;
+};
+
+/// Flips edges (a, b) of face pairs (a, b, c), (b, a, d) into (c, d) when (c, d) is not an edge
+/// yet, a and b keep valence ≥ 3 and the rule of `options` holds; with `only_at`, only edges
+/// with an end vertex v with (*only_at)[v]. Faces are visited in order, one flip per face per
+/// pass. Returns the number of flips.
+int flip_edges(WorkingMesh& mesh, const FlipOptions& options = {}, const std::vector<char>* only_at = nullptr);
+
+}  // namespace heatcvt

@@ -1,0 +1,28 @@
+#pragma once
+/// \file mesher_stats.h
+/// What the post-CVT stages of the surface mesher did: counts shared by the stages (several
+/// stages flip, remove or add faces) and the wall time of each stage.
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace heatcvt {
+
+/// Counters of the surface mesher's stages (ReconstructionResult carries the same figures).
+struct MesherStats {
+  int candidate_triangles = 0;  ///< dual candidates that span one sheet of the surface
+  int rejected_triangles = 0;   ///< candidates not kept (non-manifold or orientation conflict)
+  int removed_triangles = 0;    ///< kept, then removed (non-manifold vertices, small pieces, intersections)
+  int holes_filled = 0;         ///< boundary loops triangulated by fill_holes()
+  int flipped_edges = 0;        ///< edge flips
+  bool polish_fallback = false;      ///< the valence-flip polish self-intersected; redone with Delaunay flips only
+  bool angle_polish_undone = false;  ///< the angle polish self-intersected and was undone
+  int collapsed_edges = 0;      ///< edges of slivers collapsed
+  int split_edges = 0;          ///< long edges of slivers split
+  int faces_turned_outward = 0; ///< faces of closed pieces reversed to face outward
+  int unused_vertices = 0;      ///< vertices in no face (dropped by compaction)
+  /// Wall time of each stage in pipeline order (name, seconds).
+  std::vector<std::pair<std::string, double>> stage_seconds;
+};
+
+}  // namespace heatcvt

@@ -1,0 +1,17 @@
+#pragma once
+/// \file orientation.h
+/// Removal of tiny pieces and outward orientation of closed pieces.
+#include "heatcvt/mesher/working_mesh.h"
+
+namespace heatcvt {
+
+/// Removes the vertex-connected pieces with fewer than `min_faces` faces (a few sites of a thin
+/// tip that closed up on their own), unless that would remove every face. Returns the faces removed.
+int remove_small_pieces(WorkingMesh& mesh, int min_faces = 20);
+
+/// Every closed vertex-connected piece (no boundary half-edge) with negative enclosed volume
+/// (signed tetrahedra from the vertices' centroid) is turned inside out. Open pieces keep their
+/// orientation. Returns the faces reversed.
+int orient_closed_pieces_outward(WorkingMesh& mesh);
+
+}  // namespace heatcvt

@@ -1,0 +1,104 @@
+#pragma once
+/// \file projector.h
+/// The surface a mesher's vertices live on. Every stage that moves a vertex (tangential
+/// relaxation, angle polish, sliver collapse, edge split) projects the new position through a
+/// SurfaceProjector, so the same stages run on a point cloud's fitted surface and on an input
+/// triangle mesh.
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+namespace heatcvt {
+
+/// Projection onto a surface known to the mesher only through this interface.
+/// Implementations are safe for concurrent const calls with distinct `hint` variables.
+class SurfaceProjector {
+ public:
+  virtual ~SurfaceProjector() = default;
+  /// The point of the surface nearest `x` (its local model around x) and the surface's unit
+  /// normal there, oriented like the surface's normals. `hint` is a per-vertex warm start
+  /// (an index of the implementation's own, −1 = none), updated to the one used.
+  virtual void project(const Eigen::Vector3d& x, int& hint, Eigen::Vector3d& position, Eigen::Vector3d& normal) const = 0;
+  /// Distance from `x` to the sampled surface (nearest sample point, or nearest surface point):
+  /// hole filling asks whether the surface continues beyond a boundary.
+  virtual double distance_to_samples(const Eigen::Vector3d& x) const = 0;
+};
+
+/// Options of the cloud's local surface fit.
+struct CloudFitOptions {
+  /// Points of each fit neighbourhood (the point and its k nearest). Default 30.
+  int fit_neighbors = 30;
+  /// Neighbours along which project()'s greedy walk towards the nearest point steps (the first
+  /// `walk_neighbors` of the fit neighbourhood). Default 30.
+  int walk_neighbors = 30;
+  /// A neighbourhood keeps only the points whose normal agrees with its centre's (the other side
+  /// of a thin part is left out) unless fewer than min(`min_oriented_points`, fit_neighbors / 2)
+  /// remain. Default 12.
+  int min_oriented_points = 12;
+  /// Below this many points the quadratic fit is not tried (weighted mean height instead). Default 10.
+  int min_quadratic_points = 10;
+  /// Rank threshold of the column-pivoting QR of the quadratic fit. Default 1e-8.
+  double rank_threshold = 1e-8;
+  /// The quadratic's height at the query is rejected (weighted mean height instead) when it is
+  /// farther than this many bandwidths from the query's own height: an extrapolation. Default 2.
+  double max_height_bandwidths = 2.0;
+  /// Steps of project()'s greedy walk on the kNN graph. Default 1000.
+  int max_walk_steps = 1000;
+  int threads = 0;  ///< for the kNN search; 0 = all cores. Default 0.
+};
+
+/// The surface of a point cloud: at a point c, the weighted least-squares quadratic height field
+/// over the PCA plane of c's fit neighbourhood (Gaussian weights of bandwidth the RMS planar
+/// radius around the query; a weighted mean height where the quadratic is ill-posed).
+/// project() walks greedily on the kNN graph from the hint to the cloud point nearest x and
+/// projects onto the fit there.
+class CloudSurfaceProjector final : public SurfaceProjector {
+ public:
+  /// P (#P by 3) and its oriented unit normals N (#P by 3). `knn` (#P by ≥ fit_neighbors, each
+  /// point's nearest others, nearest first) is computed when empty.
+  CloudSurfaceProjector(Eigen::MatrixX3d P, Eigen::MatrixX3d N, const CloudFitOptions& options = {},
+                        Eigen::MatrixXi knn = {});
+  void project(const Eigen::Vector3d& x, int& hint, Eigen::Vector3d& position, Eigen::Vector3d& normal) const override;
+  double distance_to_samples(const Eigen::Vector3d& x) const override;
+
+  /// The fit neighbourhood of cloud point c: c and its nearest points whose normal agrees with
+  /// c's (all of them when too few agree).
+  std::vector<int> neighbourhood(int c) const;
+  /// Projects x onto the fit around cloud point c; the normal is oriented like `orient`.
+  void project_at(int c, const Eigen::Vector3d& x, const Eigen::Vector3d& orient, Eigen::Vector3d& position,
+                  Eigen::Vector3d& normal) const;
+  /// Projects x onto the quadratic fitted to the points `nb`; the normal is oriented like `orient`.
+  void fit_and_project(const std::vector<int>& nb, const Eigen::Vector3d& x, const Eigen::Vector3d& orient,
+                       Eigen::Vector3d& position, Eigen::Vector3d& normal) const;
+  /// The cloud point nearest x reached by a greedy walk on the kNN graph from `start`.
+  int walk(int start, const Eigen::Vector3d& x) const;
+
+  const Eigen::MatrixX3d& points() const { return P_; }
+  const Eigen::MatrixX3d& normals() const { return N_; }
+  const Eigen::MatrixXi& knn() const { return knn_; }
+
+ private:
+  Eigen::MatrixX3d P_, N_;
+  CloudFitOptions options_;
+  Eigen::MatrixXi knn_;
+};
+
+class ClosestPointTree;
+
+/// The surface of a triangle mesh: exact closest point (CGAL AABB tree) and the normal
+/// interpolated there from the mesh's area-weighted vertex normals. `hint` is not used.
+class MeshSurfaceProjector final : public SurfaceProjector {
+ public:
+  /// \throw InvalidInputError on a mesh without faces.
+  MeshSurfaceProjector(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F);
+  ~MeshSurfaceProjector() override;
+  void project(const Eigen::Vector3d& x, int& hint, Eigen::Vector3d& position, Eigen::Vector3d& normal) const override;
+  double distance_to_samples(const Eigen::Vector3d& x) const override;
+
+ private:
+  Eigen::MatrixX3d V_, VN_;
+  Eigen::MatrixX3i F_;
+  std::unique_ptr<ClosestPointTree> tree_;
+};
+
+}  // namespace heatcvt

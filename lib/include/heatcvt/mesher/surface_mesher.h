@@ -1,0 +1,68 @@
+#pragma once
+/// \file surface_mesher.h
+/// The surface mesher: the stages after the CVT, shared by the reconstruction from a point cloud
+/// (the cloud's fitted surface as projector) and the remeshing of a triangle mesh (the input
+/// mesh as projector). From dual candidate triangles to a valid, polished mesh:
+/// manifold extraction → hole filling → untangling → relaxation polish → angle polish → sliver
+/// collapse → long-edge split → small pieces removed, closed pieces outward → compaction.
+#include <Eigen/Core>
+
+#include "heatcvt/mesh.h"
+#include "heatcvt/mesher/compaction.h"
+#include "heatcvt/mesher/dual_candidates.h"
+#include "heatcvt/mesher/edge_split.h"
+#include "heatcvt/mesher/hole_filling.h"
+#include "heatcvt/mesher/manifold_extraction.h"
+#include "heatcvt/mesher/mesher_stats.h"
+#include "heatcvt/mesher/orientation.h"
+#include "heatcvt/mesher/polish.h"
+#include "heatcvt/mesher/projector.h"
+#include "heatcvt/mesher/sliver_collapse.h"
+#include "heatcvt/mesher/untangle.h"
+#include "heatcvt/validate.h"
+
+namespace heatcvt {
+
+/// Options of every stage of the surface mesher, each with its documented defaults.
+struct SurfaceMesherOptions {
+  DualCandidateOptions candidates;
+  ManifoldOptions manifold;
+  HoleFillingOptions holes;
+  UntangleOptions untangle;
+  PolishOptions polish;  ///< polish.relaxation_iterations = 0 skips every polish stage
+  SliverCollapseOptions slivers;
+  EdgeSplitOptions split;
+  /// Vertex-connected pieces with fewer faces are removed at the end. Default 20.
+  int min_piece_faces = 20;
+  /// Worker threads of the parallel stages (overrides polish.threads and split.threads);
+  /// 0 = all cores. Results do not depend on it. Default 0.
+  int threads = 0;
+};
+
+/// Runs the stages from manifold extraction to long-edge split on `mesh` (vertices = sites with
+/// normals and projector anchors, no faces yet) with the candidates `candidates`, each stage
+/// timed into stats.stage_seconds ("extraction and holes", "untangle", "relaxation polish",
+/// "angle polish", "sliver collapse", "long-edge split").
+void mesh_from_candidates(WorkingMesh& mesh, const DualCandidates& candidates, const SurfaceProjector& surface,
+                          const SurfaceMesherOptions& options, MesherStats& stats);
+
+/// Removes the small pieces, turns closed pieces outward and compacts (the final stage of the
+/// mesher, "compact"). \throw Error when no face is left.
+TriangleMesh finish_mesh(WorkingMesh& mesh, const SurfaceMesherOptions& options, MesherStats& stats);
+
+/// Result of mesh_dual_surface().
+struct DualSurfaceResult {
+  TriangleMesh mesh;            ///< the repaired, polished surface
+  ValidationReport validation;  ///< validate_triangle_mesh() of `mesh` (require_closed = false)
+  MesherStats stats;            ///< counts and stage_seconds ("sites", the stages above, "compact", "validate")
+};
+
+/// The post-CVT stages on a dual triangulation: `sites` (#S by 3, e.g. CvtResult::dual.V) are
+/// projected to `surface` (positions and normals), the triangles of `dual_faces` (#F by 3 site
+/// indices, e.g. CvtResult::dual.F) are the candidates (dual_candidates_from_faces()), then
+/// mesh_from_candidates() and finish_mesh().
+/// \throw InvalidInputError on an index out of range or a non-finite site; Error when no face is left.
+DualSurfaceResult mesh_dual_surface(const Eigen::MatrixX3d& sites, const Eigen::MatrixX3i& dual_faces,
+                                    const SurfaceProjector& surface, const SurfaceMesherOptions& options = {});
+
+}  // namespace heatcvt

@@ -1,0 +1,122 @@
+#pragma once
+/// \file working_mesh.h
+/// The working mesh of the surface mesher: the triangle soup every post-CVT stage edits
+/// (positions, faces, per-vertex normal and projector anchor) with an edge index that its own
+/// operations keep up to date, and a checkpoint / rollback for "try an operation, undo it if the
+/// result self-intersects".
+#include <Eigen/Core>
+#include <array>
+#include <unordered_map>
+#include <vector>
+
+namespace heatcvt {
+
+/// A triangle as three vertex indices; its orientation is the order of the corners.
+using MeshFace = std::array<int, 3>;
+
+/// Positions, faces and per-vertex attributes of the surface being meshed.
+///
+/// Faces are kept in a vector whose order is part of the state: stages visit faces in that order
+/// (so results are deterministic), removal keeps the order of the remaining faces, additions go
+/// to the end. The edge index maps each directed edge (half-edge) a→b to the face that holds it
+/// (when several do, an orientation conflict, the one indexed last) and each undirected edge to the number of faces on it;
+/// the valence of a vertex is the number of distinct undirected edges at it. Every face operation
+/// below updates the index; positions and normals are public and may be written directly.
+class WorkingMesh {
+ public:
+  Eigen::MatrixX3d V;       ///< #V by 3 vertex positions
+  Eigen::MatrixX3d N;       ///< #V by 3 unit vertex normals (of the surface the projector fits)
+  std::vector<int> anchor;  ///< #V projector hints (SurfaceProjector::project), −1 = none
+
+  WorkingMesh() = default;
+  /// Vertices with their normals and anchors (same row count), no faces yet.
+  WorkingMesh(Eigen::MatrixX3d positions, Eigen::MatrixX3d normals, std::vector<int> anchors);
+
+  int num_vertices() const { return static_cast<int>(V.rows()); }
+  int num_faces() const { return static_cast<int>(faces_.size()); }
+  bool empty() const { return faces_.empty(); }
+  const std::vector<MeshFace>& faces() const { return faces_; }
+  const MeshFace& face(int f) const { return faces_[f]; }
+
+  /// Appends a vertex; returns its index.
+  int add_vertex(const Eigen::Vector3d& position, const Eigen::Vector3d& normal, int anchor_hint);
+  /// Appends a face; returns its index.
+  int add_face(const MeshFace& f);
+  /// Removes the last face (undoes add_face).
+  void pop_face();
+  /// Replaces face f by g (same index).
+  void replace_face(int f, const MeshFace& g);
+  /// Removes the faces with drop[f] != 0 (drop has one entry per face); the others keep their
+  /// order. Returns the number removed.
+  int remove_faces(const std::vector<char>& drop);
+  /// Replaces every face (the index is rebuilt).
+  void set_faces(std::vector<MeshFace> faces);
+
+  /// Flips the edge between corners k and k+1 of face f1 = (a, b, c) and the face f2 = (b, a, d)
+  /// on its other side: f1 becomes (c, a, d) and f2 (d, b, c).
+  void flip(int f1, int k, int f2);
+
+  /// Face holding the half-edge a→b, or −1.
+  int half_edge_face(int a, int b) const;
+  bool has_half_edge(int a, int b) const { return half_edge_face(a, b) >= 0; }
+  /// Number of faces on the undirected edge {a, b}.
+  int edge_face_count(int a, int b) const;
+  /// Distinct undirected edges at v.
+  int valence(int v) const { return v < static_cast<int>(valence_.size()) ? valence_[v] : 0; }
+  /// The faces at each vertex (#V lists, ascending face indices).
+  std::vector<std::vector<int>> vertex_faces() const;
+  /// Vertices on a boundary half-edge (one whose opposite half-edge is missing).
+  std::vector<char> boundary_vertices() const;
+
+  /// Everything a rollback restores: vertices, attributes, faces.
+  struct Checkpoint {
+    Eigen::MatrixX3d V, N;
+    std::vector<int> anchor;
+    std::vector<MeshFace> faces;
+  };
+  Checkpoint checkpoint() const { return {V, N, anchor, faces_}; }
+  /// Restores the state saved by checkpoint() exactly (vertices added since are dropped). With
+  /// `keep_anchors` (only when no vertex was added since) the projector hints found since are
+  /// kept: they are warm starts near the same surface, not geometry.
+  void rollback(const Checkpoint& c, bool keep_anchors = false);
+
+  /// Key of the directed edge a→b (a, b < 2³¹).
+  static long long edge_key(int a, int b) { return (static_cast<long long>(a) << 32) | static_cast<unsigned>(b); }
+
+ private:
+  void index_face(int f);
+  void unindex_face(int f);
+  std::vector<MeshFace> faces_;
+  std::unordered_map<long long, int> half_edges_;  // a→b -> face
+  std::unordered_map<long long, int> edges_;       // {min, max} -> face count
+  std::vector<int> valence_;
+};
+
+/// Smallest interior angle (radians) of the triangle (a, b, c): the one opposite its shortest
+/// edge; 0 for a degenerate triangle.
+double triangle_min_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c);
+/// Smallest angle of face f of the mesh.
+double face_min_angle(const WorkingMesh& mesh, const MeshFace& f);
+
+/// Union-find (disjoint sets over 0..n−1) with path compression and union by rank
+/// (boost::disjoint_sets); the one union-find of the mesher.
+class DisjointSets {
+ public:
+  explicit DisjointSets(int n);
+  int find(int i);
+  void unite(int i, int j);
+
+ private:
+  std::vector<int> rank_, parent_;
+};
+
+/// Connected components of the faces (through shared vertices when `by_vertex`, else through
+/// shared edges): component id of each face, ids numbered by first face, and the number of faces
+/// of each component.
+struct FaceComponents {
+  std::vector<int> of_face;
+  std::vector<int> size;
+};
+FaceComponents face_components(const WorkingMesh& mesh, bool by_vertex);
+
+}  // namespace heatcvt

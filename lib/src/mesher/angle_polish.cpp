@@ -1,0 +1,199 @@
+// Angle polish of the working mesh.
+#include "heatcvt/mesher/angle_polish.h"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include "heatcvt/parallel.h"
+
+namespace heatcvt {
+namespace {
+
+// Quality of a one-ring: smallest angle over its triangles and the sum of the triangles'
+// smallest angles (what φm averages); invalid when a triangle is inverted.
+struct RingQuality {
+  double min = M_PI, sum = 0;
+  bool valid = true;
+};
+
+// Smallest angle of a 2D triangle, or −1 when it is inverted / degenerate (counter-clockwise = valid).
+double min_angle_2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+  const double cr = (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
+  if (!(cr > 0)) return -1;
+  const Eigen::Vector2d p[3] = {a, b, c};
+  int k = 0;  // the smallest angle is opposite the shortest edge
+  double shortest = std::numeric_limits<double>::infinity();
+  for (int q = 0; q < 3; ++q) {
+    const double len = (p[(q + 1) % 3] - p[(q + 2) % 3]).squaredNorm();
+    if (len < shortest) shortest = len, k = q;
+  }
+  const Eigen::Vector2d e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
+  return std::atan2(cr, e1.dot(e2));  // |e1 × e2| = cr for every corner of a CCW triangle
+}
+
+// Greedy colouring of the vertex graph in index order (vertices of one colour share no face).
+std::vector<std::vector<int>> colour_classes(const WorkingMesh& mesh, const std::vector<std::vector<int>>& vf) {
+  const int ns = mesh.num_vertices();
+  std::vector<int> colour(ns, -1);
+  std::vector<std::vector<int>> by_colour;
+  for (int v = 0; v < ns; ++v) {
+    std::vector<char> taken;
+    for (int id : vf[v])
+      for (int w : mesh.face(id))
+        if (w != v && colour[w] >= 0) {
+          if (static_cast<int>(taken.size()) <= colour[w]) taken.resize(colour[w] + 1, 0);
+          taken[colour[w]] = 1;
+        }
+    int c = 0;
+    while (c < static_cast<int>(taken.size()) && taken[c]) ++c;
+    colour[v] = c;
+    if (static_cast<int>(by_colour.size()) <= c) by_colour.resize(c + 1);
+    by_colour[c].push_back(v);
+  }
+  return by_colour;
+}
+
+// Every ring edge (v, b) appears as (c, v) of another face: v is interior.
+bool is_interior(const WorkingMesh& mesh, int v, const std::vector<int>& faces) {
+  std::vector<int> out_b, in_c;
+  for (int id : faces) {
+    const MeshFace& f = mesh.face(id);
+    int k = 0;
+    while (f[k] != v) ++k;
+    out_b.push_back(f[(k + 1) % 3]);
+    in_c.push_back(f[(k + 2) % 3]);
+  }
+  std::sort(out_b.begin(), out_b.end());
+  std::sort(in_c.begin(), in_c.end());
+  return out_b == in_c;
+}
+
+class VertexMover {
+ public:
+  VertexMover(WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<std::vector<int>>& vf,
+              const AnglePolishOptions& o)
+      : mesh_(mesh), surface_(surface), vf_(vf), o_(o), cap_(o.angle_cap_deg * M_PI / 180.0) {}
+
+  bool better(const RingQuality& n, const RingQuality& o) const {
+    if (!n.valid) return false;
+    const double nm = std::min(n.min, cap_), om = std::min(o.min, cap_);
+    if (nm > om + 1e-9) return true;
+    if (nm < om - 1e-9) return false;
+    return n.sum > o.sum + 1e-9;
+  }
+
+  // Ring quality with vertex v at x (3D), triangles checked against the normal nv.
+  RingQuality ring3(int v, const Eigen::Vector3d& x, const Eigen::Vector3d& nv) const {
+    RingQuality q;
+    for (int id : vf_[v]) {
+      const MeshFace& f = mesh_.face(id);
+      Eigen::Vector3d p[3];
+      for (int k = 0; k < 3; ++k) p[k] = f[k] == v ? x : Eigen::Vector3d(mesh_.V.row(f[k]));
+      const Eigen::Vector3d fn = (p[1] - p[0]).cross(p[2] - p[0]);
+      if (!(fn.dot(nv) > 0)) q.valid = false;
+      const double a = triangle_min_angle(p[0], p[1], p[2]);
+      q.min = std::min(q.min, a);
+      q.sum += a;
+    }
+    return q;
+  }
+
+  // Moves v if that improves its ring; returns whether it moved.
+  bool move(int v) {
+    const Eigen::MatrixX3d& S = mesh_.V;
+    const Eigen::Vector3d x = S.row(v), nv = mesh_.N.row(v);
+    const Eigen::Vector3d u = nv.unitOrthogonal(), w = nv.cross(u);
+    // Ring triangles in 2D with v at the origin: (b, c) of each face (a = v), counter-clockwise.
+    std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> ring;
+    double mean_edge = 0, area_sum = 0;
+    Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+    for (int id : vf_[v]) {
+      const MeshFace& f = mesh_.face(id);
+      int k = 0;
+      while (f[k] != v) ++k;
+      const Eigen::Vector3d b = S.row(f[(k + 1) % 3]).transpose() - x, c = S.row(f[(k + 2) % 3]).transpose() - x;
+      const Eigen::Vector2d b2(b.dot(u), b.dot(w)), c2(c.dot(u), c.dot(w));
+      ring.push_back({b2, c2});
+      mean_edge += b2.norm();
+      const double ar = 0.5 * (b2.x() * c2.y() - b2.y() * c2.x());
+      if (!(ar > 0)) return false;  // folded in the tangent plane
+      centroid += ar * (b2 + c2) / 3.0;
+      area_sum += ar;
+    }
+    if (!(area_sum > 0) || !is_interior(mesh_, v, vf_[v])) return false;
+    mean_edge /= ring.size();
+    centroid /= area_sum;
+    auto q2 = [&](const Eigen::Vector2d& y) {
+      RingQuality q;
+      for (const auto& [b, c] : ring) {
+        const double a = min_angle_2d(y, b, c);
+        if (a < 0) {
+          q.valid = false;
+          return q;
+        }
+        q.min = std::min(q.min, a);
+        q.sum += a;
+      }
+      return q;
+    };
+    Eigen::Vector2d best = Eigen::Vector2d::Zero();
+    RingQuality qb = q2(Eigen::Vector2d::Zero());
+    if (const RingQuality qc = q2(centroid); better(qc, qb)) best = centroid, qb = qc;
+    double step = o_.initial_step * mean_edge;
+    for (int iter = 0; iter < o_.max_search_steps && step > o_.final_step * mean_edge; ++iter) {
+      bool improved = false;
+      for (int d = 0; d < 8; ++d) {
+        const double ang = d * M_PI / 4;
+        const Eigen::Vector2d y = best + step * Eigen::Vector2d(std::cos(ang), std::sin(ang));
+        const RingQuality qy = q2(y);
+        if (better(qy, qb)) best = y, qb = qy, improved = true;
+      }
+      if (!improved) step *= 0.5;
+    }
+    if (best.squaredNorm() == 0) return false;
+    Eigen::Vector3d pos, nrm;
+    surface_.project(x + best.x() * u + best.y() * w, mesh_.anchor[v], pos, nrm);
+    if (!pos.allFinite() || !nrm.allFinite()) return false;
+    if (!better(ring3(v, pos, nrm), ring3(v, x, nv))) return false;
+    mesh_.V.row(v) = pos.transpose();
+    mesh_.N.row(v) = nrm.transpose();
+    return true;
+  }
+
+ private:
+  WorkingMesh& mesh_;
+  const SurfaceProjector& surface_;
+  const std::vector<std::vector<int>>& vf_;
+  const AnglePolishOptions& o_;
+  const double cap_;
+};
+
+}  // namespace
+
+int angle_polish(WorkingMesh& mesh, const SurfaceProjector& surface, int rounds, const std::vector<char>& frozen,
+                 const AnglePolishOptions& options, int threads) {
+  const std::vector<std::vector<int>> vf = mesh.vertex_faces();
+  const std::vector<std::vector<int>> by_colour = colour_classes(mesh, vf);
+  VertexMover mover(mesh, surface, vf, options);
+  int moves = 0;
+  for (int round = 0; round < rounds; ++round) {
+    int round_moves = 0;
+    for (const std::vector<int>& group : by_colour) {
+#pragma omp parallel for num_threads(resolve_threads(threads)) schedule(dynamic, 16) reduction(+ : round_moves)
+      for (size_t gi = 0; gi < group.size(); ++gi) {
+        const int v = group[gi];
+        if (vf[v].size() < 3 || frozen[v]) continue;
+        if (mover.move(v)) ++round_moves;
+      }
+    }
+    moves += round_moves;
+    if (round_moves == 0) break;
+  }
+  return moves;
+}
+
+}  // namespace heatcvt

@@ -1,0 +1,171 @@
+// Surface projectors of the mesher: a point cloud's local quadratic fit and a triangle mesh.
+#include "heatcvt/mesher/projector.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include "heatcvt/closest_point.h"
+#include "heatcvt/errors.h"
+#include "heatcvt/mesh.h"
+#include "heatcvt/normals.h"
+
+namespace heatcvt {
+
+CloudSurfaceProjector::CloudSurfaceProjector(Eigen::MatrixX3d P, Eigen::MatrixX3d N, const CloudFitOptions& options,
+                                             Eigen::MatrixXi knn)
+    : P_(std::move(P)), N_(std::move(N)), options_(options), knn_(std::move(knn)) {
+  if (P_.rows() < 2 || N_.rows() != P_.rows())
+    throw InvalidInputError("CloudSurfaceProjector: need at least 2 points with one normal each");
+  if (options_.fit_neighbors < 1 || options_.walk_neighbors < 1)
+    throw InvalidInputError("CloudSurfaceProjector: fit_neighbors and walk_neighbors must be >= 1");
+  if (knn_.size() == 0)
+    knn_ = k_nearest_neighbors(P_, std::min<int>(options_.fit_neighbors, static_cast<int>(P_.rows()) - 1), options_.threads);
+}
+
+std::vector<int> CloudSurfaceProjector::neighbourhood(int c) const {
+  std::vector<int> nb = {c};
+  const Eigen::Vector3d nc = N_.row(c);
+  for (Eigen::Index q = 0; q < knn_.cols(); ++q)
+    if (N_.row(knn_(c, q)).dot(nc) > 0) nb.push_back(knn_(c, q));
+  if (static_cast<int>(nb.size()) < std::min(options_.min_oriented_points, static_cast<int>(knn_.cols()) / 2)) {
+    nb.assign(1, c);
+    for (Eigen::Index q = 0; q < knn_.cols(); ++q) nb.push_back(knn_(c, q));
+  }
+  return nb;
+}
+
+void CloudSurfaceProjector::fit_and_project(const std::vector<int>& nb, const Eigen::Vector3d& x,
+                                            const Eigen::Vector3d& orient, Eigen::Vector3d& out_pos,
+                                            Eigen::Vector3d& out_normal) const {
+  const Eigen::MatrixX3d& P = P_;
+  const int m = static_cast<int>(nb.size());
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (int j : nb) mean += P.row(j).transpose();
+  mean /= m;
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  for (int j : nb) {
+    const Eigen::Vector3d d = P.row(j).transpose() - mean;
+    C += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
+  Eigen::Vector3d n = es.eigenvectors().col(0);
+  if (n.dot(orient) < 0) n = -n;
+  Eigen::Vector3d u = es.eigenvectors().col(2), v = n.cross(u);
+  const Eigen::Vector3d xl = x - mean;
+  const double sx = xl.dot(u), tx = xl.dot(v);
+  // Gaussian weights in the plane around the query; bandwidth = RMS planar radius.
+  std::vector<double> s(m), t(m), h(m), w(m);
+  double r2 = 0;
+  for (int q = 0; q < m; ++q) {
+    const Eigen::Vector3d d = P.row(nb[q]).transpose() - mean;
+    s[q] = d.dot(u);
+    t[q] = d.dot(v);
+    h[q] = d.dot(n);
+    r2 += (s[q] - sx) * (s[q] - sx) + (t[q] - tx) * (t[q] - tx);
+  }
+  r2 = std::max(r2 / m, 1e-300);
+  for (int q = 0; q < m; ++q) w[q] = std::exp(-((s[q] - sx) * (s[q] - sx) + (t[q] - tx) * (t[q] - tx)) / r2);
+  // Local coordinates centred at the query for conditioning.
+  Eigen::MatrixXd A(m, 6);
+  Eigen::VectorXd b(m);
+  for (int q = 0; q < m; ++q) {
+    const double a = s[q] - sx, c = t[q] - tx, sw = std::sqrt(w[q]);
+    A.row(q) << sw, sw * a, sw * c, sw * a * a, sw * a * c, sw * c * c;
+    b[q] = sw * h[q];
+  }
+  const double radius = std::sqrt(r2);
+  double z = 0, gx = 0, gy = 0;
+  bool ok = false;
+  if (m >= options_.min_quadratic_points) {
+    // Scale the columns so that the quadratic terms are O(1).
+    Eigen::VectorXd scale(6);
+    scale << 1, radius, radius, radius * radius, radius * radius, radius * radius;
+    Eigen::MatrixXd As = A * scale.cwiseInverse().asDiagonal();
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(As);
+    qr.setThreshold(options_.rank_threshold);
+    if (qr.rank() == 6) {
+      const Eigen::VectorXd coef = scale.cwiseInverse().asDiagonal() * qr.solve(b);
+      z = coef[0];
+      gx = coef[1];
+      gy = coef[2];
+      ok = std::isfinite(z) && std::isfinite(gx) && std::isfinite(gy) &&
+           std::abs(z - xl.dot(n)) < options_.max_height_bandwidths * radius;
+    }
+  }
+  if (!ok) {  // plane fallback: weighted mean height
+    double sw = 0, sh = 0;
+    for (int q = 0; q < m; ++q) {
+      sw += w[q];
+      sh += w[q] * h[q];
+    }
+    z = sw > 0 ? sh / sw : 0;
+    gx = gy = 0;
+  }
+  out_pos = mean + sx * u + tx * v + z * n;
+  out_normal = (n - gx * u - gy * v).normalized();
+}
+
+void CloudSurfaceProjector::project_at(int c, const Eigen::Vector3d& x, const Eigen::Vector3d& orient,
+                                       Eigen::Vector3d& position, Eigen::Vector3d& normal) const {
+  fit_and_project(neighbourhood(c), x, orient, position, normal);
+}
+
+int CloudSurfaceProjector::walk(int start, const Eigen::Vector3d& x) const {
+  const Eigen::Index cols = std::min<Eigen::Index>(knn_.cols(), options_.walk_neighbors);
+  int cur = start;
+  double best = (P_.row(cur).transpose() - x).squaredNorm();
+  for (int step = 0; step < options_.max_walk_steps; ++step) {
+    int nxt = cur;
+    for (Eigen::Index q = 0; q < cols; ++q) {
+      const double d = (P_.row(knn_(cur, q)).transpose() - x).squaredNorm();
+      if (d < best) best = d, nxt = knn_(cur, q);
+    }
+    if (nxt == cur) break;
+    cur = nxt;
+  }
+  return cur;
+}
+
+void CloudSurfaceProjector::project(const Eigen::Vector3d& x, int& hint, Eigen::Vector3d& position,
+                                    Eigen::Vector3d& normal) const {
+  const int c = walk(hint >= 0 && hint < P_.rows() ? hint : 0, x);
+  project_at(c, x, N_.row(c).transpose(), position, normal);
+  hint = c;
+}
+
+double CloudSurfaceProjector::distance_to_samples(const Eigen::Vector3d& x) const {
+  double d2 = std::numeric_limits<double>::infinity();
+  for (Eigen::Index i = 0; i < P_.rows(); ++i) d2 = std::min(d2, (P_.row(i).transpose() - x).squaredNorm());
+  return std::sqrt(d2);
+}
+
+MeshSurfaceProjector::MeshSurfaceProjector(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F)
+    : V_(V), F_(F), tree_(std::make_unique<ClosestPointTree>(V, F)) {
+  VN_ = vertex_normals(V, F);
+}
+
+MeshSurfaceProjector::~MeshSurfaceProjector() = default;
+
+void MeshSurfaceProjector::project(const Eigen::Vector3d& x, int& hint, Eigen::Vector3d& position,
+                                   Eigen::Vector3d& normal) const {
+  const SurfacePoint sp = tree_->closest(x);
+  position = heatcvt::position(V_, F_, sp);
+  Eigen::Vector3d nrm = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 3; ++k) nrm += sp.bary[k] * VN_.row(F_(sp.face, k)).transpose();
+  if (!(nrm.norm() > 0)) {  // opposite vertex normals cancel: the face's own normal
+    const Eigen::Vector3d a = V_.row(F_(sp.face, 0)), b = V_.row(F_(sp.face, 1)), c = V_.row(F_(sp.face, 2));
+    nrm = (b - a).cross(c - a);
+  }
+  normal = nrm.normalized();
+  hint = sp.face;
+}
+
+double MeshSurfaceProjector::distance_to_samples(const Eigen::Vector3d& x) const {
+  const SurfacePoint sp = tree_->closest(x);
+  return (heatcvt::position(V_, F_, sp) - x).norm();
+}
+
+}  // namespace heatcvt

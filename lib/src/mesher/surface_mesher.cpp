@@ -1,0 +1,93 @@
+// The surface mesher's driver: the post-CVT stages in order, each timed.
+#include "heatcvt/mesher/surface_mesher.h"
+
+#include <chrono>
+#include <string>
+
+#include "heatcvt/errors.h"
+
+namespace heatcvt {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Times consecutive stages into stats.stage_seconds.
+class StageTimer {
+ public:
+  explicit StageTimer(MesherStats& stats) : stats_(stats), t_(Clock::now()) {}
+  void done(const char* name) {
+    const auto now = Clock::now();
+    stats_.stage_seconds.emplace_back(name, std::chrono::duration<double>(now - t_).count());
+    t_ = now;
+  }
+
+ private:
+  MesherStats& stats_;
+  Clock::time_point t_;
+};
+
+}  // namespace
+
+void mesh_from_candidates(WorkingMesh& mesh, const DualCandidates& candidates, const SurfaceProjector& surface,
+                          const SurfaceMesherOptions& options, MesherStats& stats) {
+  PolishOptions polish = options.polish;
+  polish.threads = options.threads;
+  EdgeSplitOptions split = options.split;
+  split.threads = options.threads;
+  StageTimer timer(stats);
+  stats.candidate_triangles = static_cast<int>(candidates.coherent.size());
+  stats.rejected_triangles += extract_manifold(mesh, candidates.coherent);
+  stats.removed_triangles += make_vertices_manifold(mesh, options.manifold);
+  stats.rejected_triangles -= add_compatible_candidates(mesh, candidates.coherent, candidates.loose);
+  stats.holes_filled += fill_holes(mesh, surface, options.holes, options.manifold, stats.removed_triangles);
+  timer.done("extraction and holes");
+  untangle(mesh, surface, options.untangle, options.holes, options.manifold, stats);
+  timer.done("untangle");
+  relaxation_polish(mesh, surface, polish, options.untangle, options.holes, options.manifold, stats);
+  timer.done("relaxation polish");
+  angle_polish_stage(mesh, surface, polish, stats);
+  timer.done("angle polish");
+  if (polish.relaxation_iterations > 0) stats.collapsed_edges = collapse_slivers(mesh, surface, options.slivers, stats);
+  timer.done("sliver collapse");
+  if (polish.relaxation_iterations > 0) stats.split_edges = split_long_edges(mesh, surface, split, stats);
+  timer.done("long-edge split");
+}
+
+TriangleMesh finish_mesh(WorkingMesh& mesh, const SurfaceMesherOptions& options, MesherStats& stats) {
+  stats.removed_triangles += remove_small_pieces(mesh, options.min_piece_faces);
+  stats.faces_turned_outward += orient_closed_pieces_outward(mesh);
+  if (mesh.empty())
+    throw Error("surface mesher: no triangle could be extracted from the dual of " +
+                std::to_string(mesh.num_vertices()) + " sites");
+  return compact_mesh(mesh, &stats.unused_vertices);
+}
+
+DualSurfaceResult mesh_dual_surface(const Eigen::MatrixX3d& sites, const Eigen::MatrixX3i& dual_faces,
+                                    const SurfaceProjector& surface, const SurfaceMesherOptions& options) {
+  DualSurfaceResult out;
+  StageTimer timer(out.stats);
+  const int ns = static_cast<int>(sites.rows());
+  if (!sites.allFinite()) throw InvalidInputError("mesh_dual_surface: a site has a NaN or infinite coordinate");
+  if (dual_faces.size() > 0 && (dual_faces.minCoeff() < 0 || dual_faces.maxCoeff() >= ns))
+    throw InvalidInputError("mesh_dual_surface: a face refers to a site out of range");
+  WorkingMesh mesh(sites, Eigen::MatrixX3d::Zero(ns, 3), std::vector<int>(ns, -1));
+  for (int s = 0; s < ns; ++s) {
+    Eigen::Vector3d pos, nrm;
+    surface.project(sites.row(s).transpose(), mesh.anchor[s], pos, nrm);
+    mesh.V.row(s) = pos.transpose();
+    mesh.N.row(s) = nrm.transpose();
+  }
+  const DualCandidates candidates = dual_candidates_from_faces(dual_faces, mesh, options.candidates);
+  timer.done("sites");
+  mesh_from_candidates(mesh, candidates, surface, options, out.stats);
+  StageTimer finish_timer(out.stats);
+  out.mesh = finish_mesh(mesh, options, out.stats);
+  finish_timer.done("compact");
+  ValidationOptions vo;
+  vo.require_closed = false;
+  out.validation = validate_triangle_mesh(out.mesh.V, out.mesh.F, vo);
+  finish_timer.done("validate");
+  return out;
+}
+
+}  // namespace heatcvt

@@ -1,0 +1,205 @@
+// The working mesh of the surface mesher: faces with an incrementally maintained edge index.
+#include "heatcvt/mesher/working_mesh.h"
+
+#include <boost/pending/disjoint_sets.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+namespace heatcvt {
+
+WorkingMesh::WorkingMesh(Eigen::MatrixX3d positions, Eigen::MatrixX3d normals, std::vector<int> anchors)
+    : V(std::move(positions)), N(std::move(normals)), anchor(std::move(anchors)), valence_(V.rows(), 0) {
+  anchor.resize(V.rows(), -1);
+}
+
+int WorkingMesh::add_vertex(const Eigen::Vector3d& position, const Eigen::Vector3d& normal, int anchor_hint) {
+  const int m = num_vertices();
+  V.conservativeResize(m + 1, 3);
+  N.conservativeResize(m + 1, 3);
+  V.row(m) = position.transpose();
+  N.row(m) = normal.transpose();
+  anchor.push_back(anchor_hint);
+  valence_.push_back(0);
+  return m;
+}
+
+void WorkingMesh::index_face(int f) {
+  if (valence_.size() < static_cast<size_t>(V.rows())) valence_.resize(V.rows(), 0);
+  const MeshFace& t = faces_[f];
+  for (int k = 0; k < 3; ++k) {
+    const int a = t[k], b = t[(k + 1) % 3];
+    half_edges_[edge_key(a, b)] = f;
+    if (++edges_[edge_key(std::min(a, b), std::max(a, b))] == 1) ++valence_[a], ++valence_[b];
+  }
+}
+
+void WorkingMesh::unindex_face(int f) {
+  const MeshFace& t = faces_[f];
+  for (int k = 0; k < 3; ++k) {
+    const int a = t[k], b = t[(k + 1) % 3];
+    if (auto it = half_edges_.find(edge_key(a, b)); it != half_edges_.end() && it->second == f) half_edges_.erase(it);
+    auto it = edges_.find(edge_key(std::min(a, b), std::max(a, b)));
+    if (it != edges_.end() && --it->second == 0) {
+      edges_.erase(it);
+      --valence_[a], --valence_[b];
+    }
+  }
+}
+
+int WorkingMesh::add_face(const MeshFace& f) {
+  faces_.push_back(f);
+  index_face(num_faces() - 1);
+  return num_faces() - 1;
+}
+
+void WorkingMesh::pop_face() {
+  unindex_face(num_faces() - 1);
+  faces_.pop_back();
+}
+
+void WorkingMesh::replace_face(int f, const MeshFace& g) {
+  unindex_face(f);
+  faces_[f] = g;
+  index_face(f);
+}
+
+int WorkingMesh::remove_faces(const std::vector<char>& drop) {
+  int removed = 0;
+  for (int f = 0; f < num_faces(); ++f)
+    if (drop[f]) unindex_face(f), ++removed;
+  if (removed == 0) return 0;
+  int next = 0;
+  for (int f = 0; f < num_faces(); ++f) {
+    if (drop[f]) continue;
+    if (next != f) {
+      faces_[next] = faces_[f];
+      for (int k = 0; k < 3; ++k) {  // re-point the half-edges the moved face holds
+        auto it = half_edges_.find(edge_key(faces_[next][k], faces_[next][(k + 1) % 3]));
+        if (it != half_edges_.end() && it->second == f) it->second = next;
+      }
+    }
+    ++next;
+  }
+  faces_.resize(next);
+  return removed;
+}
+
+void WorkingMesh::set_faces(std::vector<MeshFace> faces) {
+  faces_ = std::move(faces);
+  half_edges_.clear();
+  edges_.clear();
+  valence_.assign(V.rows(), 0);
+  for (int f = 0; f < num_faces(); ++f) index_face(f);
+}
+
+void WorkingMesh::flip(int f1, int k, int f2) {
+  const int a = faces_[f1][k], b = faces_[f1][(k + 1) % 3], c = faces_[f1][(k + 2) % 3];
+  int d = -1;
+  for (int v : faces_[f2])
+    if (v != a && v != b) d = v;
+  replace_face(f1, {c, a, d});
+  replace_face(f2, {d, b, c});
+}
+
+int WorkingMesh::half_edge_face(int a, int b) const {
+  auto it = half_edges_.find(edge_key(a, b));
+  return it == half_edges_.end() ? -1 : it->second;
+}
+
+int WorkingMesh::edge_face_count(int a, int b) const {
+  auto it = edges_.find(edge_key(std::min(a, b), std::max(a, b)));
+  return it == edges_.end() ? 0 : it->second;
+}
+
+std::vector<std::vector<int>> WorkingMesh::vertex_faces() const {
+  std::vector<std::vector<int>> vf(num_vertices());
+  for (int f = 0; f < num_faces(); ++f)
+    for (int v : faces_[f]) vf[v].push_back(f);
+  return vf;
+}
+
+std::vector<char> WorkingMesh::boundary_vertices() const {
+  std::vector<char> on(num_vertices(), 0);
+  for (const MeshFace& f : faces_)
+    for (int q = 0; q < 3; ++q)
+      if (!has_half_edge(f[(q + 1) % 3], f[q])) on[f[q]] = on[f[(q + 1) % 3]] = 1;
+  return on;
+}
+
+void WorkingMesh::rollback(const Checkpoint& c, bool keep_anchors) {
+  if (!keep_anchors || anchor.size() != c.anchor.size()) anchor = c.anchor;
+  V = c.V;
+  N = c.N;
+  set_faces(c.faces);
+}
+
+double triangle_min_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  // One acos instead of three: the smallest angle is the one opposite the shortest edge.
+  const Eigen::Vector3d p[3] = {a, b, c};
+  int k = 0;
+  double shortest = std::numeric_limits<double>::infinity();
+  for (int q = 0; q < 3; ++q) {
+    const double len = (p[(q + 1) % 3] - p[(q + 2) % 3]).squaredNorm();
+    if (len < shortest) shortest = len, k = q;
+  }
+  const Eigen::Vector3d e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
+  const double n1 = e1.norm(), n2 = e2.norm();
+  if (n1 == 0 || n2 == 0 || shortest == 0) return 0;
+  return std::acos(std::clamp(e1.dot(e2) / (n1 * n2), -1.0, 1.0));
+}
+
+double face_min_angle(const WorkingMesh& mesh, const MeshFace& f) {
+  return triangle_min_angle(mesh.V.row(f[0]).transpose(), mesh.V.row(f[1]).transpose(), mesh.V.row(f[2]).transpose());
+}
+
+DisjointSets::DisjointSets(int n) : rank_(n, 0), parent_(n) {
+  for (int i = 0; i < n; ++i) parent_[i] = i;
+}
+
+int DisjointSets::find(int i) {
+  boost::disjoint_sets<int*, int*> sets(rank_.data(), parent_.data());
+  return sets.find_set(i);
+}
+
+void DisjointSets::unite(int i, int j) {
+  boost::disjoint_sets<int*, int*> sets(rank_.data(), parent_.data());
+  sets.union_set(i, j);
+}
+
+FaceComponents face_components(const WorkingMesh& mesh, bool by_vertex) {
+  const int nf = mesh.num_faces();
+  FaceComponents out;
+  out.of_face.assign(nf, -1);
+  if (by_vertex) {
+    DisjointSets sets(mesh.num_vertices());
+    for (const MeshFace& f : mesh.faces()) sets.unite(f[0], f[1]), sets.unite(f[1], f[2]);
+    std::vector<int> id(mesh.num_vertices(), -1);
+    for (int f = 0; f < nf; ++f) {
+      int& c = id[sets.find(mesh.face(f)[0])];
+      if (c < 0) c = static_cast<int>(out.size.size()), out.size.push_back(0);
+      out.of_face[f] = c;
+      ++out.size[c];
+    }
+    return out;
+  }
+  DisjointSets sets(nf);
+  for (int f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = mesh.face(f)[k], b = mesh.face(f)[(k + 1) % 3];
+      for (int g : {mesh.half_edge_face(a, b), mesh.half_edge_face(b, a)})
+        if (g >= 0) sets.unite(f, g);
+    }
+  std::vector<int> id(nf, -1);
+  for (int f = 0; f < nf; ++f) {
+    int& c = id[sets.find(f)];
+    if (c < 0) c = static_cast<int>(out.size.size()), out.size.push_back(0);
+    out.of_face[f] = c;
+    ++out.size[c];
+  }
+  return out;
+}
+
+}  // namespace heatcvt

@@ -1,0 +1,716 @@
+// Tests of the surface mesher's stages (lib/include/heatcvt/mesher/), each on shapes built in code.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "heatcvt/mesh.h"
+#include "heatcvt/mesher/angle_polish.h"
+#include "heatcvt/mesher/compaction.h"
+#include "heatcvt/mesher/dual_candidates.h"
+#include "heatcvt/mesher/edge_flips.h"
+#include "heatcvt/mesher/edge_split.h"
+#include "heatcvt/mesher/hole_filling.h"
+#include "heatcvt/mesher/manifold_extraction.h"
+#include "heatcvt/mesher/mesh_checks.h"
+#include "heatcvt/mesher/orientation.h"
+#include "heatcvt/mesher/projector.h"
+#include "heatcvt/mesher/sliver_collapse.h"
+#include "heatcvt/mesher/surface_mesher.h"
+#include "heatcvt/mesher/tangential_relaxation.h"
+#include "heatcvt/mesher/untangle.h"
+#include "heatcvt/mesher/valence3_removal.h"
+#include "heatcvt/mesher/working_mesh.h"
+#include "heatcvt/normals.h"
+#include "heatcvt/reconstruct.h"
+#include "heatcvt/errors.h"
+#include "heatcvt/shapes.h"
+#include "heatcvt/validate.h"
+#include "test_support.h"
+
+namespace heatcvt {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+std::vector<MeshFace> faces_of(const Eigen::MatrixX3i& F) {
+  std::vector<MeshFace> out;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) out.push_back({F(f, 0), F(f, 1), F(f, 2)});
+  return out;
+}
+
+// A working mesh of (V, F) with the surface's vertex normals and no anchors.
+WorkingMesh working(const TriangleMesh& m) {
+  WorkingMesh w(m.V, vertex_normals(m.V, m.F), std::vector<int>(m.V.rows(), -1));
+  w.set_faces(faces_of(m.F));
+  return w;
+}
+
+Eigen::MatrixX3i face_matrix(const WorkingMesh& w) {
+  Eigen::MatrixX3i F(w.num_faces(), 3);
+  for (int f = 0; f < w.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) F(f, k) = w.face(f)[k];
+  return F;
+}
+
+ValidationReport validate(const WorkingMesh& w, bool closed) {
+  const TriangleMesh m = compact_mesh(w);
+  ValidationOptions o;
+  o.require_closed = closed;
+  return validate_triangle_mesh(m.V, m.F, o);
+}
+
+// The index of `w` equals that of a mesh built from its faces in one go.
+void expect_index_fresh(const WorkingMesh& w) {
+  WorkingMesh fresh(w.V, w.N, w.anchor);
+  fresh.set_faces(w.faces());
+  for (int v = 0; v < w.num_vertices(); ++v) EXPECT_EQ(w.valence(v), fresh.valence(v)) << "vertex " << v;
+  for (const MeshFace& f : w.faces())
+    for (int k = 0; k < 3; ++k) {
+      const int a = f[k], b = f[(k + 1) % 3];
+      EXPECT_EQ(w.half_edge_face(a, b), fresh.half_edge_face(a, b));
+      EXPECT_EQ(w.half_edge_face(b, a), fresh.half_edge_face(b, a));
+      EXPECT_EQ(w.edge_face_count(a, b), fresh.edge_face_count(a, b));
+    }
+}
+
+double ring_min_angle(const WorkingMesh& w) {
+  double m = M_PI;
+  for (const MeshFace& f : w.faces()) m = std::min(m, face_min_angle(w, f));
+  return m;
+}
+
+int slivers(const WorkingMesh& w, double deg) {
+  int n = 0;
+  for (const MeshFace& f : w.faces()) n += face_min_angle(w, f) < deg * kDeg;
+  return n;
+}
+
+// Removes the faces whose centroid has z above `z` (a cap of a sphere).
+void cut_cap(WorkingMesh& w, double z) {
+  std::vector<char> drop(w.num_faces(), 0);
+  for (int f = 0; f < w.num_faces(); ++f) {
+    double cz = 0;
+    for (int v : w.face(f)) cz += w.V(v, 2) / 3.0;
+    drop[f] = cz > z;
+  }
+  ASSERT_GT(w.remove_faces(drop), 0);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(WorkingMesh, EdgeIndexFollowsEveryOperation) {
+  const TriangleMesh s = test::icosphere(2);
+  WorkingMesh w = working(s);
+  EXPECT_EQ(w.num_faces(), s.F.rows());
+  for (int v = 0; v < w.num_vertices(); ++v) EXPECT_GE(w.valence(v), 5);
+  // Flip the first edge, remove every third face, add one back, replace another.
+  const int f2 = w.half_edge_face(w.face(0)[1], w.face(0)[0]);
+  ASSERT_GE(f2, 0);
+  w.flip(0, 0, f2);
+  expect_index_fresh(w);
+  std::vector<char> drop(w.num_faces(), 0);
+  for (int f = 0; f < w.num_faces(); f += 3) drop[f] = 1;
+  const MeshFace removed = w.face(3);
+  EXPECT_EQ(w.remove_faces(drop), (w.num_faces() + 2) / 3);
+  expect_index_fresh(w);
+  w.add_face(removed);
+  expect_index_fresh(w);
+  const MeshFace g = w.face(5);
+  w.replace_face(5, {g[1], g[2], g[0]});
+  expect_index_fresh(w);
+  w.pop_face();
+  expect_index_fresh(w);
+}
+
+TEST(WorkingMesh, FlipTurnsTheSharedEdge) {
+  // Quad a(0,0) b(1,0) c(1,1) d(0,1) as (a, b, c), (c, d, a): flipping edge c-a gives b-d.
+  Eigen::MatrixX3d V(4, 3);
+  V << 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0;
+  WorkingMesh w(V, Eigen::MatrixX3d::Zero(4, 3), {});
+  w.add_face({0, 1, 2});
+  w.add_face({2, 3, 0});
+  w.flip(0, 2, 1);  // edge (c, a) of face 0
+  EXPECT_EQ(w.edge_face_count(0, 2), 0);
+  EXPECT_EQ(w.edge_face_count(1, 3), 2);
+  EXPECT_GE(w.half_edge_face(1, 3), 0);
+  EXPECT_GE(w.half_edge_face(3, 1), 0);
+  expect_index_fresh(w);
+}
+
+TEST(WorkingMesh, RollbackRestoresExactly) {
+  const TriangleMesh s = test::icosphere(2);
+  WorkingMesh w = working(s);
+  for (int v = 0; v < w.num_vertices(); ++v) w.anchor[v] = v;
+  const WorkingMesh::Checkpoint c = w.checkpoint();
+  const std::vector<MeshFace> faces = w.faces();
+  const Eigen::MatrixX3d V = w.V, N = w.N;
+  const int m = w.add_vertex(Eigen::Vector3d(0, 0, 2), Eigen::Vector3d(0, 0, 1), 7);
+  w.replace_face(0, {w.face(0)[0], w.face(0)[1], m});
+  w.V.row(3) *= 1.5;
+  w.anchor[2] = 99;
+  std::vector<char> drop(w.num_faces(), 0);
+  drop[10] = 1;
+  w.remove_faces(drop);
+  w.rollback(c);
+  EXPECT_EQ(w.num_vertices(), s.V.rows());
+  EXPECT_TRUE(w.faces() == faces);
+  EXPECT_EQ((w.V - V).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ((w.N - N).cwiseAbs().maxCoeff(), 0.0);
+  for (int v = 0; v < w.num_vertices(); ++v) EXPECT_EQ(w.anchor[v], v);
+  expect_index_fresh(w);
+}
+
+TEST(WorkingMesh, ComponentsByVertexAndByEdge) {
+  // Two icospheres, and a triangle touching the first one at a vertex only.
+  const TriangleMesh s = test::icosphere(1);
+  const int n = static_cast<int>(s.V.rows());
+  Eigen::MatrixX3d V(2 * n + 2, 3);
+  V << s.V, s.V.rowwise() + Eigen::RowVector3d(3, 0, 0), Eigen::RowVector3d(0, 0, 2), Eigen::RowVector3d(0, 0.5, 2);
+  WorkingMesh w(V, Eigen::MatrixX3d::Zero(V.rows(), 3), {});
+  for (const MeshFace& f : faces_of(s.F)) w.add_face(f);
+  for (const MeshFace& f : faces_of(s.F)) w.add_face({f[0] + n, f[1] + n, f[2] + n});
+  int top = 0;
+  for (int v = 0; v < n; ++v)
+    if (s.V(v, 2) > s.V(top, 2)) top = v;
+  w.add_face({top, 2 * n, 2 * n + 1});
+  const FaceComponents by_edge = face_components(w, false);
+  const FaceComponents by_vertex = face_components(w, true);
+  ASSERT_EQ(by_edge.size.size(), 3u);
+  EXPECT_EQ(by_edge.size[0], s.F.rows());
+  EXPECT_EQ(by_edge.size[1], s.F.rows());
+  EXPECT_EQ(by_edge.size[2], 1);
+  ASSERT_EQ(by_vertex.size.size(), 2u);
+  EXPECT_EQ(by_vertex.size[0], s.F.rows() + 1);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(Projector, MeshProjectorGivesTheClosestPointAndNormal) {
+  const TriangleMesh s = test::icosphere(4);
+  const MeshSurfaceProjector proj(s.V, s.F);
+  int hint = -1;
+  Eigen::Vector3d pos, nrm;
+  const Eigen::Vector3d x(0.3, -1.7, 0.9);
+  proj.project(x, hint, pos, nrm);
+  EXPECT_GE(hint, 0);
+  EXPECT_NEAR(pos.norm(), 1.0, 2e-3);
+  EXPECT_GT(pos.normalized().dot(x.normalized()), 0.999);
+  EXPECT_GT(nrm.dot(pos.normalized()), 0.999);
+  EXPECT_NEAR(proj.distance_to_samples(x), x.norm() - 1.0, 2e-3);
+}
+
+TEST(Projector, CloudFitProjectsOntoTheSampledSphere) {
+  const TriangleMesh s = test::icosphere(4);  // 2562 points on the unit sphere
+  const Eigen::MatrixX3d P = s.V;
+  Eigen::MatrixX3d N = P;  // outward normals
+  CloudFitOptions o;
+  o.fit_neighbors = 20;
+  o.walk_neighbors = 20;
+  const CloudSurfaceProjector proj(P, N, o);
+  for (const Eigen::Vector3d x : {Eigen::Vector3d(0.6, 0.7, 0.55), Eigen::Vector3d(-0.1, 0.2, -1.1)}) {
+    int hint = 0;  // the walk starts far away
+    Eigen::Vector3d pos, nrm;
+    proj.project(x, hint, pos, nrm);
+    EXPECT_NEAR(pos.norm(), 1.0, 1e-3);
+    EXPECT_GT(nrm.dot(pos.normalized()), 0.999);
+    EXPECT_LT((P.row(hint).transpose() - x.normalized()).norm(), 0.1);  // walked to the nearest points
+  }
+  EXPECT_NEAR(proj.distance_to_samples(Eigen::Vector3d(0, 0, 3)), 2.0, 1e-9);  // (0,0,1) is a vertex
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(DualCandidates, FacesOfADualAreOrientedByTheSiteNormals) {
+  const TriangleMesh s = test::icosphere(2);
+  WorkingMesh w(s.V, s.V, {});  // outward normals
+  Eigen::MatrixX3i F = s.F;
+  for (Eigen::Index f = 0; f < F.rows(); f += 2) std::swap(F(f, 1), F(f, 2));  // half of them inside out
+  Eigen::MatrixX3i twice(2 * F.rows(), 3);
+  twice << F, F.topRows(F.rows());
+  const DualCandidates c = dual_candidates_from_faces(twice, w);
+  EXPECT_EQ(c.coherent.size(), static_cast<size_t>(s.F.rows()));
+  EXPECT_TRUE(c.loose.empty());
+  for (const DualCandidate& d : c.coherent) {
+    EXPECT_EQ(d.witnesses, 2);
+    const Eigen::Vector3d a = s.V.row(d.f[0]), b = s.V.row(d.f[1]), cc = s.V.row(d.f[2]);
+    EXPECT_GT((b - a).cross(cc - a).dot(a + b + cc), 0);  // outward
+  }
+  for (size_t i = 1; i < c.coherent.size(); ++i) EXPECT_GE(c.coherent[i - 1].quality, c.coherent[i].quality);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(ManifoldExtraction, FinOfAThirdFaceOnAnEdgeIsRejected) {
+  const TriangleMesh s = test::icosphere(1);
+  const int n = static_cast<int>(s.V.rows());
+  Eigen::MatrixX3d V(n + 1, 3);
+  V << s.V, Eigen::RowVector3d(0, 0, 3);
+  WorkingMesh w(V, Eigen::MatrixX3d::Zero(n + 1, 3), {});
+  std::vector<DualCandidate> cands;
+  for (const MeshFace& f : faces_of(s.F)) cands.push_back({f, 2, 0, 1.0});
+  const MeshFace e = cands[0].f;
+  // The fin on edge (e0, e1), witnessed less than the sphere's faces (so ordered after them).
+  cands.push_back(DualCandidate{{e[1], e[0], n}, 1, 0, 1.0});
+  EXPECT_EQ(extract_manifold(w, cands), 1);
+  EXPECT_EQ(w.num_faces(), s.F.rows());
+  EXPECT_EQ(w.edge_face_count(e[0], e[1]), 2);
+  EXPECT_TRUE(validate(w, true).ok());
+}
+
+TEST(ManifoldExtraction, NonManifoldVertexKeepsItsLargestFan) {
+  // A sphere and a pair of triangles touching it at one vertex (the pair's own piece is small).
+  const TriangleMesh s = test::icosphere(1);
+  const int n = static_cast<int>(s.V.rows());
+  int top = 0;
+  for (int v = 0; v < n; ++v)
+    if (s.V(v, 2) > s.V(top, 2)) top = v;
+  Eigen::MatrixX3d V(n + 3, 3);
+  V << s.V, Eigen::RowVector3d(0.5, 0, 1.5), Eigen::RowVector3d(0, 0.5, 1.5), Eigen::RowVector3d(0.5, 0.5, 1.8);
+  WorkingMesh w(V, Eigen::MatrixX3d::Zero(n + 3, 3), {});
+  for (const MeshFace& f : faces_of(s.F)) w.add_face(f);
+  w.add_face({top, n, n + 1});
+  w.add_face({n + 1, n, n + 2});
+  ManifoldOptions o;
+  o.max_dropped_piece_faces = 0;  // only the fan rule
+  EXPECT_EQ(make_vertices_manifold(w, o), 1);  // the fan {top, n, n+1} at `top`
+  EXPECT_EQ(w.num_faces(), s.F.rows() + 1);
+  // The remaining lone triangle is a piece of one face: dropped by the piece rule.
+  EXPECT_EQ(make_vertices_manifold(w), 1);
+  EXPECT_EQ(w.num_faces(), s.F.rows());
+  EXPECT_TRUE(validate(w, true).ok());
+}
+
+TEST(ManifoldExtraction, SecondPassAddsOnlyWhatKeepsVerticesManifold) {
+  // The sphere without the five faces at its top vertex; the second pass gets them back in an
+  // order where the third one would make the top vertex non-manifold (two fans) when tried.
+  const TriangleMesh s = test::icosphere(1);
+  int top = 0;
+  for (int v = 0; v < s.V.rows(); ++v)
+    if (s.V(v, 2) > s.V(top, 2)) top = v;
+  WorkingMesh w(s.V, s.V, {});
+  std::vector<DualCandidate> cap;
+  for (const MeshFace& f : faces_of(s.F)) {
+    if (f[0] == top || f[1] == top || f[2] == top) cap.push_back({f, 1, 0, 1.0});
+    else w.add_face(f);
+  }
+  ASSERT_GE(cap.size(), 5u);
+  // Ring order of the cap faces: each next one shares an edge at `top` with the previous one.
+  std::vector<DualCandidate> ring = {cap[0]};
+  while (ring.size() < cap.size())
+    for (const DualCandidate& c : cap) {
+      int k = 0;
+      while (ring.back().f[k] != top) ++k;
+      const int after = ring.back().f[(k + 2) % 3];  // (top, x, after): the next face has (top, after, y)
+      int j = 0;
+      while (c.f[j] != top) ++j;
+      if (c.f[(j + 1) % 3] == after) {
+        ring.push_back(c);
+        break;
+      }
+    }
+  // First list: faces 0, 2, 1 of the ring (2 is not adjacent to 0 at `top`: rejected then);
+  // second call: 2 and the rest.
+  const int k = static_cast<int>(ring.size());
+  EXPECT_EQ(add_compatible_candidates(w, {ring[0], ring[2], ring[1]}, {}), 2);
+  EXPECT_EQ(w.num_faces(), s.F.rows() - (k - 2));
+  EXPECT_EQ(add_compatible_candidates(w, {ring[2]}, std::vector<DualCandidate>(ring.begin() + 3, ring.end())), k - 2);
+  EXPECT_EQ(w.num_faces(), s.F.rows());
+  EXPECT_TRUE(validate(w, true).ok());
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(HoleFilling, ClosesASphereWithACutOutCap) {
+  const TriangleMesh s = test::icosphere(3);
+  const MeshSurfaceProjector surface(s.V, s.F);
+  WorkingMesh w = working(s);
+  cut_cap(w, 0.93);
+  ASSERT_FALSE(validate(w, true).ok());
+  HoleFillingOptions o;  // a loop of 15 edges: filled as a hole in sampled surface
+  int removed = 0;
+  EXPECT_EQ(fill_holes(w, surface, o, {}, removed), 1);
+  const ValidationReport r = validate(w, true);
+  EXPECT_TRUE(r.ok()) << r.summary();
+  EXPECT_EQ(r.genus, 0);
+}
+
+TEST(HoleFilling, KeepsTheGenusOfATorus) {
+  const TriangleMesh t = test::torus(48, 24);
+  const MeshSurfaceProjector surface(t.V, t.F);
+  WorkingMesh w = working(t);
+  // Cut out the faces around one vertex on the outer equator (a hole of 6 edges... and its ring).
+  std::vector<char> drop(w.num_faces(), 0);
+  const Eigen::Vector3d centre(1.4, 0, 0);
+  for (int f = 0; f < w.num_faces(); ++f) {
+    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    for (int v : w.face(f)) g += w.V.row(v).transpose() / 3.0;
+    drop[f] = (g - centre).norm() < 0.2;
+  }
+  ASSERT_GT(w.remove_faces(drop), 6);
+  int removed = 0;
+  EXPECT_EQ(fill_holes(w, surface, {}, {}, removed), 1);
+  const ValidationReport r = validate(w, true);
+  EXPECT_TRUE(r.ok()) << r.summary();
+  EXPECT_EQ(r.genus, 1);
+}
+
+TEST(HoleFilling, KeepsTheBorderOfAnOpenSheet) {
+  const TriangleMesh g = test::grid(7);  // boundary loop of 28 edges, nothing sampled beyond it
+  const MeshSurfaceProjector surface(g.V, g.F);
+  WorkingMesh w = working(g);
+  int removed = 0;
+  EXPECT_EQ(fill_holes(w, surface, {}, {}, removed), 0);
+  EXPECT_EQ(w.num_faces(), g.F.rows());
+}
+
+TEST(HoleFilling, LoopTriangulationMaximisesTheSmallestAngle) {
+  // A regular hexagon: the best triangulation has smallest angle 30 degrees.
+  Eigen::MatrixX3d V(6, 3);
+  for (int i = 0; i < 6; ++i) V.row(i) << std::cos(i * M_PI / 3), std::sin(i * M_PI / 3), 0;
+  WorkingMesh w(V, Eigen::MatrixX3d::Zero(6, 3), {});
+  std::vector<MeshFace> tris;
+  ASSERT_TRUE(triangulate_loop(w, {0, 1, 2, 3, 4, 5}, tris));
+  ASSERT_EQ(tris.size(), 4u);
+  for (const MeshFace& f : tris) {
+    EXPECT_NEAR(face_min_angle(w, f), 30 * kDeg, 1e-9);
+    const Eigen::Vector3d n = (V.row(f[1]) - V.row(f[0])).cross(V.row(f[2]) - V.row(f[0])).transpose();
+    EXPECT_LT(n.z(), 0);  // against the loop's counter-clockwise direction
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(Untangle, RemovesASpikeThroughTheSphereAndRefillsTheHoles) {
+  // The top vertex of a sphere pulled through the bottom: its fan crosses the bottom faces.
+  const TriangleMesh s = test::icosphere(3);
+  const MeshSurfaceProjector surface(s.V, s.F);
+  WorkingMesh w = working(s);
+  int top = 0;
+  for (int v = 0; v < w.num_vertices(); ++v)
+    if (w.V(v, 2) > w.V(top, 2)) top = v;
+  w.V.row(top) << 0.01, 0.02, -1.3;
+  ASSERT_GT(self_intersecting_pairs(w), 0);
+  MesherStats stats;
+  untangle(w, surface, {}, {}, {}, stats);
+  EXPECT_EQ(self_intersecting_pairs(w), 0);
+  EXPECT_GT(stats.removed_triangles, 0);
+  EXPECT_GT(stats.holes_filled, 1);
+  const ValidationReport r = validate(w, true);
+  EXPECT_TRUE(r.ok()) << r.summary();
+  EXPECT_EQ(r.genus, 0);
+  EXPECT_EQ(w.valence(top), 0);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(Valence3Removal, RemovesAVertexInsertedInAFace) {
+  const TriangleMesh s = test::icosphere(2);
+  WorkingMesh w = working(s);
+  const MeshFace f = w.face(7);
+  const Eigen::Vector3d c = (w.V.row(f[0]) + w.V.row(f[1]) + w.V.row(f[2])).transpose() / 3.0;
+  const int m = w.add_vertex(c.normalized(), c.normalized(), -1);
+  w.replace_face(7, {f[0], f[1], m});
+  w.add_face({f[1], f[2], m});
+  w.add_face({f[2], f[0], m});
+  ASSERT_EQ(w.valence(m), 3);
+  EXPECT_EQ(remove_valence3(w), 1);
+  EXPECT_EQ(w.valence(m), 0);
+  EXPECT_EQ(w.num_faces(), s.F.rows());
+  EXPECT_EQ(w.edge_face_count(f[0], f[1]), 2);
+  EXPECT_TRUE(validate(w, true).ok());
+  EXPECT_EQ(remove_valence3(w), 0);  // an icosphere has none
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(EdgeFlips, MaxMinAngleFlipsMakeDelaunayPairs) {
+  // A sheared grid whose diagonals all go the wrong way (every pair fails the Delaunay test).
+  TriangleMesh g = test::grid(6, 0, 1, 0, 1, false);
+  g.V.col(0) += 0.7 * g.V.col(1);
+  WorkingMesh w = working(g);
+  auto delaunay = [&](int a, int b) {  // opposite angles of the pair on edge (a, b) sum to <= pi
+    const int f1 = w.half_edge_face(a, b), f2 = w.half_edge_face(b, a);
+    double sum = 0;
+    for (int f : {f1, f2}) {
+      int o = -1;
+      for (int v : w.face(f))
+        if (v != a && v != b) o = v;
+      const Eigen::Vector3d p = w.V.row(o), x = w.V.row(a), y = w.V.row(b);
+      sum += std::acos((x - p).normalized().dot((y - p).normalized()));
+    }
+    return sum <= M_PI + 1e-9;
+  };
+  const std::vector<char> boundary = w.boundary_vertices();
+  auto interior_pairs_delaunay = [&]() {
+    int bad = 0;
+    for (const MeshFace& f : w.faces())
+      for (int k = 0; k < 3; ++k) {
+        const int a = f[k], b = f[(k + 1) % 3];
+        if (!boundary[a] && !boundary[b] && !delaunay(a, b)) ++bad;
+      }
+    return bad;
+  };
+  ASSERT_GT(interior_pairs_delaunay(), 0);
+  const double before = ring_min_angle(w);
+  FlipOptions o;
+  o.max_passes = 50;
+  EXPECT_GT(flip_edges(w, o), 0);
+  EXPECT_EQ(interior_pairs_delaunay(), 0);
+  EXPECT_GE(ring_min_angle(w), before);
+  expect_index_fresh(w);
+  EXPECT_TRUE(validate(w, false).ok());
+}
+
+TEST(EdgeFlips, ValenceFlipsBringValencesTowardsSix) {
+  // Grid with all diagonals one way: interior valences 6; flip nothing. Alternating diagonals:
+  // valences 4 and 8; valence flips equalise them on the flat sheet.
+  WorkingMesh w = working(test::grid(8, 0, 1, 0, 1, true));
+  const std::vector<char> boundary = w.boundary_vertices();
+  auto deviation = [&]() {
+    long d = 0;
+    for (int v = 0; v < w.num_vertices(); ++v)
+      if (!boundary[v]) d += (w.valence(v) - 6) * (w.valence(v) - 6);
+    return d;
+  };
+  const long before = deviation();
+  ASSERT_GT(before, 0);
+  FlipOptions o;
+  o.valence_mode = true;
+  o.max_normal_deviation_deg = 30;
+  EXPECT_GT(flip_edges(w, o), 0);
+  EXPECT_LT(deviation(), before);
+  EXPECT_TRUE(validate(w, false).ok());
+}
+
+// ---------------------------------------------------------------------------------------------
+
+// A coarse sphere with its vertices moved tangentially (seeded), on a fine sphere as surface.
+WorkingMesh jittered_sphere(const TriangleMesh& coarse, double amount) {
+  WorkingMesh w = working(coarse);
+  for (int v = 0; v < w.num_vertices(); ++v) {
+    const Eigen::Vector3d x = w.V.row(v);
+    const Eigen::Vector3d t = x.unitOrthogonal(), u = x.cross(t);
+    const double a = std::sin(12.9898 * v) * amount, b = std::cos(78.233 * v) * amount;
+    w.V.row(v) = (x + a * t + b * u).normalized().transpose();
+    w.N.row(v) = w.V.row(v);
+  }
+  return w;
+}
+
+TEST(Polish, TangentialRelaxationEvensOutAndStaysOnTheSurface) {
+  const TriangleMesh fine = test::icosphere(5);
+  const MeshSurfaceProjector surface(fine.V, fine.F);
+  WorkingMesh w = jittered_sphere(test::icosphere(2), 0.06);
+  const double before = ring_min_angle(w);
+  for (int i = 0; i < 5; ++i) tangential_relaxation(w, surface, 2);
+  EXPECT_GT(ring_min_angle(w), before);
+  for (int v = 0; v < w.num_vertices(); ++v) EXPECT_NEAR(w.V.row(v).norm(), 1.0, 1e-3);
+  EXPECT_TRUE(validate(w, true).ok());
+}
+
+TEST(Polish, AnglePolishRaisesTheSmallestAngleAndHonoursFrozenVertices) {
+  const TriangleMesh fine = test::icosphere(5);
+  const MeshSurfaceProjector surface(fine.V, fine.F);
+  WorkingMesh w = jittered_sphere(test::icosphere(2), 0.06);
+  std::vector<char> frozen(w.num_vertices(), 0);
+  frozen[0] = 1;
+  const Eigen::Vector3d x0 = w.V.row(0);
+  const double before = ring_min_angle(w);
+  EXPECT_GT(angle_polish(w, surface, 10, frozen, {}, 2), 0);
+  EXPECT_GT(ring_min_angle(w), before);
+  EXPECT_EQ((w.V.row(0).transpose() - x0).norm(), 0.0);
+  for (int v = 0; v < w.num_vertices(); ++v) EXPECT_NEAR(w.V.row(v).norm(), 1.0, 1e-3);
+  EXPECT_TRUE(validate(w, true).ok());
+}
+
+TEST(Polish, AnglePolishDoesNotDependOnTheThreadCount) {
+  const TriangleMesh fine = test::icosphere(5);
+  const MeshSurfaceProjector surface(fine.V, fine.F);
+  WorkingMesh a = jittered_sphere(test::icosphere(2), 0.06), b = a;
+  const std::vector<char> frozen(a.num_vertices(), 0);
+  angle_polish(a, surface, 4, frozen, {}, 1);
+  angle_polish(b, surface, 4, frozen, {}, 2);
+  EXPECT_EQ((a.V - b.V).cwiseAbs().maxCoeff(), 0.0);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(SliverCollapse, CollapsesTheShortEdgeOfSlivers) {
+  const TriangleMesh fine = test::icosphere(5);
+  const MeshSurfaceProjector surface(fine.V, fine.F);
+  WorkingMesh w = working(test::icosphere(2));
+  // Move vertex 0 most of the way to a neighbour: its short edge makes slivers.
+  const MeshFace f = w.face(w.vertex_faces()[0][0]);
+  const int nb = f[0] == 0 ? f[1] : f[0];
+  w.V.row(0) = (0.9 * w.V.row(nb) + 0.1 * w.V.row(0)).normalized();
+  ASSERT_GT(slivers(w, 25), 0);
+  MesherStats stats;
+  EXPECT_GT(collapse_slivers(w, surface, {}, stats), 0);
+  EXPECT_EQ(slivers(w, 25), 0);
+  const ValidationReport r = validate(w, true);
+  EXPECT_TRUE(r.ok()) << r.summary();
+  EXPECT_EQ(r.genus, 0);
+  EXPECT_EQ(r.vertices, test::icosphere(2).V.rows() - 1);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(EdgeSplit, SplitsTheLongEdgesOfSliversAcrossAFilledHole) {
+  // A planar grid with a hole of 6 × 1 cells closed by two fans of long slivers (from the hole's
+  // lower-left corner to the top row, from its upper-right corner to the bottom row).
+  const int n = 12;
+  const TriangleMesh g = test::grid(n);
+  const MeshSurfaceProjector surface(g.V, g.F);
+  WorkingMesh w = working(g);
+  std::vector<char> drop(w.num_faces(), 0);
+  for (int f = 0; f < w.num_faces(); ++f) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (int v : w.face(f)) c += w.V.row(v).transpose() / 3.0;
+    const int ix = static_cast<int>(std::floor(c.x() * n)), iy = static_cast<int>(std::floor(c.y() * n));
+    drop[f] = ix >= 3 && ix <= 8 && iy == 5;
+  }
+  ASSERT_EQ(w.remove_faces(drop), 12);
+  auto vertex_at = [&](int ix, int iy) {
+    int best = 0;
+    for (int v = 1; v < w.num_vertices(); ++v)
+      if ((w.V.row(v) - Eigen::RowVector3d(ix, iy, 0) / n).norm() < (w.V.row(best) - Eigen::RowVector3d(ix, iy, 0) / n).norm())
+        best = v;
+    return best;
+  };
+  // Each fill triangle holds one loop edge a-b: oriented against the mesh's half-edge a->b.
+  auto add = [&](int apex, int a, int b) {
+    if (w.has_half_edge(a, b)) w.add_face({apex, b, a});
+    else w.add_face({apex, a, b});
+  };
+  const int b0 = vertex_at(3, 5), t6 = vertex_at(9, 6);
+  for (int i = 3; i < 9; ++i) add(b0, vertex_at(i, 6), vertex_at(i + 1, 6));
+  for (int i = 3; i < 9; ++i) add(t6, vertex_at(i, 5), vertex_at(i + 1, 5));
+  const ValidationReport r0 = validate(w, false);
+  ASSERT_TRUE(r0.ok()) << r0.summary();
+  ASSERT_EQ(r0.boundary_loops, 1);
+  const int slivers_before = slivers(w, 25);
+  ASSERT_GE(slivers_before, 10);
+  MesherStats stats;
+  EXPECT_GT(split_long_edges(w, surface, {}, stats), 0);
+  EXPECT_LT(slivers(w, 25), slivers_before);
+  const ValidationReport r = validate(w, false);
+  EXPECT_TRUE(r.ok()) << r.summary();
+  EXPECT_EQ(r.boundary_loops, 1);
+  EXPECT_EQ(self_intersecting_pairs(w), 0);
+  for (int v = 0; v < w.num_vertices(); ++v) EXPECT_NEAR(w.V(v, 2), 0.0, 1e-12);  // on the plane
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(Orientation, TurnsAnInsideOutClosedMeshOutward) {
+  TriangleMesh s = test::icosphere(2);
+  s.F.col(1).swap(s.F.col(2));
+  WorkingMesh w = working(s);
+  EXPECT_EQ(orient_closed_pieces_outward(w), s.F.rows());
+  double volume = 0;
+  for (const MeshFace& f : w.faces())
+    volume += w.V.row(f[0]).dot(w.V.row(f[1]).cross(w.V.row(f[2]))) / 6.0;
+  EXPECT_GT(volume, 0);
+  EXPECT_EQ(orient_closed_pieces_outward(w), 0);
+}
+
+TEST(Orientation, OpenPiecesKeepTheirOrientation) {
+  TriangleMesh g = test::grid(4);
+  g.F.col(1).swap(g.F.col(2));
+  WorkingMesh w = working(g);
+  EXPECT_EQ(orient_closed_pieces_outward(w), 0);
+  EXPECT_TRUE(w.faces() == faces_of(g.F));
+}
+
+TEST(Orientation, SmallPiecesAreRemoved) {
+  const TriangleMesh s = test::icosphere(1);  // 80 faces
+  const TriangleMesh t = test::icosphere(0);  // 20 faces
+  const int n = static_cast<int>(s.V.rows());
+  Eigen::MatrixX3d V(n + t.V.rows(), 3);
+  V << s.V, t.V.rowwise() + Eigen::RowVector3d(4, 0, 0);
+  WorkingMesh w(V, Eigen::MatrixX3d::Zero(V.rows(), 3), {});
+  for (const MeshFace& f : faces_of(s.F)) w.add_face(f);
+  for (const MeshFace& f : faces_of(t.F)) w.add_face({f[0] + n, f[1] + n, f[2] + n});
+  EXPECT_EQ(remove_small_pieces(w, 21), 20);
+  EXPECT_EQ(w.num_faces(), 80);
+  EXPECT_EQ(remove_small_pieces(w, 100), 0);  // never every face
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(Compaction, DropsUnusedVerticesInOrder) {
+  Eigen::MatrixX3d V(5, 3);
+  V << 0, 0, 0, 9, 9, 9, 1, 0, 0, 0, 1, 0, 8, 8, 8;
+  WorkingMesh w(V, Eigen::MatrixX3d::Zero(5, 3), {});
+  w.add_face({0, 2, 3});
+  int unused = 0;
+  const TriangleMesh m = compact_mesh(w, &unused);
+  EXPECT_EQ(unused, 2);
+  ASSERT_EQ(m.V.rows(), 3);
+  EXPECT_EQ(m.V.row(1), V.row(2));
+  EXPECT_EQ(m.F.row(0), Eigen::RowVector3i(0, 1, 2));
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(ReconstructionDriver, CvtOptionsFollowTheStartOptions) {
+  ReconstructionOptions o;
+  o.sites = 1234;
+  o.iterations = 7;
+  o.seed = 5;
+  o.lloyd_relaxation = 1.3;
+  const CvtOptions surface = reconstruction_cvt_options(o);  // default: the surface-Lloyd start
+  EXPECT_EQ(surface.sites, 1234);
+  EXPECT_EQ(surface.iterations, 7);
+  EXPECT_EQ(surface.seed, 5u);
+  EXPECT_EQ(surface.relaxation, 1.3);
+  EXPECT_FALSE(surface.build_dual);
+  EXPECT_EQ(surface.initialization, CvtInitialization::farthest_point);
+  EXPECT_EQ(surface.surface_lloyd_iterations, o.surface_lloyd_iterations);
+  EXPECT_EQ(surface.surface_lloyd_relaxation, o.cloud.surface_lloyd_relaxation);
+  EXPECT_EQ(surface.voronoi_rings, surface.voronoi_rings_settled);
+  o.surface_lloyd_iterations = 0;
+  o.farthest_point_start = true;
+  const CvtOptions graph = reconstruction_cvt_options(o);
+  EXPECT_EQ(graph.initialization, CvtInitialization::farthest_point);
+  EXPECT_EQ(graph.graph_lloyd_iterations, o.cloud.graph_lloyd_iterations);
+  EXPECT_EQ(graph.surface_lloyd_iterations, 0);
+  o.farthest_point_start = false;
+  EXPECT_EQ(reconstruction_cvt_options(o).initialization, CvtInitialization::random);
+}
+
+TEST(ReconstructionDriver, RejectsBadStageOptions) {
+  const TriangleMesh s = test::icosphere(3);
+  ReconstructionOptions o;
+  o.sites = 50;
+  auto rejects = [&](const ReconstructionOptions& bad, const std::string& needle) {
+    try {
+      reconstruct_surface(s.V, bad);
+      ADD_FAILURE() << "no exception for " << needle;
+    } catch (const InvalidInputError& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  ReconstructionOptions a = o;
+  a.cloud.fit_cells = 0;
+  rejects(a, "fit_cells");
+  ReconstructionOptions b = o;
+  b.cloud.max_crossing_fraction = 1.5;
+  rejects(b, "max_crossing_fraction");
+  ReconstructionOptions c = o;
+  c.cloud.surface_lloyd_relaxation = 2;
+  rejects(c, "surface_lloyd_relaxation");
+  ReconstructionOptions d = o;
+  d.fit.min_quadratic_points = 3;
+  rejects(d, "min_quadratic_points");
+  ReconstructionOptions e = o;
+  e.mesher.min_piece_faces = -1;
+  rejects(e, "min_piece_faces");
+}
+
+}  // namespace
+}  // namespace heatcvt
