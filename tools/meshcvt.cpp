@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
   const CvtOptions paper_cvt;
   double min_vertices_per_site = defaults.min_vertices_per_site;
   int repair_rounds = defaults.repair_rounds;
+  bool no_post = !defaults.post_cvt_stages;
   std::string mesh_path, out_path, cells_path, report_path,
       init = cvt.initialization == CvtInitialization::farthest_point ? "farthest" : "random";
   double relaxation = cvt.relaxation;
@@ -94,9 +95,12 @@ int main(int argc, char** argv) {
                  "rounds of adding a site to every cell at a non-manifold spot of the dual and running the CVT again "
                  "(0 = off)")
       ->capture_default_str();
+  app.add_flag("--no-post-cvt", no_post,
+               "write the dual triangulation itself, without the post-CVT stages (manifold extraction, hole filling, "
+               "untangling, polish, sliver collapse, edge splits; the input mesh is their projector)");
   app.add_flag("--paper", paper,
                "the paper's configuration for every option not given: random start, plain Lloyd, 100 iterations, "
-               "no quality evaluation or target, no splitting, no repair rounds");
+               "no quality evaluation or target, no splitting, no repair rounds, no post-CVT stages");
   app.add_flag("-q,--quiet", quiet, "no progress and no report on the terminal");
   try {
     app.parse(argc, argv);
@@ -124,6 +128,7 @@ int main(int argc, char** argv) {
     if (!given("--surface-lloyd")) surface_lloyd = paper_cvt.surface_lloyd_iterations;
     if (!given("--no-split")) no_split = !paper_cvt.split_nonmanifold_cells;
     if (!given("--repair-rounds")) repair_rounds = 0;
+    if (!given("--no-post-cvt")) no_post = true;
     cvt = paper_cvt;
   }
   const int rc = cli::run_tool("meshcvt", [&]() -> int {
@@ -163,6 +168,7 @@ int main(int argc, char** argv) {
     remesh.anisotropy = anisotropy;
     remesh.min_vertices_per_site = min_vertices_per_site;
     remesh.repair_rounds = repair_rounds;
+    remesh.post_cvt_stages = !no_post;
     remesh.cvt = cvt;
     remesh.cvt.sites = sites;
     remesh.cvt.iterations = iterations;
@@ -203,7 +209,7 @@ int main(int argc, char** argv) {
     const ValidationReport& checks = res.checks;
     const TriangleQuality& q = res.quality;
 
-    write_mesh(out_path, r.dual.V, r.dual.F);
+    write_mesh(out_path, res.mesh.V, res.mesh.F);
     if (!cells_path.empty()) {
       MeshAttributes attr;
       attr.face_int = r.diagram.face_cell;
@@ -233,6 +239,7 @@ int main(int argc, char** argv) {
           .add("duplicate_triangles", r.dual.duplicate_triangles)
           .add("flipped_triangles", r.dual.flipped_against_input)
           .add("unused_sites", static_cast<long>(r.dual.unused_sites.size()))
+          .add("output_vertices", static_cast<long>(res.mesh.V.rows())).add("post_cvt_kept", res.post_cvt_kept)
           .add("refinement_levels", res.refinement_levels).add("cvt_vertices", res.cvt_vertices)
           .add("repair_rounds", res.repair_rounds).add("repair_sites", res.repair_sites)
           .add("repair_dropped_sites", res.repair_dropped_sites);
@@ -258,12 +265,14 @@ int main(int argc, char** argv) {
     }
     if (!quiet) {
       std::printf("meshcvt: %s (%d vertices) -> %s (%d vertices, %d triangles)\n", mesh_path.c_str(), nv,
-                  out_path.c_str(), static_cast<int>(r.dual.V.rows()), q.triangles);
+                  out_path.c_str(), static_cast<int>(res.mesh.V.rows()), q.triangles);
       std::printf("  factor: %.3f s, %.1f MB (%s); %d iterations%s, %.4f s per iteration; total %.2f s\n", r.factor_seconds,
                   r.factor_bytes / 1e6, heatcvt::blas_description().c_str(), done, r.converged ? " (converged)" : (r.reached_quality ? " (quality target reached)" : ""), per_iter, total_s);
       std::printf("  stages:");
       for (const auto& [name, seconds] : res.stage_seconds) std::printf(" %s %.2f s;", name.c_str(), seconds);
       std::printf("\n");
+      if (!no_post && !res.post_cvt_kept)
+        std::printf("  the post-CVT stages' result failed checks the dual passed: the dual is written\n");
       if (res.repair_rounds)
         std::printf("  %d sites added, %d dropped in %d closed-ball repair rounds\n", res.repair_sites,
                     res.repair_dropped_sites, res.repair_rounds);

@@ -9,6 +9,7 @@
 
 #include "heatcvt/errors.h"
 #include "heatcvt/laplacian.h"
+#include "heatcvt/mesher/projector.h"
 #include "heatcvt/subdivision.h"
 
 namespace heatcvt {
@@ -120,6 +121,43 @@ void repair_closed_ball(const TriangleMesh& work, const Laplacian& laplacian, co
   }
 }
 
+// Checks of a result against the input's topology; a mesh without triangles gets the one failed
+// check "has_triangles".
+ValidationReport check_result(const TriangleMesh& result, const SurfaceDescription& input, bool built) {
+  ValidationReport rep;
+  if (built && result.F.rows() > 0) return validate_triangle_mesh(result.V, result.F, dual_checks(input));
+  if (built) {
+    MeshCheck empty;
+    empty.name = "has_triangles";
+    empty.detail = "the dual has no triangles (no point where three cells meet)";
+    rep.checks.push_back(empty);
+  }
+  return rep;
+}
+
+// The shared post-CVT stages on out.cvt.dual with the input mesh as the projector (the refined
+// mesh is the same surface). Their result replaces out.mesh unless it fails checks that the dual
+// passed (the stages, made for clouds, may open or fill a thin handle): then the dual is kept and
+// out.post_cvt_kept is false.
+void run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options, RemeshResult& out) {
+  const MeshSurfaceProjector surface(input.V, input.F);
+  SurfaceMesherOptions mo = options.mesher;
+  mo.threads = options.cvt.threads;
+  DualSurfaceResult post = mesh_dual_surface(out.cvt.dual.V, out.cvt.dual.F, surface, mo);
+  out.mesher = std::move(post.stats);
+  // the mesher validates its result as an open surface; the checks below use the input's topology
+  for (const auto& stage : out.mesher.stage_seconds)
+    if (stage.first != "validate") out.stage_seconds.push_back(stage);
+  const auto t = Clock::now();
+  ValidationReport checks = check_result(post.mesh, out.input, true);
+  out.post_cvt_kept = checks.ok() || !out.checks.ok();
+  if (out.post_cvt_kept) {
+    out.mesh = std::move(post.mesh);
+    out.checks = std::move(checks);
+  }
+  out.stage_seconds.emplace_back("post-CVT checks", seconds_since(t));
+}
+
 }  // namespace
 
 std::string SurfaceDescription::genus_text() const {
@@ -190,16 +228,10 @@ RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options, 
   t = Clock::now();
   out.mesh.V = out.cvt.dual.V;
   out.mesh.F = out.cvt.dual.F;
-  out.quality = triangle_quality(out.mesh.V, out.mesh.F);
-  if (options.cvt.build_dual && out.mesh.F.rows() > 0) {
-    out.checks = validate_triangle_mesh(out.mesh.V, out.mesh.F, dual_checks(out.input));
-  } else if (options.cvt.build_dual) {
-    MeshCheck empty;
-    empty.name = "has_triangles";
-    empty.detail = "the dual has no triangles (no point where three cells meet)";
-    out.checks.checks.push_back(empty);
-  }
+  out.checks = check_result(out.mesh, out.input, options.cvt.build_dual);
   out.stage_seconds.emplace_back("checks", seconds_since(t));
+  if (options.post_cvt_stages && options.cvt.build_dual && out.mesh.F.rows() > 0) run_post_cvt_stages(mesh, options, out);
+  out.quality = triangle_quality(out.mesh.V, out.mesh.F);
   out.iterations = static_cast<int>(out.cvt.iterations.size());
   out.converged = out.cvt.converged;
   out.sites = out.cvt.sites;

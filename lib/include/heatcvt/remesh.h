@@ -10,7 +10,9 @@
 ///     4. heat CVT (Lloyd iteration, localized solves) and its dual            centroidal_voronoi()
 ///     5. closed-ball repair: while the dual is not a manifold, a new site in
 ///        every cell at a non-manifold spot and the CVT again from all sites  repair rounds below
-///     6. checks of the dual (manifold, closed, genus, self-intersections)     validate_triangle_mesh()
+///     6. the shared post-CVT stages on the dual with the input mesh as the
+///        projector (manifold extraction, holes, untangle, polish, slivers)    mesh_dual_surface()
+///     7. checks of the result (manifold, closed, genus, self-intersections)   validate_triangle_mesh()
 #include <Eigen/Core>
 #include <string>
 #include <utility>
@@ -19,6 +21,8 @@
 #include "heatcvt/cvt.h"
 #include "heatcvt/dual_mesh.h"
 #include "heatcvt/mesh.h"
+#include "heatcvt/mesher/mesher_stats.h"
+#include "heatcvt/mesher/surface_mesher.h"
 #include "heatcvt/validate.h"
 
 namespace heatcvt {
@@ -69,12 +73,22 @@ struct RemeshOptions {
   int repair_iterations = 4;
   /// Sites added by the repair rounds, at most this fraction of cvt.sites in total. Default 0.1.
   double max_repair_fraction = 0.1;
+  /// Run the shared post-CVT stages (mesh_dual_surface(), mesher/surface_mesher.h) on the dual with
+  /// the input mesh as the projector: the vertices are then projected onto the input and may be
+  /// fewer or more than the sites (unused sites dropped, slivers collapsed, long edges split).
+  /// Their result is kept unless it fails checks that the dual passed (RemeshResult::post_cvt_kept).
+  /// false = the output is the dual itself (vertex i = site i). Default true.
+  bool post_cvt_stages = true;
+  /// Options of those stages (threads: cvt.threads is used). Default SurfaceMesherOptions{}.
+  SurfaceMesherOptions mesher;
 };
 
 /// Result of remesh_cvt().
 struct RemeshResult {
-  TriangleMesh mesh;                 ///< the dual triangulation of the CVT: vertex i = sites[i] (input units)
-  std::vector<SurfacePoint> sites;   ///< the final sites on the input mesh (faces and barycentric coordinates of the input)
+  /// The remeshed surface (input units): the dual triangulation of the CVT after the post-CVT
+  /// stages, or the dual itself (vertex i = sites[i]) when post_cvt_stages is false.
+  TriangleMesh mesh;
+  std::vector<SurfacePoint> sites;   ///< the CVT's final sites on the input mesh (faces and barycentric coordinates of the input)
   TriangleQuality quality;           ///< φmin, φm of `mesh`
   /// validate_triangle_mesh() of `mesh` against the input's topology; a dual without triangles
   /// gets the one failed check "has_triangles" instead.
@@ -88,6 +102,10 @@ struct RemeshResult {
   int repair_rounds = 0;             ///< closed-ball repair rounds run
   int repair_sites = 0;              ///< sites added by them
   int repair_dropped_sites = 0;      ///< sites in no dual triangle dropped by them (a cell enclosed by another)
+  MesherStats mesher;                ///< counts of the post-CVT stages (empty when not run)
+  /// The post-CVT stages ran and their result is `mesh`; false when they did not run or their
+  /// result failed checks that the dual passed (then `mesh` is the dual).
+  bool post_cvt_kept = false;
   /// The last CVT: its heat Voronoi diagram lives on the refined mesh (cvt_vertices vertices),
   /// its sites on the refined mesh's faces; statistics of every iteration.
   CvtResult cvt;
