@@ -3,7 +3,10 @@
 // the closed-ball repair turns a dual with cells wrapped around a thin part into a manifold.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
+#include <vector>
 #include <limits>
 #include <random>
 
@@ -108,6 +111,12 @@ TEST(RemeshCvt, UpsamplesACoarseTorusToAValidManifoldOfTheSameGenus) {
   EXPECT_EQ(r.checks.genus, 1);
   EXPECT_EQ(r.checks.boundary_loops, 0);
   EXPECT_EQ(r.checks.components, 1);
+  // The post-CVT stages ran on the dual and their result is the output; every stage is timed.
+  EXPECT_TRUE(r.post_cvt_kept);
+  std::vector<std::string> stages;
+  for (const auto& s : r.stage_seconds) stages.push_back(s.first);
+  for (const char* name : {"refine", "laplacian", "cvt", "repair", "checks", "relaxation polish", "angle polish", "compact"})
+    EXPECT_NE(std::find(stages.begin(), stages.end(), name), stages.end()) << name;
   // The sites are points of the input; the output vertices lie on the input surface.
   for (const SurfacePoint& p : r.sites) {
     ASSERT_GE(p.face, 0);
