@@ -136,7 +136,7 @@ ValidationReport check_result(const TriangleMesh& result, const SurfaceDescripti
 }
 
 // The shared post-CVT stages on out.cvt.dual with the input mesh as the projector (the refined
-// mesh is the same surface). Their result replaces out.mesh unless it fails checks that the dual
+// mesh is the same surface). Their result replaces out.mesh unless it fails a check that the dual
 // passed (the stages, made for clouds, may open or fill a thin handle): then the dual is kept and
 // out.post_cvt_kept is false.
 void run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options, RemeshResult& out) {
@@ -150,7 +150,12 @@ void run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options
     if (stage.first != "validate") out.stage_seconds.push_back(stage);
   const auto t = Clock::now();
   ValidationReport checks = check_result(post.mesh, out.input, true);
-  out.post_cvt_kept = checks.ok() || !out.checks.ok();
+  // kept when it passes every check the dual passed
+  out.post_cvt_kept = true;
+  for (const MeshCheck& c : out.checks.checks) {
+    const MeshCheck* after = checks.find(c.name);
+    if (c.ran && c.passed && !(after && after->ran && after->passed)) out.post_cvt_kept = false;
+  }
   if (out.post_cvt_kept) {
     out.mesh = std::move(post.mesh);
     out.checks = std::move(checks);
@@ -230,7 +235,9 @@ RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options, 
   out.mesh.F = out.cvt.dual.F;
   out.checks = check_result(out.mesh, out.input, options.cvt.build_dual);
   out.stage_seconds.emplace_back("checks", seconds_since(t));
-  if (options.post_cvt_stages && options.cvt.build_dual && out.mesh.F.rows() > 0) run_post_cvt_stages(mesh, options, out);
+  // The stages orient every closed piece outward: not for a non-orientable input.
+  if (options.post_cvt_stages && options.cvt.build_dual && out.mesh.F.rows() > 0 && !out.input.non_orientable)
+    run_post_cvt_stages(mesh, options, out);
   out.quality = triangle_quality(out.mesh.V, out.mesh.F);
   out.iterations = static_cast<int>(out.cvt.iterations.size());
   out.converged = out.cvt.converged;

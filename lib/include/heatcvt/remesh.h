@@ -76,7 +76,8 @@ struct RemeshOptions {
   /// Run the shared post-CVT stages (mesh_dual_surface(), mesher/surface_mesher.h) on the dual with
   /// the input mesh as the projector: the vertices are then projected onto the input and may be
   /// fewer or more than the sites (unused sites dropped, slivers collapsed, long edges split).
-  /// Their result is kept unless it fails checks that the dual passed (RemeshResult::post_cvt_kept).
+  /// Their result is kept unless it fails a check that the dual passed (RemeshResult::post_cvt_kept).
+  /// Not run on non-orientable inputs (the stages orient closed pieces outward).
   /// false = the output is the dual itself (vertex i = site i). Default true.
   bool post_cvt_stages = true;
   /// Options of those stages (threads: cvt.threads is used). Default SurfaceMesherOptions{}.
@@ -104,7 +105,7 @@ struct RemeshResult {
   int repair_dropped_sites = 0;      ///< sites in no dual triangle dropped by them (a cell enclosed by another)
   MesherStats mesher;                ///< counts of the post-CVT stages (empty when not run)
   /// The post-CVT stages ran and their result is `mesh`; false when they did not run or their
-  /// result failed checks that the dual passed (then `mesh` is the dual).
+  /// result failed a check that the dual passed (then `mesh` is the dual).
   bool post_cvt_kept = false;
   /// The last CVT: its heat Voronoi diagram lives on the refined mesh (cvt_vertices vertices),
   /// its sites on the refined mesh's faces; statistics of every iteration.
