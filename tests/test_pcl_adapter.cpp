@@ -632,10 +632,13 @@ TEST(HeatCVTReconstruction, BadInputsGivePclErrorAndEmptyResult) {
 TEST(OneCallApi, RemeshCvtGivesTheDualOfTheCvtDeterministically) {
   const heatcvt::TriangleMesh input = heatcvt::read_mesh(data_path("meshes/bun_zipper_res4.ply"));
   heatcvt::RemeshOptions opt;
-  opt.sites = 100;
-  opt.iterations = 5;
-  opt.seed = 2;
-  opt.threads = 2;
+  opt.cvt = heatcvt::CvtOptions{};  // the paper's plain Lloyd: exactly `iterations` iterations
+  opt.cvt.sites = 100;
+  opt.cvt.iterations = 5;
+  opt.cvt.seed = 2;
+  opt.cvt.threads = 2;
+  opt.repair_rounds = 0;
+  opt.post_cvt_stages = false;  // the output is the dual itself: vertex i = site i
   const heatcvt::RemeshResult r = heatcvt::remesh_cvt(input, opt);
   ASSERT_EQ(r.mesh.V.rows(), 100);
   ASSERT_EQ(r.sites.size(), 100u);
@@ -649,14 +652,15 @@ TEST(OneCallApi, RemeshCvtGivesTheDualOfTheCvtDeterministically) {
   // Same result with 1 and 4 threads (the run above used 2).
   for (int threads : {1, 4}) {
     SCOPED_TRACE(threads);
-    opt.threads = threads;
+    opt.cvt.threads = threads;
     const heatcvt::RemeshResult again = heatcvt::remesh_cvt(input, opt);
     EXPECT_TRUE(again.mesh.V == r.mesh.V);
     EXPECT_TRUE(again.mesh.F == r.mesh.F);
   }
 
   heatcvt::RemeshOptions bad = opt;
-  bad.sites = static_cast<int>(input.V.rows()) + 1;
+  bad.min_vertices_per_site = 0;  // no refinement: at most one site per vertex
+  bad.cvt.sites = static_cast<int>(input.V.rows()) + 1;
   EXPECT_THROW(heatcvt::remesh_cvt(input, bad), heatcvt::InvalidInputError);
 }
 

@@ -17,34 +17,26 @@
 #include "heatcvt/dual_mesh.h"
 #include "heatcvt/errors.h"
 #include "heatcvt/heat_solver.h"
-#include "heatcvt/laplacian.h"
 #include "heatcvt/mesh_io.h"
 #include "heatcvt/normalize.h"
+#include "heatcvt/remesh.h"
 #include "heatcvt/validate.h"
 #include "report_json.h"
 
 using namespace heatcvt;
 using Clock = std::chrono::steady_clock;
 
-namespace {
-// The checks of a dual without triangles: validate_triangle_mesh needs faces, so one failed check.
-ValidationReport empty_mesh_report() {
-  ValidationReport report;
-  MeshCheck check;
-  check.name = "has_triangles";
-  check.detail = "the dual triangulation has no triangles (too few sites for the surface)";
-  report.checks.push_back(check);
-  return report;
-}
-}  // namespace
-
 int main(int argc, char** argv) {
   CLI::App app{"meshcvt: remesh a triangle mesh by an intrinsic centroidal Voronoi tessellation with heat "
                "diffusion (Herholz, Haase, Alexa 2017, §7.1); writes the dual triangulation"};
   // Defaults shown by --help: the best measured configuration (fast_cvt_options); --paper switches
   // every option not given explicitly to the paper's plain Lloyd (CvtOptions{}).
-  CvtOptions cvt = fast_cvt_options(CvtOptions{}.sites);
+  const RemeshOptions defaults;
+  CvtOptions cvt = defaults.cvt;
   const CvtOptions paper_cvt;
+  double min_vertices_per_site = defaults.min_vertices_per_site;
+  int repair_rounds = defaults.repair_rounds;
+  bool no_post = !defaults.post_cvt_stages;
   std::string mesh_path, out_path, cells_path, report_path,
       init = cvt.initialization == CvtInitialization::farthest_point ? "farthest" : "random";
   double relaxation = cvt.relaxation;
@@ -97,9 +89,20 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--no-split", no_split,
                "keep the site count: do not add sites to cells that are too big for thin parts (non-manifold dual)");
+  app.add_option("--min-vertices-per-site", min_vertices_per_site,
+                 "refine the input by midpoint subdivision (surface unchanged) until it has this many vertices per "
+                 "site, so more sites than input vertices work (0 = never refine)")
+      ->capture_default_str();
+  app.add_option("--repair-rounds", repair_rounds,
+                 "rounds of adding a site to every cell at a non-manifold spot of the dual and running the CVT again "
+                 "(0 = off)")
+      ->capture_default_str();
+  app.add_flag("--no-post-cvt", no_post,
+               "write the dual triangulation itself, without the post-CVT stages (manifold extraction, hole filling, "
+               "untangling, polish, sliver collapse, edge splits; the input mesh is their projector)");
   app.add_flag("--paper", paper,
                "the paper's configuration for every option not given: random start, plain Lloyd, 100 iterations, "
-               "no quality evaluation or target, no splitting");
+               "no quality evaluation or target, no splitting, no repair rounds, no post-CVT stages");
   app.add_flag("-q,--quiet", quiet, "no progress and no report on the terminal");
   if (const int status = cli::parse_command_line(app, argc, argv, "meshcvt"); status >= 0) return status;
 
@@ -114,6 +117,8 @@ int main(int argc, char** argv) {
     if (!given("--graph-lloyd")) graph_lloyd = paper_cvt.graph_lloyd_iterations;
     if (!given("--surface-lloyd")) surface_lloyd = paper_cvt.surface_lloyd_iterations;
     if (!given("--no-split")) no_split = !paper_cvt.split_nonmanifold_cells;
+    if (!given("--repair-rounds")) repair_rounds = 0;
+    if (!given("--no-post-cvt")) no_post = true;
     cvt = paper_cvt;
   }
   return cli::run_tool("meshcvt", [&]() -> int {
@@ -126,6 +131,9 @@ int main(int argc, char** argv) {
     if (!(anisotropy >= 0) || !std::isfinite(anisotropy)) throw InvalidInputError("--anisotropy must be >= 0");
     if (!(t_coef > 0) || !std::isfinite(t_coef)) throw InvalidInputError("--t-coef must be a positive number");
     if (threads < 0) throw InvalidInputError("--threads must be >= 0");
+    if (!(min_vertices_per_site >= 0) || !std::isfinite(min_vertices_per_site))
+      throw InvalidInputError("--min-vertices-per-site must be a number >= 0");
+    if (repair_rounds < 0) throw InvalidInputError("--repair-rounds must be >= 0");
     if (quality_every < 0) throw InvalidInputError("--quality-every must be >= 0");
     if (!(target_mean >= 0 && target_mean <= 60) || !(target_min >= 0 && target_min <= 60))
       throw InvalidInputError("--target-phi-m / --target-phi-min must be angles in [0, 60] degrees");
@@ -145,78 +153,58 @@ int main(int argc, char** argv) {
     // depend on the units; the outputs are written back in the input's coordinates.
     const NormalizationFrame frame = cli::on_file(mesh_path, [&] { return normalize_positions(mesh.V); });
     const int nv = static_cast<int>(mesh.V.rows());
-    if (sites > nv)
-      throw InvalidInputError("--sites " + std::to_string(sites) + " exceeds the " + std::to_string(nv) +
-                              " vertices of " + mesh_path);
-    const MeshTopology topo = mesh_topology(mesh.F, nv);
-    const int input_genus = mesh_genus(mesh.F, nv);
-    // A non-orientable input (Klein bottle, Möbius strip) is valid for the intrinsic method; its
-    // dual is then checked as a non-orientable surface (validate.h) instead of failing the
-    // orientation check. Only inputs with inconsistently oriented edges need the full test.
-    bool input_non_orientable = false;
-    if (topo.inconsistent_edges > 0 && topo.nonmanifold_edges == 0) {
-      ValidationOptions iopt;
-      iopt.check_self_intersections = false;
-      iopt.allow_non_orientable = true;
-      input_non_orientable = validate_triangle_mesh(mesh.V, mesh.F, iopt).orientable == 0;
-    }
-    const std::string genus_text =
-        input_genus >= 0 ? "genus " + std::to_string(input_genus)
-                         : input_non_orientable ? "non-orientable, Euler characteristic " +
-                                                      std::to_string(topo.euler_characteristic())
-                                                : std::string("genus undefined (not a manifold)");
+    const SurfaceDescription input = describe_surface(mesh);
+    const int input_genus = input.genus;
     log("read " + mesh_path + ": " + std::to_string(nv) + " vertices, " + std::to_string(mesh.F.rows()) + " faces, " +
-        genus_text + (topo.boundary_edges ? ", open" : ", closed"));
+        input.genus_text() + (input.closed() ? ", closed" : ", open"));
 
-    auto t0 = Clock::now();
-    Eigen::VectorXd metric;
-    Laplacian lap = cli::on_file(mesh_path, [&] {
-      return anisotropy > 0 ? anisotropic_laplacian(mesh.V, mesh.F, anisotropy, &metric) : cotan_laplacian(mesh.V, mesh.F);
-    });
-    const double laplacian_s = cli::seconds_since(t0);
-    if (!lap.degenerate_faces.empty())
-      log("warning: " + std::to_string(lap.degenerate_faces.size()) + " degenerate faces in " + mesh_path +
-          " carry no heat conduction");
-
-    cvt.sites = sites;
-    cvt.iterations = iterations;
-    cvt.tolerance = tolerance;
-    cvt.seed = seed;
-    cvt.threads = threads;
-    cvt.time_coefficient = t_coef;
-    cvt.quality_every = quality_every;
-    cvt.target_phi_mean_deg = target_mean > 0 ? target_mean : (target_min > 0 ? 1e-9 : 0.0);
-    cvt.target_phi_min_deg = target_min > 0 ? target_min : (target_mean > 0 ? 1e-9 : 0.0);
-    cvt.initialization = init == "farthest" ? CvtInitialization::farthest_point : CvtInitialization::random;
-    cvt.relaxation = relaxation;
-    cvt.graph_lloyd_iterations = graph_lloyd;
-    cvt.surface_lloyd_iterations = surface_lloyd;
-    cvt.split_nonmanifold_cells = !no_split;
+    RemeshOptions remesh;
+    remesh.anisotropy = anisotropy;
+    remesh.min_vertices_per_site = min_vertices_per_site;
+    remesh.repair_rounds = repair_rounds;
+    remesh.post_cvt_stages = !no_post;
+    remesh.cvt = cvt;
+    remesh.cvt.sites = sites;
+    remesh.cvt.iterations = iterations;
+    remesh.cvt.tolerance = tolerance;
+    remesh.cvt.seed = seed;
+    remesh.cvt.threads = threads;
+    remesh.cvt.time_coefficient = t_coef;
+    remesh.cvt.quality_every = quality_every;
+    remesh.cvt.target_phi_mean_deg = target_mean > 0 ? target_mean : (target_min > 0 ? 1e-9 : 0.0);
+    remesh.cvt.target_phi_min_deg = target_min > 0 ? target_min : (target_mean > 0 ? 1e-9 : 0.0);
+    remesh.cvt.initialization = init == "farthest" ? CvtInitialization::farthest_point : CvtInitialization::random;
+    remesh.cvt.relaxation = relaxation;
+    remesh.cvt.graph_lloyd_iterations = graph_lloyd;
+    remesh.cvt.surface_lloyd_iterations = surface_lloyd;
+    remesh.cvt.split_nonmanifold_cells = !no_split;
     cli::Progress progress("lloyd", iterations, quiet);
-    CvtResult r = cli::on_file(mesh_path, [&] {
-      return centroidal_voronoi(mesh.V, mesh.F, lap, cvt, {},
-                                [&](const CvtIterationStats& s) {
-                                  progress.update(s.iteration);
-                                  return true;
-                                },
-                                metric);
+    RemeshResult res = remesh_cvt(mesh, remesh, [&](const CvtIterationStats& s) {
+      progress.update(s.iteration);
+      return true;
     });
     progress.finish();
+    const CvtResult& r = res.cvt;
+    double laplacian_s = 0;
+    for (const auto& [name, seconds] : res.stage_seconds)
+      if (name == "laplacian") laplacian_s = seconds;
+    if (res.refinement_levels)
+      log("refined " + mesh_path + " by " + std::to_string(res.refinement_levels) + " midpoint subdivision(s) to " +
+          std::to_string(res.cvt_vertices) + " vertices (--min-vertices-per-site " + std::to_string(min_vertices_per_site) + ")");
+    if (res.degenerate_faces)
+      log("warning: " + std::to_string(res.degenerate_faces) + " degenerate faces in " + mesh_path +
+          " carry no heat conduction");
     for (int comp : r.diagram.unreached_components)
       log("warning: connected component " + std::to_string(comp) + " of " + mesh_path +
           " has no site and gets no cell");
+    const ValidationReport& checks = res.checks;
+    const TriangleQuality& q = res.quality;
 
-    // Checks of the dual (nothing is repaired).
-    ValidationOptions vopt;
-    vopt.require_closed = topo.boundary_edges == 0;
-    vopt.expected_genus = input_genus;
-    vopt.allow_non_orientable = input_non_orientable;
-    // A dual without triangles (e.g. -n 1) fails the checks instead of raising an error.
-    const ValidationReport checks = r.dual.F.rows() > 0 ? validate_triangle_mesh(r.dual.V, r.dual.F, vopt)
-                                                        : empty_mesh_report();
-    const TriangleQuality q = triangle_quality(r.dual.V, r.dual.F);
-    restore_frame(r.dual.V, frame);
-    restore_frame(r.diagram.V, frame);
+    // Outputs in the input's coordinates.
+    TriangleMesh out_mesh = res.mesh;
+    restore_frame(out_mesh.V, frame);
+    Eigen::MatrixX3d cells_V = r.diagram.V;
+    restore_frame(cells_V, frame);
 
     const int done = static_cast<int>(r.iterations.size());
     double iter_s = 0;
@@ -255,6 +243,13 @@ int main(int argc, char** argv) {
     rep["duplicate_triangles"] = r.dual.duplicate_triangles;
     rep["flipped_triangles"] = r.dual.flipped_against_input;
     rep["unused_sites"] = r.dual.unused_sites.size();
+    rep["output_vertices"] = res.mesh.V.rows();
+    rep["post_cvt_kept"] = res.post_cvt_kept;
+    rep["refinement_levels"] = res.refinement_levels;
+    rep["cvt_vertices"] = res.cvt_vertices;
+    rep["repair_rounds"] = res.repair_rounds;
+    rep["repair_sites"] = res.repair_sites;
+    rep["repair_dropped_sites"] = res.repair_dropped_sites;
     std::vector<double> moves, times;
     for (const auto& s : r.iterations) moves.push_back(s.max_move), times.push_back(s.seconds);
     rep["max_move_per_iteration"] = moves;
@@ -263,25 +258,32 @@ int main(int argc, char** argv) {
                             {"components", checks.components}, {"boundary_loops", checks.boundary_loops},
                             {"euler_characteristic", checks.euler_characteristic}, {"genus", checks.genus},
                             {"orientable", checks.orientable}, {"crosscaps", checks.crosscaps}};
-    const int status = cli::finish_report(
-        rep, {{"laplacian", laplacian_s}, {"factor", r.factor_seconds}, {"iterations", iter_s}}, check_list);
+    const int status = cli::finish_report(rep, res.stage_seconds, check_list);
     {
       OutputTransaction outputs;  // all outputs or none (atomic_file.h)
-      write_mesh(out_path, r.dual.V, r.dual.F);
+      write_mesh(out_path, out_mesh.V, out_mesh.F);
       if (!cells_path.empty()) {
         MeshAttributes attr;
         attr.face_int = r.diagram.face_cell;
         attr.face_color = cli::cell_colors(r.diagram.face_cell);
-        write_mesh(cells_path, r.diagram.V, r.diagram.F, attr);
+        write_mesh(cells_path, cells_V, r.diagram.F, attr);
       }
       if (!report_path.empty()) cli::write_json(report_path, rep);
       outputs.commit();
     }
     if (!quiet) {
       std::printf("meshcvt: %s (%d vertices) -> %s (%d vertices, %d triangles)\n", mesh_path.c_str(), nv,
-                  out_path.c_str(), static_cast<int>(r.dual.V.rows()), q.triangles);
+                  out_path.c_str(), static_cast<int>(res.mesh.V.rows()), q.triangles);
       std::printf("  factor: %.3f s, %.1f MB (%s); %d iterations%s, %.4f s per iteration; total %.2f s\n", r.factor_seconds,
                   r.factor_bytes / 1e6, heatcvt::blas_description().c_str(), done, r.converged ? " (converged)" : (r.reached_quality ? " (quality target reached)" : ""), per_iter, total_s);
+      std::printf("  stages:");
+      for (const auto& [name, seconds] : res.stage_seconds) std::printf(" %s %.2f s;", name.c_str(), seconds);
+      std::printf("\n");
+      if (!no_post && !res.post_cvt_kept)
+        std::printf("  the post-CVT stages' result failed checks the dual passed: the dual is written\n");
+      if (res.repair_rounds)
+        std::printf("  %d sites added, %d dropped in %d closed-ball repair rounds\n", res.repair_sites,
+                    res.repair_dropped_sites, res.repair_rounds);
       std::printf("  quality: phi_min %.2f deg, phi_m %.2f deg, %.2f%% of triangles below 30 deg\n", q.min_angle_deg,
                   q.mean_min_angle_deg, 100.0 * q.below_30_fraction);
       std::printf("  cell-area variance %.4g%s\n", r.final_area_variance,

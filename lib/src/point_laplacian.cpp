@@ -230,23 +230,9 @@ TuftedResult tufted_intrinsic_delaunay(const std::vector<std::array<int, 3>>& so
   return result;
 }
 
-}  // namespace
-
-PointLaplacian point_laplacian(const Eigen::MatrixX3d& P, const PointLaplacianOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  const int k = options.k;
-  if (k < 3) throw InvalidInputError("point_laplacian: k = " + std::to_string(k) + " is too small (need k >= 3)");
-  if (options.threads < 0)
-    throw InvalidInputError("point_laplacian: threads = " + std::to_string(options.threads) + " is negative");
-  if (P.rows() < static_cast<Eigen::Index>(k) + 1)
-    throw InvalidInputError("point_laplacian: the cloud has " + std::to_string(P.rows()) +
-                            " points, need at least k + 1 = " + std::to_string(k + 1));
-  if (!(options.cot_clamp > 0) || !(options.degenerate_area_epsilon >= 0) || !(options.min_mass_fraction > 0) ||
-      !(options.mollify_factor >= 0))
-    throw InvalidInputError("point_laplacian: cot_clamp and min_mass_fraction must be > 0, "
-                            "degenerate_area_epsilon and mollify_factor >= 0");
-  const int n = static_cast<int>(P.rows());
-  const int threads = resolve_threads(options.threads);
+// The k nearest neighbours of every point: the given table (checked) or a fresh kNN search.
+Eigen::MatrixXi neighbour_table(const Eigen::MatrixX3d& P, const PointLaplacianOptions& options, int threads) {
+  const int n = static_cast<int>(P.rows()), k = options.k;
   Eigen::MatrixXi nb;
   if (options.neighbors) {
     const Eigen::MatrixXi& given = *options.neighbors;
@@ -264,139 +250,98 @@ PointLaplacian point_laplacian(const Eigen::MatrixX3d& P, const PointLaplacianOp
     nb = k_nearest_neighbors(P, k, threads);  // validates finiteness too (throws naming the point)
   }
 
+  return nb;
+}
+
+// The local triangles of point i (paper §8, Sharp & Crane 2020): PCA frame of the point and its
+// k neighbours, their projection to the tangent plane, its Delaunay triangulation, and the
+// triangles incident to the centre with their cotangents. `dt`, `q`, `ids` are per-thread work
+// space; the unit normal goes to `normal`.
+LocalFan local_fan(const Eigen::MatrixX3d& P, const Eigen::MatrixXi& nb, int i, const PointLaplacianOptions& options,
+                   Delaunay& dt, std::vector<Eigen::Vector2d>& q, std::vector<int>& ids, Eigen::RowVector3d& normal) {
+  const int k = options.k;
   const Eigen::MatrixX3d* on = options.oriented_normals;
-  if (on && on->rows() != n)
-    throw InvalidInputError("point_laplacian: " + std::to_string(on->rows()) + " oriented normals for " +
-                            std::to_string(n) + " points");
-  PointLaplacian out;
-  out.normals.resize(n, 3);
-  std::vector<LocalFan> fans(n);
+  LocalFan fan;
+  // PCA frame of the point and its neighbours.
+  ids[0] = i;
+  for (int c = 0; c < k; ++c) ids[c + 1] = nb(i, c);
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (int id : ids) mean += P.row(id).transpose();
+  mean /= (k + 1);
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  double mean_sq = 0;
+  for (int id : ids) {
+    const Eigen::Vector3d d = P.row(id).transpose() - mean;
+    C += d * d.transpose();
+    mean_sq += (P.row(id) - P.row(i)).squaredNorm();
+  }
+  mean_sq /= k;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
+  Eigen::Vector3d nrm = es.eigenvectors().col(0);
+  Eigen::Vector3d e1 = es.eigenvectors().col(2);
+  if (!nrm.allFinite() || !e1.allFinite()) {
+    nrm = Eigen::Vector3d::UnitZ();
+    e1 = Eigen::Vector3d::UnitX();
+  }
+  nrm.normalize();
+  e1 = (e1 - e1.dot(nrm) * nrm).normalized();
+  const Eigen::Vector3d e2 = nrm.cross(e1);  // (e1, e2, n) right-handed: CCW seen from +n
+  normal = nrm.transpose();
 
-#pragma omp parallel num_threads(threads)
-  {
-    Delaunay dt;
-    std::vector<Eigen::Vector2d> q(k + 1);
-    std::vector<int> ids(k + 1);
-#pragma omp for schedule(dynamic, 64)
-    for (int i = 0; i < n; ++i) {
-      // PCA frame of the point and its neighbours.
-      ids[0] = i;
-      for (int c = 0; c < k; ++c) ids[c + 1] = nb(i, c);
-      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-      for (int id : ids) mean += P.row(id).transpose();
-      mean /= (k + 1);
-      Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-      double mean_sq = 0;
-      for (int id : ids) {
-        const Eigen::Vector3d d = P.row(id).transpose() - mean;
-        C += d * d.transpose();
-        mean_sq += (P.row(id) - P.row(i)).squaredNorm();
-      }
-      mean_sq /= k;
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
-      Eigen::Vector3d nrm = es.eigenvectors().col(0);
-      Eigen::Vector3d e1 = es.eigenvectors().col(2);
-      if (!nrm.allFinite() || !e1.allFinite()) {
-        nrm = Eigen::Vector3d::UnitZ();
-        e1 = Eigen::Vector3d::UnitX();
-      }
-      nrm.normalize();
-      e1 = (e1 - e1.dot(nrm) * nrm).normalized();
-      const Eigen::Vector3d e2 = nrm.cross(e1);  // (e1, e2, n) right-handed: CCW seen from +n
-      out.normals.row(i) = nrm.transpose();
-
-      // Projected neighbourhood and its Delaunay triangulation, the centre inserted first so
-      // that it survives if a neighbour coincides with it.
-      dt.clear();
-      const Eigen::Vector3d pi = P.row(i).transpose();
-      for (int c = 0; c <= k; ++c) {
-        const Eigen::Vector3d d = P.row(ids[c]).transpose() - pi;
-        q[c] = Eigen::Vector2d(d.dot(e1), d.dot(e2));
-      }
-      Delaunay::Vertex_handle centre = dt.insert(Kernel::Point_2(0.0, 0.0));
-      centre->info() = 0;
-      for (int c = 1; c <= k; ++c) {
-        if (on && on->row(i).dot(on->row(ids[c])) < 0) continue;  // other side of a thin part
-        const auto before = dt.number_of_vertices();
-        Delaunay::Vertex_handle vh = dt.insert(Kernel::Point_2(q[c].x(), q[c].y()));
-        if (dt.number_of_vertices() != before) vh->info() = c;  // else: duplicate, keep the first
-      }
-      LocalFan& fan = fans[i];
-      if (dt.dimension() < 2) continue;
-      const double min_area = options.degenerate_area_epsilon * mean_sq;
-      Delaunay::Face_circulator fc = dt.incident_faces(centre), done = fc;
-      do {
-        if (dt.is_infinite(fc)) continue;
-        int local[3];
-        for (int c = 0; c < 3; ++c) local[c] = fc->vertex(c)->info();
-        // Rotate so the centre comes first (keeps CCW order, makes output deterministic).
-        while (local[0] != 0) std::rotate(local, local + 1, local + 3);
-        if (on && (on->row(ids[local[0]]).dot(on->row(ids[local[1]])) < 0 ||
-                   on->row(ids[local[1]]).dot(on->row(ids[local[2]])) < 0 ||
-                   on->row(ids[local[0]]).dot(on->row(ids[local[2]])) < 0))
-          continue;
-        const Eigen::Vector2d a = q[local[0]], b = q[local[1]], d = q[local[2]];
-        const double twice_area2d = (b - a).x() * (d - a).y() - (b - a).y() * (d - a).x();
-        if (!(0.5 * twice_area2d > min_area) || !(twice_area2d > 0)) {
-          ++fan.degenerate;
-          continue;
-        }
-        LocalTriangle t;
-        for (int c = 0; c < 3; ++c) {
-          const Eigen::Vector2d& x = q[local[c]];
-          const Eigen::Vector2d u = q[local[(c + 1) % 3]] - x, w = q[local[(c + 2) % 3]] - x;
-          t.cot[c] = std::clamp(u.dot(w) / twice_area2d, -options.cot_clamp, options.cot_clamp);
-          t.v[c] = ids[local[c]];
-        }
-        const Eigen::Vector3d A = P.row(t.v[0]), B = P.row(t.v[1]), D = P.row(t.v[2]);
-        t.area = 0.5 * (B - A).cross(D - A).norm();
-        fan.triangles.push_back(t);
-      } while (++fc != done);
+  // Projected neighbourhood and its Delaunay triangulation, the centre inserted first so
+  // that it survives if a neighbour coincides with it.
+  dt.clear();
+  const Eigen::Vector3d pi = P.row(i).transpose();
+  for (int c = 0; c <= k; ++c) {
+    const Eigen::Vector3d d = P.row(ids[c]).transpose() - pi;
+    q[c] = Eigen::Vector2d(d.dot(e1), d.dot(e2));
+  }
+  Delaunay::Vertex_handle centre = dt.insert(Kernel::Point_2(0.0, 0.0));
+  centre->info() = 0;
+  for (int c = 1; c <= k; ++c) {
+    if (on && on->row(i).dot(on->row(ids[c])) < 0) continue;  // other side of a thin part
+    const auto before = dt.number_of_vertices();
+    Delaunay::Vertex_handle vh = dt.insert(Kernel::Point_2(q[c].x(), q[c].y()));
+    if (dt.number_of_vertices() != before) vh->info() = c;  // else: duplicate, keep the first
+  }
+  if (dt.dimension() < 2) return fan;
+  const double min_area = options.degenerate_area_epsilon * mean_sq;
+  Delaunay::Face_circulator fc = dt.incident_faces(centre), done = fc;
+  do {
+    if (dt.is_infinite(fc)) continue;
+    int local[3];
+    for (int c = 0; c < 3; ++c) local[c] = fc->vertex(c)->info();
+    // Rotate so the centre comes first (keeps CCW order, makes output deterministic).
+    while (local[0] != 0) std::rotate(local, local + 1, local + 3);
+    if (on && (on->row(ids[local[0]]).dot(on->row(ids[local[1]])) < 0 ||
+               on->row(ids[local[1]]).dot(on->row(ids[local[2]])) < 0 ||
+               on->row(ids[local[0]]).dot(on->row(ids[local[2]])) < 0))
+      continue;
+    const Eigen::Vector2d a = q[local[0]], b = q[local[1]], d = q[local[2]];
+    const double twice_area2d = (b - a).x() * (d - a).y() - (b - a).y() * (d - a).x();
+    if (!(0.5 * twice_area2d > min_area) || !(twice_area2d > 0)) {
+      ++fan.degenerate;
+      continue;
     }
-  }
-
-  // Sequential, ordered merge: results do not depend on the thread count.
-  std::vector<std::pair<int64_t, double>> edge_weights;
-  std::vector<std::pair<std::array<int, 3>, int64_t>> keyed;  // (sorted corners, occurrence)
-  std::vector<std::array<int, 3>> all_tris;  // the soup, with repetitions, in point order
-  Eigen::VectorXd M = Eigen::VectorXd::Zero(n);
-  for (int i = 0; i < n; ++i) {
-    out.degenerate_triangles += fans[i].degenerate;
-    for (const LocalTriangle& t : fans[i].triangles) {
-      if (!options.intrinsic_delaunay)
-        for (int c = 0; c < 3; ++c) {
-          M[t.v[c]] += t.area / 9.0;  // (1/3 weight) · (area / 3 per corner), eq. 6
-          const int a = t.v[(c + 1) % 3], b = t.v[(c + 2) % 3];
-          const int64_t key = static_cast<int64_t>(std::min(a, b)) * n + std::max(a, b);
-          edge_weights.emplace_back(key, t.cot[c] / 6.0);  // (1/3 weight) · ½ cot, eq. 5
-        }
-      std::array<int, 3> s = t.v;
-      std::sort(s.begin(), s.end());
-      keyed.emplace_back(s, static_cast<int64_t>(all_tris.size()));
-      all_tris.push_back(t.v);
+    LocalTriangle t;
+    for (int c = 0; c < 3; ++c) {
+      const Eigen::Vector2d& x = q[local[c]];
+      const Eigen::Vector2d u = q[local[(c + 1) % 3]] - x, w = q[local[(c + 2) % 3]] - x;
+      t.cot[c] = std::clamp(u.dot(w) / twice_area2d, -options.cot_clamp, options.cot_clamp);
+      t.v[c] = ids[local[c]];
     }
-  }
-  if (keyed.empty())
-    throw InvalidInputError("point_laplacian: no local triangle could be built (the " + std::to_string(n) +
-                            " points are collinear or coincident)");
-  if (options.intrinsic_delaunay) {
-    const TuftedResult r = tufted_intrinsic_delaunay(all_tris, P, options.mollify_factor, options.cot_clamp,
-                                                     1.0 / 3.0, edge_weights, M);
-    out.intrinsic_flips = r.flips;
-    out.unflippable_edges = r.skipped;
-  }
+    const Eigen::Vector3d A = P.row(t.v[0]), B = P.row(t.v[1]), D = P.row(t.v[2]);
+    t.area = 0.5 * (B - A).cross(D - A).norm();
+    fan.triangles.push_back(t);
+  } while (++fc != done);
+  return fan;
+}
 
-  // Distinct triangles, first occurrence kept, in order of occurrence.
-  std::sort(keyed.begin(), keyed.end());
-  std::vector<int64_t> firsts;
-  for (size_t r = 0; r < keyed.size(); ++r)
-    if (r == 0 || keyed[r].first != keyed[r - 1].first) firsts.push_back(keyed[r].second);
-  std::sort(firsts.begin(), firsts.end());
-  out.triangles.resize(static_cast<Eigen::Index>(firsts.size()), 3);
-  for (size_t r = 0; r < firsts.size(); ++r)
-    for (int c = 0; c < 3; ++c) out.triangles(static_cast<Eigen::Index>(r), c) = all_tris[firsts[r]][c];
-
-  // Sum the contributions per edge (sorted: deterministic order), clamp, assemble.
+// Sums the per-edge contributions (sorted: deterministic order), clamps negative weights and
+// assembles L, the lumped masses M (floored at min_mass_fraction of the mean) and h̄.
+void assemble_laplacian(const Eigen::MatrixX3d& P, std::vector<std::pair<int64_t, double>>& edge_weights,
+                        Eigen::VectorXd M, const PointLaplacianOptions& options, PointLaplacian& out) {
+  const int n = static_cast<int>(P.rows());
   std::sort(edge_weights.begin(), edge_weights.end());
   std::vector<Eigen::Triplet<double>> triplets;
   triplets.reserve(edge_weights.size());
@@ -449,6 +394,90 @@ PointLaplacian point_laplacian(const Eigen::MatrixX3d& P, const PointLaplacianOp
       M[i] = floor_mass;
     }
   lap.M = std::move(M);
+}
+
+}  // namespace
+
+PointLaplacian point_laplacian(const Eigen::MatrixX3d& P, const PointLaplacianOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const int k = options.k;
+  if (k < 3) throw InvalidInputError("point_laplacian: k = " + std::to_string(k) + " is too small (need k >= 3)");
+  if (options.threads < 0)
+    throw InvalidInputError("point_laplacian: threads = " + std::to_string(options.threads) + " is negative");
+  if (P.rows() < static_cast<Eigen::Index>(k) + 1)
+    throw InvalidInputError("point_laplacian: the cloud has " + std::to_string(P.rows()) +
+                            " points, need at least k + 1 = " + std::to_string(k + 1));
+  if (!(options.cot_clamp > 0) || !(options.degenerate_area_epsilon >= 0) || !(options.min_mass_fraction > 0) ||
+      !(options.mollify_factor >= 0))
+    throw InvalidInputError("point_laplacian: cot_clamp and min_mass_fraction must be > 0, "
+                            "degenerate_area_epsilon and mollify_factor >= 0");
+  const int n = static_cast<int>(P.rows());
+  const int threads = resolve_threads(options.threads);
+  const Eigen::MatrixXi nb = neighbour_table(P, options, threads);
+
+  const Eigen::MatrixX3d* on = options.oriented_normals;
+  if (on && on->rows() != n)
+    throw InvalidInputError("point_laplacian: " + std::to_string(on->rows()) + " oriented normals for " +
+                            std::to_string(n) + " points");
+  PointLaplacian out;
+  out.normals.resize(n, 3);
+  std::vector<LocalFan> fans(n);
+
+#pragma omp parallel num_threads(threads)
+  {
+    Delaunay dt;
+    std::vector<Eigen::Vector2d> q(k + 1);
+    std::vector<int> ids(k + 1);
+    Eigen::RowVector3d normal;
+#pragma omp for schedule(dynamic, 64)
+    for (int i = 0; i < n; ++i) {
+      fans[i] = local_fan(P, nb, i, options, dt, q, ids, normal);
+      out.normals.row(i) = normal;
+    }
+  }
+
+  // Sequential, ordered merge: results do not depend on the thread count.
+  std::vector<std::pair<int64_t, double>> edge_weights;
+  std::vector<std::pair<std::array<int, 3>, int64_t>> keyed;  // (sorted corners, occurrence)
+  std::vector<std::array<int, 3>> all_tris;  // the soup, with repetitions, in point order
+  Eigen::VectorXd M = Eigen::VectorXd::Zero(n);
+  for (int i = 0; i < n; ++i) {
+    out.degenerate_triangles += fans[i].degenerate;
+    for (const LocalTriangle& t : fans[i].triangles) {
+      if (!options.intrinsic_delaunay)
+        for (int c = 0; c < 3; ++c) {
+          M[t.v[c]] += t.area / 9.0;  // (1/3 weight) · (area / 3 per corner), eq. 6
+          const int a = t.v[(c + 1) % 3], b = t.v[(c + 2) % 3];
+          const int64_t key = static_cast<int64_t>(std::min(a, b)) * n + std::max(a, b);
+          edge_weights.emplace_back(key, t.cot[c] / 6.0);  // (1/3 weight) · ½ cot, eq. 5
+        }
+      std::array<int, 3> s = t.v;
+      std::sort(s.begin(), s.end());
+      keyed.emplace_back(s, static_cast<int64_t>(all_tris.size()));
+      all_tris.push_back(t.v);
+    }
+  }
+  if (keyed.empty())
+    throw InvalidInputError("point_laplacian: no local triangle could be built (the " + std::to_string(n) +
+                            " points are collinear or coincident)");
+  if (options.intrinsic_delaunay) {
+    const TuftedResult r = tufted_intrinsic_delaunay(all_tris, P, options.mollify_factor, options.cot_clamp,
+                                                     1.0 / 3.0, edge_weights, M);
+    out.intrinsic_flips = r.flips;
+    out.unflippable_edges = r.skipped;
+  }
+
+  // Distinct triangles, first occurrence kept, in order of occurrence.
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<int64_t> firsts;
+  for (size_t r = 0; r < keyed.size(); ++r)
+    if (r == 0 || keyed[r].first != keyed[r - 1].first) firsts.push_back(keyed[r].second);
+  std::sort(firsts.begin(), firsts.end());
+  out.triangles.resize(static_cast<Eigen::Index>(firsts.size()), 3);
+  for (size_t r = 0; r < firsts.size(); ++r)
+    for (int c = 0; c < 3; ++c) out.triangles(static_cast<Eigen::Index>(r), c) = all_tris[firsts[r]][c];
+
+  assemble_laplacian(P, edge_weights, std::move(M), options, out);
   out.neighbors = nb;
   out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;

@@ -5,7 +5,7 @@
 ///
 ///   heat_voronoi_diagram()  heat Voronoi cells of sites on a triangle mesh  (paper §4)
 ///   heat_centroids_of()     the cells and their heat centroids               (paper §5)
-///   remesh_cvt()            CVT remeshing of a triangle mesh (= `meshcvt`)   (paper §7.1)
+///   remesh_cvt()            CVT remeshing of a triangle mesh (= `meshcvt`; remesh.h) (paper §7.1)
 ///   reconstruct_surface()   mesh from a point cloud (= `cloud2mesh`; reconstruct.h) (paper §8)
 ///
 /// Every function takes an options struct whose defaults are documented below (the same as the
@@ -35,6 +35,7 @@
 #include "heatcvt/point_laplacian.h"
 #include "heatcvt/reconstruct.h"
 #include "heatcvt/reconstruct_stream.h"
+#include "heatcvt/remesh.h"
 #include "heatcvt/scan_merge.h"
 #include "heatcvt/shapes.h"
 #include "heatcvt/subdivision.h"
@@ -111,60 +112,6 @@ inline HeatCentroids heat_centroids_of(const TriangleMesh& mesh, const std::vect
     else
       out.positions.row(row).setConstant(std::numeric_limits<double>::quiet_NaN());
   }
-  return out;
-}
-
-/// Options of remesh_cvt(); defaults as `meshcvt --help` (and CvtOptions).
-struct RemeshOptions {
-  int sites = 1000;          ///< vertices of the output mesh (CVT sites), 1 ≤ sites ≤ #V. Default 1000.
-  int iterations = 100;      ///< maximum Lloyd iterations (paper: 100). Default 100.
-  double tolerance = 0.0;    ///< stop when no site moves more than tolerance·spacing; 0 = never. Default 0.
-  double anisotropy = 0.0;   ///< λ of the anisotropic lift (p, λn) (paper §7.1, Fig. 9: 0.05); 0 = isotropic. Default 0.
-  double time_coefficient = 1.0;  ///< t = C·h̄². Default 1.
-  std::uint32_t seed = 1;    ///< seed of the random initial sites. Default 1.
-  CvtInitialization initialization = CvtInitialization::random;  ///< Default random (paper).
-  int threads = 0;           ///< 0 = all hardware threads; results do not depend on it. Default 0.
-};
-
-/// Result of remesh_cvt().
-struct RemeshResult {
-  TriangleMesh mesh;             ///< the dual triangulation of the CVT: #sites vertices (input units)
-  std::vector<SurfacePoint> sites;  ///< the final sites on the input mesh (vertex i = sites[i])
-  TriangleQuality quality;       ///< φmin, φm of `mesh`
-  int iterations = 0;            ///< Lloyd iterations run
-  bool converged = false;        ///< stopped by the tolerance
-};
-
-/// CVT remeshing (paper §7.1): cotan Laplacian (or the anisotropic lifted one when
-/// anisotropy > 0), Lloyd iteration with heat Voronoi cells and heat centroids using localized
-/// solves (§6), then the dual triangulation of the final diagram — the pipeline of `meshcvt`,
-/// so the same mesh and options give the same output mesh.
-///   mesh V #V by 3, F #F by 3 (valid triangle mesh).
-/// \throw InvalidInputError (invalid mesh, sites < 1 or > #V, iterations < 0, λ < 0, ...); SolverError.
-inline RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options = {}) {
-  validate_mesh(mesh.V, mesh.F, "mesh");
-  TriangleMesh unit = mesh;  // computed in the unit bounding-box frame (normalize.h), as meshcvt does
-  const NormalizationFrame frame = normalize_positions(unit.V);
-  Eigen::VectorXd metric;
-  const Laplacian laplacian = options.anisotropy > 0 ? anisotropic_laplacian(unit.V, unit.F, options.anisotropy, &metric)
-                                                     : cotan_laplacian(unit.V, unit.F);
-  CvtOptions cvt;
-  cvt.sites = options.sites;
-  cvt.iterations = options.iterations;
-  cvt.tolerance = options.tolerance;
-  cvt.seed = options.seed;
-  cvt.threads = options.threads;
-  cvt.time_coefficient = options.time_coefficient;
-  cvt.initialization = options.initialization;
-  CvtResult r = centroidal_voronoi(unit.V, unit.F, laplacian, cvt, {}, {}, metric);
-  RemeshResult out;
-  out.mesh.V = r.dual.V;
-  out.mesh.F = r.dual.F;
-  out.sites = std::move(r.sites);
-  out.quality = triangle_quality(out.mesh.V, out.mesh.F);
-  restore_frame(out.mesh.V, frame);
-  out.iterations = static_cast<int>(r.iterations.size());
-  out.converged = r.converged;
   return out;
 }
 

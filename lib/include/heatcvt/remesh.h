@@ -1,0 +1,126 @@
+#pragma once
+/// \file remesh.h
+/// CVT remeshing of a triangle mesh in one call (paper §7.1): the pipeline of `meshcvt`.
+///
+///   remesh_cvt(mesh, options)
+///     1. describe the input surface (topology, genus, orientability)        describe_surface()
+///     2. refine it by midpoint subdivision while it has fewer than
+///        min_vertices_per_site vertices per site (the surface is unchanged)  midpoint_subdivide()
+///     3. cotan Laplacian (or the anisotropic lifted one)                      laplacian.h, cvt.h
+///     4. heat CVT (Lloyd iteration, localized solves) and its dual            centroidal_voronoi()
+///     5. closed-ball repair: while the dual is not a manifold, a new site in
+///        every cell at a non-manifold spot and the CVT again from all sites  repair rounds below
+///     6. the shared post-CVT stages on the dual with the input mesh as the
+///        projector (manifold extraction, holes, untangle, polish, slivers)    mesh_dual_surface()
+///     7. checks of the result (manifold, closed, genus, self-intersections)   validate_triangle_mesh()
+#include <Eigen/Core>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "heatcvt/cvt.h"
+#include "heatcvt/dual_mesh.h"
+#include "heatcvt/mesh.h"
+#include "heatcvt/mesher/mesher_stats.h"
+#include "heatcvt/mesher/surface_mesher.h"
+#include "heatcvt/validate.h"
+
+namespace heatcvt {
+
+/// Topology of an input surface as remesh_cvt() checks its output against it.
+struct SurfaceDescription {
+  MeshTopology topology;
+  int genus = -1;               ///< mesh_genus(); −1 when not an orientable manifold
+  bool non_orientable = false;  ///< an edge manifold admitting no consistent orientation (Klein bottle, Möbius strip)
+  bool closed() const { return topology.boundary_edges == 0; }
+  /// "genus 3", "non-orientable, Euler characteristic 0" or "genus undefined (not a manifold)".
+  std::string genus_text() const;
+};
+
+/// Topology, genus and orientability of a triangle mesh (V #V by 3, F #F by 3). A non-orientable
+/// input (Klein bottle, Möbius strip) is valid for the intrinsic method; its dual is then checked
+/// as a non-orientable surface (ValidationOptions::allow_non_orientable) instead of failing the
+/// orientation check. Only inputs with inconsistently oriented edges need that (costlier) test.
+SurfaceDescription describe_surface(const TriangleMesh& mesh);
+
+/// Options of remesh_cvt(). Defaults are `meshcvt`'s (see its --help).
+struct RemeshOptions {
+  /// Options of the CVT; `cvt.sites` is the number of output vertices (any count ≥ 1: more than the
+  /// input's vertices is an upsampling, served by refining the input). Default
+  /// fast_cvt_options(1000) (meshcvt's defaults; CvtOptions{} is the paper's plain Lloyd).
+  CvtOptions cvt = fast_cvt_options(1000);
+  /// λ of the anisotropic lift (p, λn) (paper §7.1, Fig. 9: 0.05); 0 = isotropic. Default 0.
+  double anisotropy = 0.0;
+  /// Refine the input by midpoint subdivision (1-to-4, the surface is unchanged) until it has at
+  /// least this many vertices per site, so the heat diffusion resolves every cell; 0 = never refine
+  /// (then cvt.sites ≤ #V is required). Default 8. Measured with meshcvt's defaults on
+  /// ../shared/data/meshes: spot, elephant and torus at 1,000 sites (2.3–2.9 vertices per site)
+  /// end with φm 43.7–45.3° after heat iterations, once refined (9–12 per site) the start meets
+  /// φm ≥ 51°, φmin ≥ 25° with no heat iteration; max_planck_decimated at 1,000 sites misses it at
+  /// 5.3 per site and meets it at 21; knot1, fandisk, spot and torus meet it from 3.2–9.8.
+  double min_vertices_per_site = 8.0;
+  /// At most this many midpoint subdivisions (each multiplies #F by 4). Default 4.
+  int max_refinement_levels = 4;
+  /// Closed-ball repair: at most this many rounds of "a new site at the farthest point of every
+  /// cell at a non-manifold spot of the dual (cells wrapping a thin part, touching themselves or
+  /// split), the sites in no dual triangle (a cell enclosed by another) dropped, then the CVT
+  /// again from these sites" while the dual is not a manifold (on inputs without non-manifold
+  /// edges). 0 = off. Default 3.
+  int repair_rounds = 3;
+  /// Heat Lloyd iterations of the CVT of a repair round, at most (its start from the previous
+  /// sites plus the new ones is already near a CVT: the round is there to give every cell a
+  /// site, the start's surface-Lloyd iterations settle them). Default 4.
+  int repair_iterations = 4;
+  /// Sites added by the repair rounds, at most this fraction of cvt.sites in total. Default 0.1.
+  double max_repair_fraction = 0.1;
+  /// Run the shared post-CVT stages (mesh_dual_surface(), mesher/surface_mesher.h) on the dual with
+  /// the input mesh as the projector: the vertices are then projected onto the input and may be
+  /// fewer or more than the sites (unused sites dropped, slivers collapsed, long edges split).
+  /// Their result is kept unless it fails a check that the dual passed (RemeshResult::post_cvt_kept).
+  /// Not run on non-orientable inputs (the stages orient closed pieces outward).
+  /// false = the output is the dual itself (vertex i = site i). Default true.
+  bool post_cvt_stages = true;
+  /// Options of those stages (threads: cvt.threads is used). Default SurfaceMesherOptions{}.
+  SurfaceMesherOptions mesher;
+};
+
+/// Result of remesh_cvt().
+struct RemeshResult {
+  /// The remeshed surface (input units): the dual triangulation of the CVT after the post-CVT
+  /// stages, or the dual itself (vertex i = sites[i]) when post_cvt_stages is false.
+  TriangleMesh mesh;
+  std::vector<SurfacePoint> sites;   ///< the CVT's final sites on the input mesh (faces and barycentric coordinates of the input)
+  TriangleQuality quality;           ///< φmin, φm of `mesh`
+  /// validate_triangle_mesh() of `mesh` against the input's topology; a dual without triangles
+  /// gets the one failed check "has_triangles" instead.
+  ValidationReport checks;
+  SurfaceDescription input;          ///< topology of the input
+  int iterations = 0;                ///< heat Lloyd iterations run (last CVT)
+  bool converged = false;            ///< stopped by the tolerance (last CVT)
+  int refinement_levels = 0;         ///< midpoint subdivisions of the input before the CVT
+  int cvt_vertices = 0;              ///< vertices of the mesh the CVT ran on
+  int degenerate_faces = 0;          ///< faces without heat conduction (Laplacian::degenerate_faces)
+  int repair_rounds = 0;             ///< closed-ball repair rounds run
+  int repair_sites = 0;              ///< sites added by them
+  int repair_dropped_sites = 0;      ///< sites in no dual triangle dropped by them (a cell enclosed by another)
+  MesherStats mesher;                ///< counts of the post-CVT stages (empty when not run)
+  /// The post-CVT stages ran and their result is `mesh`; false when they did not run or their
+  /// result failed a check that the dual passed (then `mesh` is the dual).
+  bool post_cvt_kept = false;
+  /// The last CVT: its heat Voronoi diagram lives on the refined mesh (cvt_vertices vertices),
+  /// its sites on the refined mesh's faces; statistics of every iteration.
+  CvtResult cvt;
+  /// Wall time of each stage in pipeline order (name, seconds), as ReconstructionResult's.
+  std::vector<std::pair<std::string, double>> stage_seconds;
+};
+
+/// CVT remeshing (paper §7.1), the pipeline of `meshcvt` (see the file comment): the same mesh and
+/// options give the same output mesh as the tool.
+///   mesh V #V by 3, F #F by 3 (valid triangle mesh).
+///   progress: called after every heat Lloyd iteration (return false to stop), as centroidal_voronoi().
+/// \throw InvalidInputError (invalid mesh, cvt.sites < 1, more sites than the refined input's
+///        vertices, bad CvtOptions, λ < 0, ...); SolverError.
+RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options = {},
+                        const CvtCallback& progress = {});
+
+}  // namespace heatcvt

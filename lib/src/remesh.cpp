@@ -1,0 +1,267 @@
+#include "heatcvt/remesh.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "heatcvt/errors.h"
+#include "heatcvt/laplacian.h"
+#include "heatcvt/mesher/projector.h"
+#include "heatcvt/normalize.h"
+#include "heatcvt/subdivision.h"
+
+namespace heatcvt {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// The checks a dual must pass to be a 2-manifold (with the input's boundary): the ones whose
+// offending elements name cells (dual vertices) that break the closed-ball property.
+const char* const kManifoldChecks[] = {"manifold_edges", "manifold_vertices", "closed", "all_vertices_used"};
+
+// Validation options of the dual against the input's topology.
+ValidationOptions dual_checks(const SurfaceDescription& input) {
+  ValidationOptions o;
+  o.require_closed = input.closed();
+  o.expected_genus = input.genus;
+  o.allow_non_orientable = input.non_orientable;
+  return o;
+}
+
+// Cells of the dual's vertices at non-manifold spots: the endpoints of edges with more than two
+// triangles (or border edges of a closed input), vertices whose triangles do not form one fan and
+// sites in no triangle. Empty when the dual is a 2-manifold with the input's boundary.
+std::vector<int> cells_breaking_closed_ball(const DualMesh& dual, const SurfaceDescription& input) {
+  ValidationOptions o = dual_checks(input);
+  o.check_self_intersections = false;
+  o.expected_genus = -1;
+  o.max_listed = static_cast<int>(dual.V.rows());
+  std::vector<int> cells;
+  if (dual.F.rows() == 0) {  // no Voronoi vertex at all (e.g. every cell a ring around a thin tube)
+    for (int s = 0; s < static_cast<int>(dual.V.rows()); ++s) cells.push_back(s);
+    return cells;
+  }
+  const ValidationReport rep = validate_triangle_mesh(dual.V, dual.F, o);
+  for (const char* name : kManifoldChecks) {
+    const MeshCheck* c = rep.find(name);
+    if (!c || c->passed) continue;
+    for (const auto& where : c->where) cells.insert(cells.end(), where.begin(), where.end());
+  }
+  std::sort(cells.begin(), cells.end());
+  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+  return cells;
+}
+
+// For each cell in `cells`, the point of the tessellation (a corner of a refined face of the
+// cell) farthest from its site: where a cell that wraps a thin part or is split needs a new site.
+// Cells without such a point (no faces, or all within `min_distance` of the site) get none.
+std::vector<SurfacePoint> farthest_points_of_cells(const VoronoiDiagram& d, const Eigen::MatrixX3d& site_positions,
+                                                   const std::vector<int>& cells, double min_distance) {
+  std::vector<int> slot(static_cast<std::size_t>(d.num_cells()), -1);
+  for (std::size_t i = 0; i < cells.size(); ++i)
+    if (cells[i] >= 0 && cells[i] < d.num_cells()) slot[static_cast<std::size_t>(cells[i])] = static_cast<int>(i);
+  std::vector<double> best(cells.size(), min_distance * min_distance);
+  std::vector<SurfacePoint> found(cells.size());
+  for (Eigen::Index r = 0; r < d.F.rows(); ++r) {
+    const int c = d.face_cell[r];
+    if (c < 0 || slot[static_cast<std::size_t>(c)] < 0) continue;
+    const int i = slot[static_cast<std::size_t>(c)];
+    for (int k = 0; k < 3; ++k) {
+      const double dist = (d.V.row(d.F(r, k)) - site_positions.row(c)).squaredNorm();
+      if (dist <= best[static_cast<std::size_t>(i)]) continue;
+      best[static_cast<std::size_t>(i)] = dist;
+      found[static_cast<std::size_t>(i)].face = d.face_parent[r];
+      found[static_cast<std::size_t>(i)].bary = d.face_bary.row(3 * r + k).transpose();
+    }
+  }
+  found.erase(std::remove_if(found.begin(), found.end(), [](const SurfacePoint& p) { return p.face < 0; }), found.end());
+  return found;
+}
+
+// Whether (V, F) has edges with more than two faces (then no manifold dual exists).
+bool has_nonmanifold_edges(const SurfaceDescription& input) { return input.topology.nonmanifold_edges > 0; }
+
+// Closed-ball repair (RemeshOptions::repair_rounds): while the dual of out.cvt is not a manifold,
+// a new site at the farthest point of every cell at a non-manifold spot, the sites in no triangle
+// (cells enclosed by another cell, which is then an annulus) dropped, and the CVT again from
+// these sites with a few surface-Lloyd iterations (as after the CVT's own splits).
+void repair_closed_ball(const TriangleMesh& work, const Laplacian& laplacian, const Eigen::VectorXd& metric,
+                        const RemeshOptions& options, const CvtCallback& progress, RemeshResult& out) {
+  const int budget = static_cast<int>(options.max_repair_fraction * options.cvt.sites);
+  CvtOptions again = options.cvt;
+  again.surface_lloyd_iterations = std::min(again.surface_lloyd_iterations, again.surface_lloyd_split_iterations);
+  again.iterations = std::min(again.iterations, options.repair_iterations);
+  const double spacing = std::sqrt(surface_area(work.V, work.F) / options.cvt.sites);
+  while (out.repair_rounds < options.repair_rounds && out.repair_sites < budget) {
+    const int ns = static_cast<int>(out.cvt.sites.size());
+    std::vector<int> bad = cells_breaking_closed_ball(out.cvt.dual, out.input);
+    if (bad.empty()) break;
+    std::vector<unsigned char> drop(static_cast<std::size_t>(ns), 0);
+    if (out.cvt.dual.F.rows() > 0)
+      for (int s : out.cvt.dual.unused_sites) drop[static_cast<std::size_t>(s)] = 1;
+    bad.erase(std::remove_if(bad.begin(), bad.end(), [&](int s) { return drop[static_cast<std::size_t>(s)] != 0; }),
+              bad.end());
+    if (static_cast<int>(bad.size()) > budget - out.repair_sites) bad.resize(static_cast<std::size_t>(budget - out.repair_sites));
+    const std::vector<SurfacePoint> added = farthest_points_of_cells(out.cvt.diagram, out.cvt.positions, bad, 1e-6 * spacing);
+    std::vector<SurfacePoint> start;
+    for (int s = 0; s < ns; ++s)
+      if (!drop[static_cast<std::size_t>(s)]) start.push_back(out.cvt.sites[static_cast<std::size_t>(s)]);
+    const int dropped = ns - static_cast<int>(start.size());
+    if (added.empty() && dropped == 0) break;
+    start.insert(start.end(), added.begin(), added.end());
+    out.cvt = centroidal_voronoi(work.V, work.F, laplacian, again, start, progress, metric);
+    out.repair_sites += static_cast<int>(added.size());
+    out.repair_dropped_sites += dropped;
+    ++out.repair_rounds;
+  }
+}
+
+// Checks of a result against the input's topology; a mesh without triangles gets the one failed
+// check "has_triangles".
+ValidationReport check_result(const TriangleMesh& result, const SurfaceDescription& input, bool built) {
+  ValidationReport rep;
+  if (built && result.F.rows() > 0) return validate_triangle_mesh(result.V, result.F, dual_checks(input));
+  if (built) {
+    MeshCheck empty;
+    empty.name = "has_triangles";
+    empty.detail = "the dual has no triangles (no point where three cells meet)";
+    rep.checks.push_back(empty);
+  }
+  return rep;
+}
+
+// The shared post-CVT stages on out.cvt.dual with the input mesh as the projector (the refined
+// mesh is the same surface). Their result replaces out.mesh unless it fails a check that the dual
+// passed (the stages, made for clouds, may open or fill a thin handle): then the dual is kept and
+// out.post_cvt_kept is false.
+void run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options, RemeshResult& out) {
+  const MeshSurfaceProjector surface(input.V, input.F);
+  SurfaceMesherOptions mo = options.mesher;
+  mo.threads = options.cvt.threads;
+  DualSurfaceResult post = mesh_dual_surface(out.cvt.dual.V, out.cvt.dual.F, surface, mo);
+  out.mesher = std::move(post.stats);
+  // the mesher validates its result as an open surface; the checks below use the input's topology
+  for (const auto& stage : out.mesher.stage_seconds)
+    if (stage.first != "validate") out.stage_seconds.push_back(stage);
+  const auto t = Clock::now();
+  ValidationReport checks = check_result(post.mesh, out.input, true);
+  // kept when it passes every check the dual passed
+  out.post_cvt_kept = true;
+  for (const MeshCheck& c : out.checks.checks) {
+    const MeshCheck* after = checks.find(c.name);
+    if (c.ran && c.passed && !(after && after->ran && after->passed)) out.post_cvt_kept = false;
+  }
+  if (out.post_cvt_kept) {
+    out.mesh = std::move(post.mesh);
+    out.checks = std::move(checks);
+  }
+  out.stage_seconds.emplace_back("post-CVT checks", seconds_since(t));
+}
+
+}  // namespace
+
+std::string SurfaceDescription::genus_text() const {
+  if (genus >= 0) return "genus " + std::to_string(genus);
+  if (non_orientable) return "non-orientable, Euler characteristic " + std::to_string(topology.euler_characteristic());
+  return "genus undefined (not a manifold)";
+}
+
+SurfaceDescription describe_surface(const TriangleMesh& mesh) {
+  SurfaceDescription d;
+  const int nv = static_cast<int>(mesh.V.rows());
+  d.topology = mesh_topology(mesh.F, nv);
+  d.genus = mesh_genus(mesh.F, nv);
+  if (d.topology.inconsistent_edges > 0 && d.topology.nonmanifold_edges == 0) {
+    ValidationOptions o;
+    o.check_self_intersections = false;
+    o.allow_non_orientable = true;
+    d.non_orientable = validate_triangle_mesh(mesh.V, mesh.F, o).orientable == 0;
+  }
+  return d;
+}
+
+namespace {
+
+// The pipeline of remesh_cvt() on a mesh already in its unit frame.
+RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions& options, const CvtCallback& progress) {
+  const int sites = options.cvt.sites;
+  if (sites < 1) throw InvalidInputError("remesh_cvt: the number of sites must be >= 1, got " + std::to_string(sites));
+  if (!(options.min_vertices_per_site >= 0) || !std::isfinite(options.min_vertices_per_site))
+    throw InvalidInputError("remesh_cvt: min_vertices_per_site must be a number >= 0");
+  if (options.max_refinement_levels < 0 || options.repair_rounds < 0 || options.repair_iterations < 0 ||
+      !(options.max_repair_fraction >= 0))
+    throw InvalidInputError(
+        "remesh_cvt: max_refinement_levels, repair_rounds, repair_iterations and max_repair_fraction must be >= 0");
+  RemeshResult out;
+  auto t = Clock::now();
+  out.input = describe_surface(mesh);
+
+  // Enough resolution under every cell: midpoint subdivision keeps the surface and its topology.
+  TriangleMesh refined;
+  const TriangleMesh* work = &mesh;
+  while (options.min_vertices_per_site > 0 && out.refinement_levels < options.max_refinement_levels &&
+         static_cast<double>(work->V.rows()) < options.min_vertices_per_site * sites) {
+    refined = midpoint_subdivide(*work);
+    work = &refined;
+    ++out.refinement_levels;
+  }
+  out.cvt_vertices = static_cast<int>(work->V.rows());
+  if (sites > out.cvt_vertices)
+    throw InvalidInputError("remesh_cvt: " + std::to_string(sites) + " sites exceed the " +
+                            std::to_string(out.cvt_vertices) + " vertices of the " +
+                            (out.refinement_levels ? "refined " : "") + "input (raise max_refinement_levels)");
+  out.stage_seconds.emplace_back("refine", seconds_since(t));
+
+  t = Clock::now();
+  Eigen::VectorXd metric;
+  const Laplacian laplacian = options.anisotropy > 0 ? anisotropic_laplacian(work->V, work->F, options.anisotropy, &metric)
+                                                     : cotan_laplacian(work->V, work->F);
+  out.degenerate_faces = static_cast<int>(laplacian.degenerate_faces.size());
+  out.stage_seconds.emplace_back("laplacian", seconds_since(t));
+
+  t = Clock::now();
+  out.cvt = centroidal_voronoi(work->V, work->F, laplacian, options.cvt, {}, progress, metric);
+  out.stage_seconds.emplace_back("cvt", seconds_since(t));
+
+  t = Clock::now();
+  if (options.cvt.build_dual && !has_nonmanifold_edges(out.input)) repair_closed_ball(*work, laplacian, metric, options, progress, out);
+  out.stage_seconds.emplace_back("repair", seconds_since(t));
+
+  t = Clock::now();
+  out.mesh.V = out.cvt.dual.V;
+  out.mesh.F = out.cvt.dual.F;
+  out.checks = check_result(out.mesh, out.input, options.cvt.build_dual);
+  out.stage_seconds.emplace_back("checks", seconds_since(t));
+  // The stages orient every closed piece outward: not for a non-orientable input.
+  if (options.post_cvt_stages && options.cvt.build_dual && out.mesh.F.rows() > 0 && !out.input.non_orientable)
+    run_post_cvt_stages(mesh, options, out);
+  out.quality = triangle_quality(out.mesh.V, out.mesh.F);
+  out.iterations = static_cast<int>(out.cvt.iterations.size());
+  out.converged = out.cvt.converged;
+  out.sites = out.cvt.sites;
+  for (SurfacePoint& p : out.sites)
+    for (int level = 0; level < out.refinement_levels; ++level) p = subdivision_parent(p);
+  return out;
+}
+
+}  // namespace
+
+RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options, const CvtCallback& progress) {
+  validate_mesh(mesh.V, mesh.F, "mesh");
+  // Computed in the unit bounding-box frame (normalize.h), so that the result does not depend on
+  // the unit of length; positions are returned in the input's coordinates.
+  TriangleMesh unit = mesh;
+  const NormalizationFrame frame = normalize_positions(unit.V);
+  RemeshResult out = remesh_in_unit_frame(unit, options, progress);
+  for (Eigen::MatrixX3d* V : {&out.mesh.V, &out.cvt.positions, &out.cvt.diagram.V, &out.cvt.dual.V})
+    if (V->rows() > 0) restore_frame(*V, frame);
+  return out;
+}
+
+}  // namespace heatcvt

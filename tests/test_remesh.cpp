@@ -1,0 +1,186 @@
+// remesh_cvt (remesh.h): midpoint refinement keeps the surface, upsampling beyond the input's
+// vertex count gives a valid closed manifold of the input's genus with the requested count, and
+// the closed-ball repair turns a dual with cells wrapped around a thin part into a manifold.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+#include <limits>
+#include <random>
+
+#include "heatcvt/errors.h"
+#include "heatcvt/remesh.h"
+#include "heatcvt/subdivision.h"
+#include "heatcvt/validate.h"
+#include "test_support.h"
+
+using namespace heatcvt;
+
+namespace {
+
+// Distance of p to the triangle (a, b, c) (Ericson, Real-Time Collision Detection §5.1.5).
+double point_triangle_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                               const Eigen::Vector3d& c) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return (p - a).norm();
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return (p - b).norm();
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return (p - (a + d1 / (d1 - d3) * ab)).norm();
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return (p - c).norm();
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return (p - (a + d2 / (d2 - d6) * ac)).norm();
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+    return (p - (b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b))).norm();
+  const double denom = 1.0 / (va + vb + vc);
+  return (p - (a + ab * vb * denom + ac * vc * denom)).norm();
+}
+
+// Largest distance from the points P to the surface (V, F) (brute force over the faces).
+double max_distance_to_surface(const Eigen::MatrixX3d& P, const TriangleMesh& mesh) {
+  double worst = 0;
+  for (Eigen::Index i = 0; i < P.rows(); ++i) {
+    double best = std::numeric_limits<double>::infinity();
+    for (Eigen::Index f = 0; f < mesh.F.rows(); ++f)
+      best = std::min(best, point_triangle_distance(P.row(i).transpose(), mesh.V.row(mesh.F(f, 0)).transpose(),
+                                                    mesh.V.row(mesh.F(f, 1)).transpose(),
+                                                    mesh.V.row(mesh.F(f, 2)).transpose()));
+    worst = std::max(worst, best);
+  }
+  return worst;
+}
+
+// The icosahedron: icosphere without subdivision (12 vertices, 20 faces).
+TriangleMesh icosahedron() { return test::icosphere(0); }
+
+}  // namespace
+
+TEST(MidpointSubdivision, KeepsTheSurfaceTopologyAndArea) {
+  for (const auto& mesh : {icosahedron(), test::torus(12, 8), test::grid(5)}) {
+    const TriangleMesh fine = midpoint_subdivide(mesh);
+    // Same connectivity as Loop subdivision (whose counts and topology test_subdivision checks).
+    const TriangleMesh loop = loop_subdivide(mesh);
+    EXPECT_EQ(fine.V.rows(), loop.V.rows());
+    EXPECT_TRUE(fine.F == loop.F);
+    EXPECT_NEAR(surface_area(fine.V, fine.F), surface_area(mesh.V, mesh.F), 1e-12 * surface_area(mesh.V, mesh.F));
+    // The old vertices keep their positions; the new ones lie on the old surface.
+    EXPECT_TRUE(fine.V.topRows(mesh.V.rows()) == mesh.V);
+    EXPECT_LT(max_distance_to_surface(fine.V, mesh), 1e-12);
+  }
+}
+
+TEST(MidpointSubdivision, ParentOfAPointIsTheSamePointOfTheCoarseMesh) {
+  const TriangleMesh coarse = test::torus(10, 6);
+  const TriangleMesh fine = midpoint_subdivide(midpoint_subdivide(coarse));
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (int i = 0; i < 200; ++i) {
+    SurfacePoint p;
+    p.face = static_cast<int>(rng() % static_cast<unsigned>(fine.F.rows()));
+    double a = u(rng), b = u(rng);
+    if (a + b > 1) a = 1 - a, b = 1 - b;
+    p.bary = Eigen::Vector3d(a, b, 1 - a - b);
+    const SurfacePoint q = subdivision_parent(subdivision_parent(p));
+    ASSERT_GE(q.face, 0);
+    ASSERT_LT(q.face, coarse.F.rows());
+    EXPECT_NEAR(q.bary.sum(), 1.0, 1e-14);
+    EXPECT_GE(q.bary.minCoeff(), -1e-14);
+    EXPECT_LT((position(fine.V, fine.F, p) - position(coarse.V, coarse.F, q)).norm(), 1e-12);
+  }
+}
+
+TEST(RemeshCvt, UpsamplesACoarseTorusToAValidManifoldOfTheSameGenus) {
+  const TriangleMesh input = test::torus(20, 15);  // 300 vertices, genus 1
+  ASSERT_EQ(input.V.rows(), 300);
+  RemeshOptions opt;
+  opt.cvt.sites = 3000;
+  opt.cvt.threads = 2;
+  const RemeshResult r = remesh_cvt(input, opt);
+  EXPECT_GT(r.refinement_levels, 0);
+  EXPECT_GE(r.cvt_vertices, opt.min_vertices_per_site * opt.cvt.sites);
+  EXPECT_GE(r.mesh.V.rows(), 3000);
+  EXPECT_LE(r.mesh.V.rows(), 3060);  // within 2 % of the requested count
+  EXPECT_TRUE(r.checks.ok()) << r.checks.summary();
+  EXPECT_EQ(r.checks.genus, 1);
+  EXPECT_EQ(r.checks.boundary_loops, 0);
+  EXPECT_EQ(r.checks.components, 1);
+  // The post-CVT stages ran on the dual and their result is the output; every stage is timed.
+  EXPECT_TRUE(r.post_cvt_kept);
+  std::vector<std::string> stages;
+  for (const auto& s : r.stage_seconds) stages.push_back(s.first);
+  for (const char* name : {"refine", "laplacian", "cvt", "repair", "checks", "relaxation polish", "angle polish", "compact"})
+    EXPECT_NE(std::find(stages.begin(), stages.end(), name), stages.end()) << name;
+  // The sites are points of the input; the output vertices lie on the input surface.
+  for (const SurfacePoint& p : r.sites) {
+    ASSERT_GE(p.face, 0);
+    ASSERT_LT(p.face, input.F.rows());
+    EXPECT_GE(p.bary.minCoeff(), -1e-12);
+  }
+  EXPECT_LT(max_distance_to_surface(r.mesh.V, input), 1e-9);
+}
+
+TEST(RemeshCvt, UpsamplesAnIcosahedronToAValidSphere) {
+  const TriangleMesh input = icosahedron();  // 12 vertices
+  RemeshOptions opt;
+  opt.cvt.sites = 500;
+  opt.cvt.threads = 2;
+  const RemeshResult r = remesh_cvt(input, opt);
+  EXPECT_GE(r.mesh.V.rows(), 500);
+  EXPECT_LE(r.mesh.V.rows(), 510);
+  EXPECT_TRUE(r.checks.ok()) << r.checks.summary();
+  EXPECT_EQ(r.checks.genus, 0);
+  EXPECT_EQ(r.checks.boundary_loops, 0);
+  EXPECT_LT(max_distance_to_surface(r.mesh.V, input), 1e-9);
+}
+
+TEST(RemeshCvt, WithoutRefinementMoreSitesThanVerticesIsAnError) {
+  const TriangleMesh input = test::torus(20, 15);
+  RemeshOptions opt;
+  opt.min_vertices_per_site = 0;
+  opt.cvt.sites = 301;
+  EXPECT_THROW(remesh_cvt(input, opt), InvalidInputError);
+  opt.min_vertices_per_site = 4;
+  opt.max_refinement_levels = 0;
+  EXPECT_THROW(remesh_cvt(input, opt), InvalidInputError);
+  opt.max_refinement_levels = -1;
+  EXPECT_THROW(remesh_cvt(input, opt), InvalidInputError);
+  opt.max_refinement_levels = 4;
+  opt.min_vertices_per_site = std::nan("");
+  EXPECT_THROW(remesh_cvt(input, opt), InvalidInputError);
+}
+
+TEST(RemeshCvt, RepairGivesAManifoldWhereCellsWrapAThinTube) {
+  // A thin torus (tube circumference 2π·0.06 ≈ 0.38) with so few sites that their spacing
+  // (≈ 0.2) is not small against the tube's circumference: cells wrap around the tube.
+  const TriangleMesh input = test::torus(160, 24, 1.0, 0.06);
+  RemeshOptions plain;
+  plain.post_cvt_stages = false;  // the dual itself: what the repair is for
+  plain.cvt.sites = 60;
+  plain.cvt.threads = 2;
+  plain.cvt.split_nonmanifold_cells = false;
+  plain.repair_rounds = 0;
+  const RemeshResult before = remesh_cvt(input, plain);
+  ASSERT_FALSE(before.checks.ok()) << "the shape must break the closed-ball property without repair";
+
+  RemeshOptions opt = plain;
+  opt.repair_rounds = RemeshOptions{}.repair_rounds;
+  opt.max_repair_fraction = 2.0;
+  const RemeshResult r = remesh_cvt(input, opt);
+  EXPECT_GT(r.repair_sites, 0);
+  const MeshCheck* edges = r.checks.find("manifold_edges");
+  const MeshCheck* vertices = r.checks.find("manifold_vertices");
+  ASSERT_NE(edges, nullptr);
+  ASSERT_NE(vertices, nullptr);
+  EXPECT_TRUE(edges->passed) << r.checks.summary();
+  EXPECT_TRUE(vertices->passed) << r.checks.summary();
+  EXPECT_TRUE(r.checks.find("closed")->passed) << r.checks.summary();
+  EXPECT_TRUE(r.checks.find("all_vertices_used")->passed) << r.checks.summary();
+  EXPECT_EQ(r.mesh.V.rows(), 60 + r.repair_sites - r.repair_dropped_sites);
+}
