@@ -1,5 +1,7 @@
 #include "heatcvt/mesh.h"
 
+#include "heatcvt/disjoint_sets.h"
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -73,26 +75,15 @@ std::vector<std::vector<int>> vertex_neighbors(int num_vertices, const Eigen::Ma
   return nb;
 }
 
-namespace {
-int find_root(std::vector<int>& parent, int x) {
-  while (parent[x] != x) x = parent[x] = parent[parent[x]];
-  return x;
-}
-}  // namespace
-
 int connected_components(int num_vertices, const Eigen::MatrixX3i& F, Eigen::VectorXi& component) {
-  std::vector<int> parent(num_vertices);
-  std::iota(parent.begin(), parent.end(), 0);
+  DisjointSets sets(num_vertices);
   for (int f = 0; f < F.rows(); ++f)
-    for (int k = 1; k < 3; ++k) {
-      int a = find_root(parent, F(f, 0)), b = find_root(parent, F(f, k));
-      if (a != b) parent[std::max(a, b)] = std::min(a, b);
-    }
+    for (int k = 1; k < 3; ++k) sets.unite(F(f, 0), F(f, k));
   component.resize(num_vertices);
   std::vector<int> id(num_vertices, -1);
   int count = 0;
   for (int v = 0; v < num_vertices; ++v) {
-    int r = find_root(parent, v);
+    const int r = sets.find(v);
     if (id[r] < 0) id[r] = count++;
     component[v] = id[r];
   }

@@ -4,6 +4,8 @@
 // (Surface_mesh + Polygon_mesh_processing).
 #include "heatcvt/validate.h"
 
+#include "heatcvt/disjoint_sets.h"
+
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/connected_components.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
@@ -30,19 +32,6 @@ namespace {
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using CgalMesh = CGAL::Surface_mesh<Kernel::Point_3>;
 namespace PMP = CGAL::Polygon_mesh_processing;
-
-struct UnionFind {
-  std::vector<int> p;
-  explicit UnionFind(int n) : p(n) { std::iota(p.begin(), p.end(), 0); }
-  int find(int x) {
-    while (p[x] != x) x = p[x] = p[p[x]];
-    return x;
-  }
-  void unite(int a, int b) {
-    a = find(a), b = find(b);
-    if (a != b) p[std::max(a, b)] = std::min(a, b);
-  }
-};
 
 struct Topology {
   int vertices = 0, edges = 0, faces = 0, components = 0, boundary_loops = 0;
@@ -79,7 +68,7 @@ Topology analyse(const Eigen::MatrixX3i& F, int nv, int max_listed) {
       half.push_back({std::min(a, b), std::max(a, b), f, a < b ? 1 : 0});
     }
   std::sort(half.begin(), half.end());
-  UnionFind comps(nv), border(nv);
+  DisjointSets comps(nv), border(nv);
   std::vector<char> on_border(nv, 0);
   for (size_t i = 0; i < half.size();) {
     size_t j = i;
@@ -112,28 +101,17 @@ Topology analyse(const Eigen::MatrixX3i& F, int nv, int max_listed) {
         link[2 * i + 1] = F(f, (k + 2) % 3);
       }
   }
-  std::unordered_map<int, int> parent;
-  std::function<int(int)> find = [&](int x) {
-    int r = x;
-    while (parent[r] != r) r = parent[r];
-    while (parent[x] != r) {
-      const int nx = parent[x];
-      parent[x] = r;
-      x = nx;
-    }
-    return r;
-  };
+  // A vertex is manifold when the edges of its link (opposite edges of its faces) form one piece.
+  std::unordered_map<int, int> local;  // link vertex -> index in the link
   for (int v = 0; v < nv; ++v) {
     if (off[v + 1] == off[v]) continue;
-    parent.clear();
+    local.clear();
     for (int i = off[v]; i < off[v + 1]; ++i)
-      for (int q = 0; q < 2; ++q) parent.emplace(link[2 * i + q], link[2 * i + q]);
-    for (int i = off[v]; i < off[v + 1]; ++i) {
-      const int a = find(link[2 * i]), b = find(link[2 * i + 1]);
-      if (a != b) parent[a] = b;
-    }
+      for (int q = 0; q < 2; ++q) local.emplace(link[2 * i + q], static_cast<int>(local.size()));
+    DisjointSets link_sets(static_cast<int>(local.size()));
+    for (int i = off[v]; i < off[v + 1]; ++i) link_sets.unite(local[link[2 * i]], local[link[2 * i + 1]]);
     int nroots = 0;
-    for (auto& kv : parent) nroots += kv.first == find(kv.first);
+    for (int i = 0; i < static_cast<int>(local.size()); ++i) nroots += link_sets.find(i) == i;
     if (nroots > 1) list(t.nonmanifold_vertices, t.n_nonmanifold_vertices, {v});
   }
   // components and boundary loops

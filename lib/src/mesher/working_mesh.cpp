@@ -1,7 +1,6 @@
 // The working mesh of the surface mesher: faces with an incrementally maintained edge index.
 #include "heatcvt/mesher/working_mesh.h"
 
-#include <boost/pending/disjoint_sets.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -153,20 +152,6 @@ double triangle_min_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, co
 
 double face_min_angle(const WorkingMesh& mesh, const MeshFace& f) {
   return triangle_min_angle(mesh.V.row(f[0]).transpose(), mesh.V.row(f[1]).transpose(), mesh.V.row(f[2]).transpose());
-}
-
-DisjointSets::DisjointSets(int n) : rank_(n, 0), parent_(n) {
-  for (int i = 0; i < n; ++i) parent_[i] = i;
-}
-
-int DisjointSets::find(int i) {
-  boost::disjoint_sets<int*, int*> sets(rank_.data(), parent_.data());
-  return sets.find_set(i);
-}
-
-void DisjointSets::unite(int i, int j) {
-  boost::disjoint_sets<int*, int*> sets(rank_.data(), parent_.data());
-  sets.union_set(i, j);
 }
 
 FaceComponents face_components(const WorkingMesh& mesh, bool by_vertex) {

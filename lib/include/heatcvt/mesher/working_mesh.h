@@ -9,6 +9,8 @@
 #include <unordered_map>
 #include <vector>
 
+#include "heatcvt/disjoint_sets.h"
+
 namespace heatcvt {
 
 /// A triangle as three vertex indices; its orientation is the order of the corners.
@@ -97,18 +99,6 @@ class WorkingMesh {
 double triangle_min_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c);
 /// Smallest angle of face f of the mesh.
 double face_min_angle(const WorkingMesh& mesh, const MeshFace& f);
-
-/// Union-find (disjoint sets over 0..n−1) with path compression and union by rank
-/// (boost::disjoint_sets); the one union-find of the mesher.
-class DisjointSets {
- public:
-  explicit DisjointSets(int n);
-  int find(int i);
-  void unite(int i, int j);
-
- private:
-  std::vector<int> rank_, parent_;
-};
 
 /// Connected components of the faces (through shared vertices when `by_vertex`, else through
 /// shared edges): component id of each face, ids numbered by first face, and the number of faces
