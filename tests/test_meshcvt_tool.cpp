@@ -26,7 +26,9 @@ void expect_open_mesh_kept(const std::string& file, int sites, bool orientable) 
   const std::string input_path = test::data_path("meshes/" + file);
   const std::string out = dir.path("dual.ply"), report = dir.path("r.json");
   const auto r = test::run_tool("meshcvt", input_path + " -n " + std::to_string(sites) + " -q -o " + out + " --report " + report);
-  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // Written: exit 0, or 3 when a check failed (the Klein disc is an immersed surface that
+  // intersects itself, and so does its dual); only the topology is compared here.
+  ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 3) << r.exit_code << " " << r.err;
   EXPECT_TRUE(r.err.empty()) << r.err;
   const TriangleMesh input = read_mesh(input_path);
   ValidationOptions open;
@@ -108,7 +110,8 @@ TEST(MeshcvtTool, BadOptions) {
   };
   fails("-n 0", "--sites");
   fails("-n abc", "abc");
-  fails("-n 5", "exceeds");  // more sites than the 4 vertices
+  fails("-n 5 --min-vertices-per-site 0", "exceed");  // more sites than the 4 vertices, refinement off
+  fails("-n 3 --min-vertices-per-site -1", "--min-vertices-per-site");
   fails("-n 3 -i -1", "--iterations");
   fails("-n 3 --tolerance -1", "--tolerance");
   fails("-n 3 --anisotropy -0.5", "--anisotropy");

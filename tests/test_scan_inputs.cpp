@@ -346,14 +346,14 @@ TEST(Cloud2MeshScans, BadPosesGiveOneErrorLineAndNoOutput) {
   }
 }
 
-// A cloud larger than the whole-cloud path keeps in memory (StreamOptions::max_raw_points) is
-// streamed into a voxel summary by cloud2mesh; the mesh meets the same checks.
+// A cloud with more points than --stream-above is streamed into a voxel summary by cloud2mesh;
+// the mesh meets the same checks.
 TEST(Cloud2MeshScans, ALargeCloudIsStreamedIntoAVoxelSummary) {
   test::ScratchDir dir("c2m_stream");
   const TriangleMesh sphere = test::icosphere(5);
   const std::string cloud = dir.path("big.xyz"), out = dir.path("big.ply"), rep = dir.path("big.json");
   write_points_xyz(cloud, sample_surface(sphere.V, sphere.F, 400000, 9, 0.001));
-  const auto r = test::run_tool("cloud2mesh", cloud + " -n 600 -q -o " + out + " --report " + rep);
+  const auto r = test::run_tool("cloud2mesh", cloud + " -n 600 -q --stream-above 300000 -o " + out + " --report " + rep);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::ifstream in(rep);
   const std::string json((std::istreambuf_iterator<char>(in)), {});

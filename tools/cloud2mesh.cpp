@@ -144,15 +144,15 @@ ReconstructionCallback stage_progress(cli::Progress& bar) {
 // to stream it: "x y z" with about 7 significant digits per coordinate.
 constexpr double kTextBytesPerPoint = 30.0;
 
-// Whether one input file is larger than the whole-cloud path keeps in memory
-// (StreamOptions::max_raw_points): then it is streamed into a voxel summary (reconstruct_stream.h).
-bool should_stream(const std::vector<ScanInput>& scans, const ReconstructionOptions& opt, const StreamOptions& stream) {
+// Whether one input file has more than `stream_above` points: then it is streamed into a voxel
+// summary (reconstruct_stream.h) instead of being held whole (about 2.1 KB per point).
+bool should_stream(const std::vector<ScanInput>& scans, const ReconstructionOptions& opt, long long stream_above) {
   if (scans.size() != 1 || !scans[0].pose.isApprox(Eigen::Isometry3d::Identity()) || opt.denoise || opt.voxel_size > 0)
     return false;
   const CloudChunkReader probe(scans[0].path);
   const double points = probe.points_in_file() >= 0 ? static_cast<double>(probe.points_in_file())
                                                     : static_cast<double>(probe.bytes_total()) / kTextBytesPerPoint;
-  return points > static_cast<double>(stream.max_raw_points);
+  return points > static_cast<double>(stream_above);
 }
 
 // The streamed reconstruction of one large file, with reading progress (bytes) per pass.
@@ -189,6 +189,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> cloud_paths, pose_paths;
   std::string conf_path, out_path, report_path;
   bool quiet = false, write_normals = false;
+  long long stream_above = 2000000;
   app.add_option("CLOUD", cloud_paths,
                  "input point clouds (.pcd .ply .xyz .pwn .txt); several scans are merged into one surface");
   app.add_option("--pose", pose_paths,
@@ -206,6 +207,10 @@ int main(int argc, char** argv) {
                                                                             {"keep", HolePolicy::keep}},
                                           CLI::ignore_case))
       ->default_str("auto");
+  app.add_option("--stream-above", stream_above,
+                 "a single cloud file with more points than this is streamed into a voxel summary sized for -n "
+                 "(memory bounded by the output size) instead of being held whole (about 2.1 KB per point)")
+      ->capture_default_str();
   app.add_flag("--normals", write_normals, "write per-vertex normals (outward on closed pieces) with the mesh");
   app.add_option("-o,--output", out_path, "output mesh (.ply .obj .off .stl)")->required();
   app.add_option("-n,--sites", opt.sites, "number of output vertices (CVT sites)")->capture_default_str();
@@ -277,7 +282,8 @@ int main(int argc, char** argv) {
     PointCloud cloud;
     ReconstructionResult res;
     StreamedReconstruction streamed;
-    const bool stream = should_stream(scans, opt, StreamOptions());
+    if (stream_above < 0) throw InvalidInputError("--stream-above must be >= 0");
+    const bool stream = should_stream(scans, opt, stream_above);
     if (stream) {
       streamed = reconstruct_streamed(scans[0].path, opt, quiet);
       res = std::move(streamed.result);

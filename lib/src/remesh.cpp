@@ -144,15 +144,29 @@ void run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options
   const MeshSurfaceProjector surface(input.V, input.F);
   SurfaceMesherOptions mo = options.mesher;
   mo.threads = options.cvt.threads;
-  DualSurfaceResult post = mesh_dual_surface(out.cvt.dual.V, out.cvt.dual.F, surface, mo);
+  // The boundary loops of an input mesh are real: only holes inside the input surface (missing
+  // dual triangles) are closed.
+  mo.holes.policy = HolePolicy::keep;
+  DualSurfaceResult post;
+  try {
+    post = mesh_dual_surface(out.cvt.dual.V, out.cvt.dual.F, surface, mo);
+  } catch (const Error&) {  // nothing extracted (a dual of very few sites): the dual stays
+    out.post_cvt_kept = false;
+    return;
+  }
   out.mesher = std::move(post.stats);
   // the mesher validates its result as an open surface; the checks below use the input's topology
   for (const auto& stage : out.mesher.stage_seconds)
     if (stage.first != "validate") out.stage_seconds.push_back(stage);
   const auto t = Clock::now();
   ValidationReport checks = check_result(post.mesh, out.input, true);
-  // kept when it passes every check the dual passed
-  out.post_cvt_kept = true;
+  // Kept when it passes every check the dual passed and, where the dual has the input's topology
+  // (components, Euler characteristic), keeps it: the stages must not open, close or cut the surface.
+  const auto input_topology = [&](const ValidationReport& r) {
+    return r.components == out.input.topology.components &&
+           r.euler_characteristic == out.input.topology.euler_characteristic();
+  };
+  out.post_cvt_kept = !input_topology(out.checks) || input_topology(checks);
   for (const MeshCheck& c : out.checks.checks) {
     const MeshCheck* after = checks.find(c.name);
     if (c.ran && c.passed && !(after && after->ran && after->passed)) out.post_cvt_kept = false;
