@@ -21,6 +21,7 @@
 
 #include "heatcvt/errors.h"
 #include "heatcvt/mesh_io.h"
+#include "text_tokens.h"
 
 namespace heatcvt {
 
@@ -44,14 +45,9 @@ void require_readable_file(const std::string& path) {
   if (fs::file_size(path, ec) == 0) fail(path, "file is empty");
 }
 
-bool parse_double(std::string_view tok, double& out) {
-  if (!tok.empty() && tok.front() == '+') tok.remove_prefix(1);
-  if (tok.empty()) return false;
-  const auto res = std::from_chars(tok.data(), tok.data() + tok.size(), out);
-  return res.ec == std::errc() && res.ptr == tok.data() + tok.size();
-}
-
-inline bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
+using detail::for_each_token;
+using detail::is_space;
+using detail::parse_double;
 
 // ------------------------------------------------------------------------------------------
 // XYZ / PWN / TXT
@@ -77,20 +73,13 @@ PointCloud read_xyz(const std::string& path, CloudReadReport& rep) {
     const size_t hash = line.find('#');
     if (hash != std::string_view::npos) line = line.substr(0, hash);
     int cols = 0;
-    size_t i = 0;
-    while (true) {
-      while (i < line.size() && is_space(line[i])) ++i;
-      if (i >= line.size()) break;
-      size_t j = i;
-      while (j < line.size() && !is_space(line[j])) ++j;
-      const std::string_view tok = line.substr(i, j - i);
+    for_each_token(line, [&](std::string_view tok) {
       double v = 0;
       if (!parse_double(tok, v))
         fail(path, "line " + std::to_string(line_no) + ": malformed number " + quote_excerpt(tok));
       if (cols < 6) vals[cols] = v;
       ++cols;
-      i = j;
-    }
+    });
     if (cols == 0) continue;
     if (first_data_line && cols == 1 && vals[0] >= 0 && vals[0] == std::floor(vals[0])) {
       first_data_line = false;  // a leading point count

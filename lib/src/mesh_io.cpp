@@ -22,6 +22,7 @@
 
 #include "heatcvt/atomic_file.h"
 #include "heatcvt/errors.h"
+#include "text_tokens.h"
 
 namespace heatcvt {
 
@@ -62,35 +63,10 @@ std::string read_whole_file(const std::string& path) {
 
 std::string quote(std::string_view s) { return quote_excerpt(s); }
 
-// Parses a whole token as a double; '+' prefix allowed. Returns false if not a number.
-bool parse_double(std::string_view tok, double& out) {
-  if (!tok.empty() && tok.front() == '+') tok.remove_prefix(1);
-  if (tok.empty()) return false;
-  const auto res = std::from_chars(tok.data(), tok.data() + tok.size(), out);
-  return res.ec == std::errc() && res.ptr == tok.data() + tok.size();
-}
-
-bool parse_int(std::string_view tok, long long& out) {
-  if (!tok.empty() && tok.front() == '+') tok.remove_prefix(1);
-  if (tok.empty()) return false;
-  const auto res = std::from_chars(tok.data(), tok.data() + tok.size(), out);
-  return res.ec == std::errc() && res.ptr == tok.data() + tok.size();
-}
-
-inline bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
-
-// Splits a line into whitespace-separated tokens (reuses `tokens`).
-void split(std::string_view line, std::vector<std::string_view>& tokens) {
-  tokens.clear();
-  size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && is_space(line[i])) ++i;
-    size_t j = i;
-    while (j < line.size() && !is_space(line[j])) ++j;
-    if (j > i) tokens.push_back(line.substr(i, j - i));
-    i = j;
-  }
-}
+using detail::is_space;
+using detail::parse_double;
+using detail::parse_int;
+using detail::split;
 
 // Iterates over the lines of a buffer.
 class LineReader {
