@@ -21,6 +21,8 @@
 
 #include "heatcvt/errors.h"
 #include "heatcvt/mesh_io.h"
+#include "pcd_format.h"
+#include "text_tokens.h"
 
 namespace heatcvt {
 
@@ -44,14 +46,8 @@ void require_readable_file(const std::string& path) {
   if (fs::file_size(path, ec) == 0) fail(path, "file is empty");
 }
 
-bool parse_double(std::string_view tok, double& out) {
-  if (!tok.empty() && tok.front() == '+') tok.remove_prefix(1);
-  if (tok.empty()) return false;
-  const auto res = std::from_chars(tok.data(), tok.data() + tok.size(), out);
-  return res.ec == std::errc() && res.ptr == tok.data() + tok.size();
-}
-
-inline bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
+using detail::for_each_token;
+using detail::parse_double;
 
 // ------------------------------------------------------------------------------------------
 // XYZ / PWN / TXT
@@ -77,20 +73,13 @@ PointCloud read_xyz(const std::string& path, CloudReadReport& rep) {
     const size_t hash = line.find('#');
     if (hash != std::string_view::npos) line = line.substr(0, hash);
     int cols = 0;
-    size_t i = 0;
-    while (true) {
-      while (i < line.size() && is_space(line[i])) ++i;
-      if (i >= line.size()) break;
-      size_t j = i;
-      while (j < line.size() && !is_space(line[j])) ++j;
-      const std::string_view tok = line.substr(i, j - i);
+    for_each_token(line, [&](std::string_view tok) {
       double v = 0;
       if (!parse_double(tok, v))
         fail(path, "line " + std::to_string(line_no) + ": malformed number " + quote_excerpt(tok));
       if (cols < 6) vals[cols] = v;
       ++cols;
-      i = j;
-    }
+    });
     if (cols == 0) continue;
     if (first_data_line && cols == 1 && vals[0] >= 0 && vals[0] == std::floor(vals[0])) {
       first_data_line = false;  // a leading point count
@@ -118,9 +107,8 @@ PointCloud read_xyz(const std::string& path, CloudReadReport& rep) {
 // ------------------------------------------------------------------------------------------
 // PCD
 
-// Checks every line of an ASCII PCD body (PCL's reader accepts non-numeric tokens and short
-// lines silently): the first `points` non-blank lines must hold exactly `values_per_point`
-// numbers each ("nan" allowed, as PCL writes it). `line_no` is the number of header lines.
+// Checks every line of an ASCII PCD body: the first `points` non-blank lines must hold exactly
+// `values_per_point` numbers each (read_pcd_ascii_line). `line_no` is the number of header lines.
 void check_ascii_pcd_body(const std::string& path, std::istream& in, long long points, long long values_per_point,
                           int line_no) {
   std::string line;
@@ -128,25 +116,7 @@ void check_ascii_pcd_body(const std::string& path, std::istream& in, long long p
   while (seen < points && std::getline(in, line)) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
-    long long cols = 0;
-    size_t i = 0;
-    while (true) {
-      while (i < line.size() && is_space(line[i])) ++i;
-      if (i >= line.size()) break;
-      size_t j = i;
-      while (j < line.size() && !is_space(line[j])) ++j;
-      const std::string_view tok(line.data() + i, j - i);
-      double v = 0;
-      if (!parse_double(tok, v))
-        fail(path, "line " + std::to_string(line_no) + ": malformed number " + quote_excerpt(tok) +
-                       (tok.find(',') != std::string_view::npos ? " (decimal commas are not allowed)" : ""));
-      ++cols;
-      i = j;
-    }
-    if (cols == 0) continue;
-    if (cols != values_per_point)
-      fail(path, "line " + std::to_string(line_no) + ": " + std::to_string(cols) + " values, the header announces " +
-                     std::to_string(values_per_point) + " per point");
+    if (detail::read_pcd_ascii_line(path, line_no, line, values_per_point, [](std::string_view) {}) == 0) continue;
     ++seen;
   }
   if (seen < points)
@@ -158,87 +128,17 @@ void check_ascii_pcd_body(const std::string& path, std::istream& in, long long p
 void precheck_pcd(const std::string& path, std::string& data_kind, long long& header_points) {
   std::ifstream in(path, std::ios::binary);
   const auto file_size = static_cast<long long>(fs::file_size(path));
-  std::string line;
-  long long width = -1, height = 1, points = -1, point_step = 0;
-  std::vector<long long> sizes, counts;
-  size_t nfields = 0;
-  std::vector<std::string> field_names;
-  bool have_data = false;
-  int lines = 0;
-  while (std::getline(in, line)) {
-    if (++lines > 1000) fail(path, "not a PCD file (no DATA line in the first 1000 lines)");
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    std::istringstream ls(line);
-    std::string key;
-    ls >> key;
-    if (key.empty() || key[0] == '#') continue;
-    if (key == "FIELDS" || key == "COLUMNS") {
-      std::string f;
-      while (ls >> f) {
-        // A repeated name (two 'x' fields) would silently read one of them for both.
-        if (std::find(field_names.begin(), field_names.end(), f) != field_names.end())
-          fail(path, "malformed PCD header: the field " + quote_excerpt(f) + " is listed twice");
-        field_names.push_back(f);
-        ++nfields;
-      }
-    } else if (key == "SIZE" || key == "COUNT") {
-      auto& dst = key == "SIZE" ? sizes : counts;
-      std::string t;
-      while (ls >> t) {
-        long long v = 0;
-        const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
-        if (r.ec != std::errc() || v <= 0 || v > 1 << 20) fail(path, "malformed PCD " + key + " entry " + quote_excerpt(t));
-        dst.push_back(v);
-      }
-    } else if (key == "WIDTH" || key == "HEIGHT" || key == "POINTS") {
-      std::string t;
-      ls >> t;
-      long long v = -1;
-      const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
-      if (r.ec != std::errc() || v < 0 || v > 2000000000LL) fail(path, "malformed PCD " + key + " " + quote_excerpt(t));
-      (key == "WIDTH" ? width : key == "HEIGHT" ? height : points) = v;
-    } else if (key == "DATA") {
-      ls >> data_kind;
-      have_data = true;
-      break;
-    } else if (key != "VERSION" && key != "TYPE" && key != "VIEWPOINT") {
-      fail(path, "not a PCD file (unexpected header line " + quote_excerpt(line) + ")");
-    }
-  }
-  if (!have_data) fail(path, "not a PCD file or truncated header (no DATA line)");
-  if (nfields == 0 || sizes.size() != nfields) fail(path, "malformed PCD header (FIELDS and SIZE disagree)");
-  if (!counts.empty() && counts.size() != nfields) fail(path, "malformed PCD header (FIELDS and COUNT disagree)");
-  if (width < 0) fail(path, "malformed PCD header (no WIDTH)");
-  if (points < 0) points = width * height;
-  if (points != width * height)
-    fail(path, "malformed PCD header: POINTS " + std::to_string(points) + " != WIDTH*HEIGHT " + std::to_string(width * height));
-  header_points = points;
-  for (size_t k = 0; k < nfields; ++k) point_step += sizes[k] * (counts.empty() ? 1 : counts[k]);
+  const detail::PcdHeader h =
+      detail::read_pcd_header(path, [&](std::string& line) { return static_cast<bool>(std::getline(in, line)); });
+  data_kind = h.data_kind;
+  header_points = h.points;
   const long long header_bytes = static_cast<long long>(in.tellg());
   const long long body = in ? file_size - header_bytes : 0;
-  if (data_kind == "binary") {
-    if (points * point_step > body)
-      fail(path, "truncated: header announces " + std::to_string(points) + " points (" + std::to_string(points * point_step) +
-                     " bytes) but only " + std::to_string(body) + " bytes of data follow");
-  } else if (data_kind == "binary_compressed") {
-    uint32_t sz[2] = {0, 0};
-    if (body < 8 || !in.read(reinterpret_cast<char*>(sz), 8)) fail(path, "truncated: compressed PCD data missing");
-    if (static_cast<long long>(sz[0]) > body - 8)
-      fail(path, "truncated: compressed block of " + std::to_string(sz[0]) + " bytes but only " + std::to_string(body - 8) +
-                     " bytes follow");
-    if (static_cast<long long>(sz[1]) != points * point_step)
-      fail(path, "corrupt compressed PCD: uncompressed size " + std::to_string(sz[1]) + " != " +
-                     std::to_string(points * point_step) + " expected from the header");
-  } else if (data_kind == "ascii") {
-    if (points * 2 * static_cast<long long>(nfields) > body + 1)
-      fail(path, "truncated: header announces " + std::to_string(points) + " points but only " + std::to_string(body) +
-                     " bytes follow");
-    long long values_per_point = 0;
-    for (size_t k = 0; k < nfields; ++k) values_per_point += counts.empty() ? 1 : counts[k];
-    check_ascii_pcd_body(path, in, points, values_per_point, lines);
-  } else {
-    fail(path, "unknown PCD DATA type " + quote_excerpt(data_kind));
-  }
+  std::uint32_t compressed[2];
+  detail::check_pcd_body_size(
+      path, h, body, [&](char* dst, std::size_t n) { return static_cast<bool>(in.read(dst, static_cast<std::streamsize>(n))); },
+      compressed);
+  if (data_kind == "ascii") check_ascii_pcd_body(path, in, h.points, h.values_per_point(), h.lines);
 }
 
 double load_field(const uint8_t* p, uint8_t datatype) {

@@ -19,32 +19,6 @@ namespace stream_detail {
 
 namespace fs = std::filesystem;
 
-bool parse_double(std::string_view tok, double& out) {
-  if (!tok.empty() && tok.front() == '+') tok.remove_prefix(1);
-  if (tok.empty()) return false;
-  const auto res = std::from_chars(tok.data(), tok.data() + tok.size(), out);
-  return res.ec == std::errc() && res.ptr == tok.data() + tok.size();
-}
-
-bool parse_int(std::string_view tok, long long& out) {
-  if (!tok.empty() && tok.front() == '+') tok.remove_prefix(1);
-  if (tok.empty()) return false;
-  const auto res = std::from_chars(tok.data(), tok.data() + tok.size(), out);
-  return res.ec == std::errc() && res.ptr == tok.data() + tok.size();
-}
-
-void split(std::string_view line, std::vector<std::string_view>& tokens) {
-  tokens.clear();
-  size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && is_space(line[i])) ++i;
-    size_t j = i;
-    while (j < line.size() && !is_space(line[j])) ++j;
-    if (j > i) tokens.push_back(line.substr(i, j - i));
-    i = j;
-  }
-}
-
 ByteSource::ByteSource(const std::string& path, std::size_t buffer_bytes)
     : path_(path), buf_(std::max<std::size_t>(buffer_bytes, 4096)) {
   std::error_code ec;
@@ -166,20 +140,13 @@ class XyzDecoder : public CloudChunkReader::Decoder {
     const size_t hash = line.find('#');
     if (hash != std::string_view::npos) line = line.substr(0, hash);
     cols_ = 0;
-    size_t i = 0;
-    while (true) {
-      while (i < line.size() && is_space(line[i])) ++i;
-      if (i >= line.size()) break;
-      size_t j = i;
-      while (j < line.size() && !is_space(line[j])) ++j;
-      const std::string_view tok = line.substr(i, j - i);
+    for_each_token(line, [&](std::string_view tok) {
       double v = 0;
       if (!parse_double(tok, v))
         fail(src.path(), "line " + std::to_string(line_no_) + ": malformed number " + quote_excerpt(tok));
       if (cols_ < 6) vals_[cols_] = v;
       ++cols_;
-      i = j;
-    }
+    });
     return true;
   }
   // A single non-negative integer on the first data line is a point count, not a point.

@@ -10,19 +10,17 @@
 
 #include "heatcvt/cloud_stream.h"
 #include "heatcvt/errors.h"
+#include "text_tokens.h"
 
 namespace heatcvt::stream_detail {
 
 [[noreturn]] inline void fail(const std::string& path, const std::string& problem) { throw IOError(path + ": " + problem); }
 
-inline bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
-
-/// Parses a whole token as a double ('+' prefix allowed), as the whole-file readers do.
-bool parse_double(std::string_view tok, double& out);
-/// Parses a whole token as a signed integer ('+' prefix allowed).
-bool parse_int(std::string_view tok, long long& out);
-/// Splits a line into whitespace-separated tokens (reuses `tokens`).
-void split(std::string_view line, std::vector<std::string_view>& tokens);
+using detail::for_each_token;
+using detail::is_space;
+using detail::parse_double;
+using detail::parse_int;
+using detail::split;
 
 /// Sequential reads from a file through one fixed buffer; tracks the byte offset.
 class ByteSource {

@@ -9,9 +9,9 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <sstream>
 
 #include "cloud_stream_detail.h"
+#include "pcd_format.h"
 
 namespace heatcvt::stream_detail {
 
@@ -127,99 +127,40 @@ class PcdDecoder : public CloudChunkReader::Decoder {
   const PcdField* rgb_[3] = {nullptr, nullptr, nullptr};
   bool rgb_integer_ = true;
   std::string line_;
+  detail::PcdHeader header_;
 };
 
-// The header checks of read_cloud (same messages); also reads TYPE for the datatypes.
+// The header checks of read_cloud (pcd_format.h); TYPE gives the datatypes.
 void PcdDecoder::read_header() {
-  const std::string& path = src.path();
-  std::string line;
-  long long width = -1, height = 1, points = -1;
-  std::vector<long long> sizes, counts;
-  std::vector<char> kinds;
-  bool have_data = false;
-  while (src.getline(line)) {
-    if (++header_lines_ > 1000) fail(path, "not a PCD file (no DATA line in the first 1000 lines)");
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    std::istringstream ls(line);
-    std::string key;
-    ls >> key;
-    if (key.empty() || key[0] == '#') continue;
-    if (key == "FIELDS" || key == "COLUMNS") {
-      std::string f;
-      while (ls >> f) {
-        // A repeated name (two 'x' fields) would silently read one of them for both.
-        for (const auto& g : fields_)
-          if (g.name == f) fail(path, "malformed PCD header: the field " + quote_excerpt(f) + " is listed twice");
-        fields_.push_back({f});
-      }
-    } else if (key == "SIZE" || key == "COUNT") {
-      auto& dst = key == "SIZE" ? sizes : counts;
-      std::string t;
-      while (ls >> t) {
-        long long v = 0;
-        const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
-        if (r.ec != std::errc() || v <= 0 || v > 1 << 20) fail(path, "malformed PCD " + key + " entry " + quote_excerpt(t));
-        dst.push_back(v);
-      }
-    } else if (key == "TYPE") {
-      std::string t;
-      while (ls >> t) kinds.push_back(t.size() == 1 ? t[0] : '?');
-    } else if (key == "WIDTH" || key == "HEIGHT" || key == "POINTS") {
-      std::string t;
-      ls >> t;
-      long long v = -1;
-      const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
-      if (r.ec != std::errc() || v < 0 || v > 2000000000LL) fail(path, "malformed PCD " + key + " " + quote_excerpt(t));
-      (key == "WIDTH" ? width : key == "HEIGHT" ? height : points) = v;
-    } else if (key == "DATA") {
-      ls >> kind_;
-      have_data = true;
-      break;
-    } else if (key != "VERSION" && key != "VIEWPOINT") {
-      fail(path, "not a PCD file (unexpected header line " + quote_excerpt(line) + ")");
-    }
-  }
-  const std::size_t nfields = fields_.size();
-  if (!have_data) fail(path, "not a PCD file or truncated header (no DATA line)");
-  if (nfields == 0 || sizes.size() != nfields) fail(path, "malformed PCD header (FIELDS and SIZE disagree)");
-  if (!counts.empty() && counts.size() != nfields) fail(path, "malformed PCD header (FIELDS and COUNT disagree)");
-  if (width < 0) fail(path, "malformed PCD header (no WIDTH)");
-  if (points < 0) points = width * height;
-  if (points != width * height)
-    fail(path, "malformed PCD header: POINTS " + std::to_string(points) + " != WIDTH*HEIGHT " + std::to_string(width * height));
-  points_ = points;
-  for (std::size_t k = 0; k < nfields; ++k) {
-    PcdField& f = fields_[k];
-    f.size = sizes[k];
-    f.count = counts.empty() ? 1 : counts[k];
-    f.kind = k < kinds.size() ? kinds[k] : 'F';
+  const detail::PcdHeader h = detail::read_pcd_header(src.path(), [&](std::string& line) { return src.getline(line); });
+  kind_ = h.data_kind;
+  header_lines_ = h.lines;
+  points_ = h.points;
+  for (std::size_t k = 0; k < h.field_names.size(); ++k) {
+    PcdField f;
+    f.name = h.field_names[k];
+    f.size = h.sizes[k];
+    f.count = h.count(k);
+    f.kind = k < h.kinds.size() ? h.kinds[k] : 'F';
     f.type = pcd_type(f.kind, f.size);
     f.offset = static_cast<std::size_t>(point_step_);
     point_step_ += f.size * f.count;
     values_per_point_ += f.count;
+    fields_.push_back(f);
   }
   record_.assign(static_cast<std::size_t>(point_step_), 0);
   format = "pcd-" + kind_;
   points_total = points_;
+  header_ = h;
 }
 
 // Checks that the body can hold the announced points before any of it is read.
 void PcdDecoder::check_body_size() {
   const std::string& path = src.path();
-  const long long body = src.remaining();
-  if (kind_ == "binary") {
-    if (points_ * point_step_ > body)
-      fail(path, "truncated: header announces " + std::to_string(points_) + " points (" + std::to_string(points_ * point_step_) +
-                     " bytes) but only " + std::to_string(body) + " bytes of data follow");
-  } else if (kind_ == "binary_compressed") {
-    uint32_t sz[2] = {0, 0};
-    if (body < 8 || !src.read(reinterpret_cast<char*>(sz), 8)) fail(path, "truncated: compressed PCD data missing");
-    if (static_cast<long long>(sz[0]) > body - 8)
-      fail(path, "truncated: compressed block of " + std::to_string(sz[0]) + " bytes but only " + std::to_string(body - 8) +
-                     " bytes follow");
-    if (static_cast<long long>(sz[1]) != points_ * point_step_)
-      fail(path, "corrupt compressed PCD: uncompressed size " + std::to_string(sz[1]) + " != " +
-                     std::to_string(points_ * point_step_) + " expected from the header");
+  uint32_t sz[2] = {0, 0};
+  detail::check_pcd_body_size(
+      path, header_, src.remaining(), [&](char* dst, std::size_t n) { return src.read(dst, n); }, sz);
+  if (kind_ == "binary_compressed") {
     // One LZF block: it must be decompressed whole (see cloud_stream.h).
     std::vector<char> packed(sz[0]);
     if (sz[0] > 0 && !src.read(packed.data(), sz[0])) fail(path, "truncated: compressed PCD data missing");
@@ -233,12 +174,7 @@ void PcdDecoder::check_body_size() {
       if (f.name != "_") start += static_cast<std::size_t>(f.size * f.count * points_);
     }
   } else if (kind_ == "ascii") {
-    if (points_ * 2 * static_cast<long long>(fields_.size()) > body + 1)
-      fail(path, "truncated: header announces " + std::to_string(points_) + " points but only " + std::to_string(body) +
-                     " bytes follow");
     line_no_ = header_lines_;
-  } else {
-    fail(path, "unknown PCD DATA type " + quote_excerpt(kind_));
   }
 }
 
@@ -281,30 +217,15 @@ const char* PcdDecoder::ascii_record() {
       fail(path, "truncated: header announces " + std::to_string(points_) + " points, file holds " + std::to_string(next_record_));
     ++line_no_;
     if (!line_.empty() && line_.back() == '\r') line_.pop_back();
-    std::size_t i = 0, field = 0, slot = 0;
-    long long cols = 0;
-    while (true) {
-      while (i < line_.size() && is_space(line_[i])) ++i;
-      if (i >= line_.size()) break;
-      std::size_t j = i;
-      while (j < line_.size() && !is_space(line_[j])) ++j;
-      const std::string_view tok(line_.data() + i, j - i);
-      double v = 0;
-      if (!parse_double(tok, v))
-        fail(path, "line " + std::to_string(line_no_) + ": malformed number " + quote_excerpt(tok) +
-                       (tok.find(',') != std::string_view::npos ? " (decimal commas are not allowed)" : ""));
+    std::size_t field = 0, slot = 0;
+    const long long cols = detail::read_pcd_ascii_line(path, line_no_, line_, values_per_point_, [&](std::string_view tok) {
       if (field < fields_.size()) {
         const PcdField& f = fields_[field];
         store_ascii(tok, f.type, record_.data() + f.offset + slot * static_cast<std::size_t>(f.size));
         if (++slot == static_cast<std::size_t>(f.count)) slot = 0, ++field;
       }
-      ++cols;
-      i = j;
-    }
+    });
     if (cols == 0) continue;
-    if (cols != values_per_point_)
-      fail(path, "line " + std::to_string(line_no_) + ": " + std::to_string(cols) + " values, the header announces " +
-                     std::to_string(values_per_point_) + " per point");
     return record_.data();
   }
 }

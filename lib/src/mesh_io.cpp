@@ -22,6 +22,8 @@
 
 #include "heatcvt/atomic_file.h"
 #include "heatcvt/errors.h"
+#include "ply_format.h"
+#include "text_tokens.h"
 
 namespace heatcvt {
 
@@ -62,35 +64,10 @@ std::string read_whole_file(const std::string& path) {
 
 std::string quote(std::string_view s) { return quote_excerpt(s); }
 
-// Parses a whole token as a double; '+' prefix allowed. Returns false if not a number.
-bool parse_double(std::string_view tok, double& out) {
-  if (!tok.empty() && tok.front() == '+') tok.remove_prefix(1);
-  if (tok.empty()) return false;
-  const auto res = std::from_chars(tok.data(), tok.data() + tok.size(), out);
-  return res.ec == std::errc() && res.ptr == tok.data() + tok.size();
-}
-
-bool parse_int(std::string_view tok, long long& out) {
-  if (!tok.empty() && tok.front() == '+') tok.remove_prefix(1);
-  if (tok.empty()) return false;
-  const auto res = std::from_chars(tok.data(), tok.data() + tok.size(), out);
-  return res.ec == std::errc() && res.ptr == tok.data() + tok.size();
-}
-
-inline bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
-
-// Splits a line into whitespace-separated tokens (reuses `tokens`).
-void split(std::string_view line, std::vector<std::string_view>& tokens) {
-  tokens.clear();
-  size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && is_space(line[i])) ++i;
-    size_t j = i;
-    while (j < line.size() && !is_space(line[j])) ++j;
-    if (j > i) tokens.push_back(line.substr(i, j - i));
-    i = j;
-  }
-}
+using detail::is_space;
+using detail::parse_double;
+using detail::parse_int;
+using detail::split;
 
 // Iterates over the lines of a buffer.
 class LineReader {
@@ -254,77 +231,14 @@ PolygonSoup read_off(const std::string& path, const std::string& data, MeshReadR
 // ------------------------------------------------------------------------------------------
 // PLY
 
-enum class PlyType { i8, u8, i16, u16, i32, u32, f32, f64 };
-
-bool ply_type_from_name(std::string_view n, PlyType& t) {
-  static const std::pair<const char*, PlyType> table[] = {
-      {"char", PlyType::i8},    {"int8", PlyType::i8},     {"uchar", PlyType::u8},   {"uint8", PlyType::u8},
-      {"short", PlyType::i16},  {"int16", PlyType::i16},   {"ushort", PlyType::u16}, {"uint16", PlyType::u16},
-      {"int", PlyType::i32},    {"int32", PlyType::i32},   {"uint", PlyType::u32},   {"uint32", PlyType::u32},
-      {"float", PlyType::f32},  {"float32", PlyType::f32}, {"double", PlyType::f64}, {"float64", PlyType::f64}};
-  for (const auto& e : table)
-    if (n == e.first) {
-      t = e.second;
-      return true;
-    }
-  return false;
-}
-
-size_t ply_size(PlyType t) {
-  switch (t) {
-    case PlyType::i8: case PlyType::u8: return 1;
-    case PlyType::i16: case PlyType::u16: return 2;
-    case PlyType::i32: case PlyType::u32: case PlyType::f32: return 4;
-    case PlyType::f64: return 8;
-  }
-  return 1;
-}
-
-bool ply_is_integer(PlyType t) { return t != PlyType::f32 && t != PlyType::f64; }
-
-struct PlyProperty {
-  std::string name;
-  bool is_list = false;
-  PlyType type = PlyType::f32;        // scalar type or list item type
-  PlyType count_type = PlyType::u8;   // list count type
-};
-
-struct PlyElement {
-  std::string name;
-  long long count = 0;
-  std::vector<PlyProperty> props;
-};
-
-template <typename T>
-T load_raw(const char* p, bool swap) {
-  unsigned char b[sizeof(T)];
-  std::memcpy(b, p, sizeof(T));
-  if (swap) std::reverse(b, b + sizeof(T));
-  T v;
-  std::memcpy(&v, b, sizeof(T));
-  return v;
-}
-
-double load_value(const char* p, PlyType t, bool swap) {
-  switch (t) {
-    case PlyType::i8: return static_cast<double>(static_cast<int8_t>(*p));
-    case PlyType::u8: return static_cast<double>(static_cast<uint8_t>(*p));
-    case PlyType::i16: return load_raw<int16_t>(p, swap);
-    case PlyType::u16: return load_raw<uint16_t>(p, swap);
-    case PlyType::i32: return load_raw<int32_t>(p, swap);
-    case PlyType::u32: return load_raw<uint32_t>(p, swap);
-    case PlyType::f32: return load_raw<float>(p, swap);
-    case PlyType::f64: return load_raw<double>(p, swap);
-  }
-  return 0;
-}
-
-bool host_is_little_endian() {
-  const uint16_t one = 1;
-  unsigned char b;
-  std::memcpy(&b, &one, 1);
-  return b == 1;
-}
+using detail::host_is_little_endian;
+using detail::load_raw;
+using detail::load_value;
+using detail::ply_is_integer;
+using detail::ply_size;
+using detail::PlyElement;
+using detail::PlyProperty;
+using detail::PlyType;
 
 // Sequential value source over the PLY body: binary (with optional byte swap) or ascii tokens.
 class PlyBody {
@@ -344,10 +258,7 @@ class PlyBody {
       while (end < data_.size() && !is_space(data_[end])) ++end;
       const std::string_view tok = data_.substr(pos_, end - pos_);
       pos_ = end;
-      double v = 0;
-      if (!parse_double(tok, v)) fail(path_, "malformed number " + quote(tok) + " in " + context());
-      if (ply_is_integer(t) && v != std::floor(v)) fail(path_, "non-integer value " + quote(tok) + " for an integer property in " + context());
-      return v;
+      return detail::ply_ascii_value(path_, tok, t, context);
     }
     const size_t n = ply_size(t);
     if (remaining() < n) fail(path_, "truncated: binary data ends in " + context());
@@ -366,68 +277,12 @@ class PlyBody {
 
 PolygonSoup read_ply(const std::string& path, const std::string& data, MeshReadReport& rep) {
   LineReader lines(data);
-  std::string_view line;
-  std::vector<std::string_view> tok;
-  if (!lines.next(line) || lower(std::string(line.substr(0, 3))) != "ply" ||
-      (line.size() > 3 && !is_space(line[3])))
-    fail(path, "not a PLY file (missing 'ply' magic line)");
-  std::string format;
-  std::vector<PlyElement> elements;
-  bool header_done = false;
-  while (lines.next(line)) {
-    split(line, tok);
-    if (tok.empty()) continue;
-    const auto key = tok[0];
-    auto hdr = [&](const std::string& problem) {
-      return IOError(path + ": PLY header line " + std::to_string(lines.line_no()) + ": " + problem);
-    };
-    // Element and property names appear in later messages: no control bytes in them.
-    auto require_printable_name = [&](std::string_view name) {
-      for (char c : name)
-        if (!std::isprint(static_cast<unsigned char>(c))) throw hdr("unprintable name " + quote(name));
-      return std::string(name);
-    };
-    if (key == "end_header") {
-      header_done = true;
-      break;
-    } else if (key == "format") {
-      if (tok.size() < 2) throw hdr("format line without a format");
-      format = std::string(tok[1]);
-      if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
-        throw hdr("unknown PLY format " + quote(format));
-    } else if (key == "comment" || key == "obj_info") {
-      continue;
-    } else if (key == "element") {
-      long long count = -1;
-      if (tok.size() >= 2) require_printable_name(tok[1]);
-      if (tok.size() < 3 || !parse_int(tok[2], count) || count < 0 || count > kMaxCount)
-        throw hdr("malformed element line");
-      elements.push_back({std::string(tok[1]), count, {}});
-    } else if (key == "property") {
-      if (elements.empty()) throw hdr("property before any element");
-      PlyProperty p;
-      if (tok.size() >= 2 && tok[1] == "list") {
-        if (tok.size() < 5) throw hdr("malformed list property");
-        p.is_list = true;
-        if (!ply_type_from_name(tok[2], p.count_type) || !ply_is_integer(p.count_type))
-          throw hdr("bad list count type " + quote(tok[2]));
-        if (!ply_type_from_name(tok[3], p.type)) throw hdr("unknown property type " + quote(tok[3]));
-        p.name = require_printable_name(tok[4]);
-      } else {
-        if (tok.size() < 3) throw hdr("malformed property line");
-        if (!ply_type_from_name(tok[1], p.type)) throw hdr("unknown property type " + quote(tok[1]));
-        p.name = require_printable_name(tok[2]);
-      }
-      elements.back().props.push_back(p);
-    } else {
-      throw hdr("unexpected keyword " + quote(key));
-    }
-  }
-  if (!header_done) fail(path, "truncated PLY header (no end_header)");
-  if (format.empty()) fail(path, "PLY header has no format line");
-  const bool ascii = format == "ascii";
-  const bool file_little = format == "binary_little_endian";
-  const bool swap = !ascii && (file_little != host_is_little_endian());
+  const detail::PlyHeader header =
+      detail::read_ply_header(path, [&](std::string_view& line) { return lines.next(line); });
+  const std::string& format = header.format;
+  const std::vector<PlyElement>& elements = header.elements;
+  const bool ascii = header.ascii;
+  const bool swap = header.swap;
   PlyBody body(path, data, lines.pos(), ascii, swap);
   rep.format = "ply-" + format;
 
@@ -439,25 +294,15 @@ PolygonSoup read_ply(const std::string& path, const std::string& data, MeshReadR
   }
   for (const auto& el : elements) {
     // Minimal bytes per instance, checked before any allocation.
-    size_t min_bytes = 0;
-    for (const auto& p : el.props) min_bytes += ascii ? 2 : (p.is_list ? ply_size(p.count_type) : ply_size(p.type));
-    if (el.count > 0 && min_bytes > 0 &&
-        static_cast<double>(el.count) * static_cast<double>(min_bytes) > static_cast<double>(body.remaining()) + 1)
-      fail(path, "truncated: header announces " + std::to_string(el.count) + " " + el.name + " elements but only " +
-                     std::to_string(body.remaining()) + " bytes of data remain");
+    const size_t min_bytes = detail::ply_min_bytes(el, ascii);
+    detail::check_ply_element_fits(path, el, min_bytes, static_cast<std::int64_t>(body.remaining()));
     const bool is_vertex = el.name == "vertex" && !have_vertices;
     const bool is_face = el.name == "face";
     int col[9] = {-1, -1, -1, -1, -1, -1, -1, -1, -1};
     double colour_scale = 1.0;  // uchar/ushort colours are scaled to [0,1]; float colours are taken as [0,1]
     int face_list = -1;
     if (is_vertex) {
-      // Colour properties: "red green blue" (most writers) or "diffuse_red ..." (Stanford, MeshLab).
-      static const char* names[9] = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue"};
-      for (int k = 0; k < 9; ++k)
-        for (size_t j = 0; j < el.props.size(); ++j)
-          if (!el.props[j].is_list && (el.props[j].name == names[k] || (k >= 6 && el.props[j].name == std::string("diffuse_") + names[k])))
-            col[k] = static_cast<int>(j);
-      if (col[0] < 0 || col[1] < 0 || col[2] < 0) fail(path, "PLY vertex element lacks x, y or z");
+      detail::ply_vertex_columns(path, el.props, col);
       have_vertices = true;
       soup.V.resize(el.count, 3);
       if (col[3] >= 0 && col[4] >= 0 && col[5] >= 0) {
@@ -466,8 +311,7 @@ PolygonSoup read_ply(const std::string& path, const std::string& data, MeshReadR
       }
       if (col[6] >= 0 && col[7] >= 0 && col[8] >= 0) {
         soup.C.resize(el.count, 3);
-        const PlyType t = el.props[static_cast<size_t>(col[6])].type;
-        if (ply_is_integer(t)) colour_scale = ply_size(t) >= 2 ? 1.0 / 65535.0 : 1.0 / 255.0;
+        colour_scale = detail::ply_colour_scale(el.props[static_cast<size_t>(col[6])].type);
       }
     }
     if (is_face) {
