@@ -3,7 +3,7 @@
 // each Poisson followed by CGAL isotropic remeshing to `sites` vertices (the two-step pipelines a
 // careful user would run); on clouds sampled (without normals) from closed meshes of known genus,
 // clean and with Gaussian noise (0.25 % of the bbox diagonal). One run per cell; prints a markdown
-// table with the issue-4 acceptance verdict per heatcvt row.
+// table with the acceptance verdict per heatcvt row.
 //
 // Usage: bench_reconstruct [points=50000] [sites=3000]
 //            [shapes=bunny_pmp.off,armadillo.obj,kitten.obj,fertility.off,elephant.off]
@@ -283,7 +283,7 @@ int main(int argc, char** argv) {
               "method alone; \"pipeline\" is end to end from the bare points: + PCA/MST normals for the other "
               "methods, + the Poisson run for the remeshing rows. \"ratio\" = mean distance / the best two-step "
               "(Poisson + remesh) mean distance of the same cloud. Self-intersections checked only for heatcvt and "
-              "the two-step rows. \"ok\" = issue-4 acceptance (closed, oriented manifold, source genus, no "
+              "the two-step rows. \"ok\" = the acceptance targets (closed, oriented manifold, source genus, no "
               "self-intersections, phi_m >= 52, phi_min >= 25, ratio <= 1.2 clean / 1.5 noisy).\n\n",
               points, sites);
   std::printf("| cloud | method | time s | pipeline s | V | F | manifold | closed | genus | phi_min | phi_m | mean dist | "

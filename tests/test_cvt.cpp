@@ -456,7 +456,7 @@ TEST(CvtAcceleration, QualityAtStartReturnsTheHeatVoronoiDualOfTheStartSites) {
   // With the default voronoi_rings_settled (1 ring) the final diagram's cells agree with full
   // diffusions to a few 1e-3 of their area and give the same dual triangles.
   EXPECT_EQ(triangle_set(full_dual.F), triangle_set(r.dual.F));
-  // With the paper's index sets (cell + 2 rings, §6; issue 3's acceptance: localized heat within
+  // With the paper's index sets (cell + 2 rings, §6; the target: localized heat within
   // 1e-3 of full diffusions), the cell areas agree to 1e-3.
   CvtOptions two_rings = o;
   two_rings.voronoi_rings_settled = two_rings.voronoi_rings;

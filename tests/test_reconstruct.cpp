@@ -24,7 +24,7 @@ namespace {
 
 double bbox_diagonal(const Eigen::MatrixX3d& V) { return (V.colwise().maxCoeff() - V.colwise().minCoeff()).norm(); }
 
-// Issue 4's acceptance, one rule for every cloud (50k points sampled without normals from a
+// The reconstruction's acceptance, one rule for every cloud (50k points sampled without normals from a
 // closed mesh, seed 11, clean or with Gaussian noise of 0.25 % of the bbox diagonal, -n 3000):
 // closed, oriented 2-manifold of the source's genus without self-intersections, φm >= 52°,
 // φmin >= 25°, and a mean two-sided distance to the source within kCleanRatio (clean) /
@@ -36,7 +36,7 @@ constexpr double kNoisyRatio = 1.5;
 constexpr double kNoise = 0.0025;
 constexpr int kPoints = 50000;
 constexpr int kSites = 3000;
-// Properties of this test beyond issue 4's targets, the same for every cloud: most sites become
+// Properties of this test beyond the acceptance targets, the same for every cloud: most sites become
 // vertices, and the two-sided Hausdorff distance / bbox diagonal stays small. Their level is set
 // by the clouds with parts thinner than the site spacing (armadillo's ears, fingers and claws):
 // there the dual loses the tips, which are capped (filled holes), and some sites end in no
@@ -82,7 +82,7 @@ void check_closed_reconstruction(const std::string& file, int genus, bool noisy)
     return v;
   };
   EXPECT_NEAR(volume(r.mesh) / volume(src), 1.0, 0.03);
-  // Issue 4's angle targets, measured on the output mesh.
+  // The angle targets, measured on the output mesh.
   const TriangleQuality q = triangle_quality(r.mesh.V, r.mesh.F);
   EXPECT_GE(q.mean_min_angle_deg, 52.0);
   EXPECT_GE(q.min_angle_deg, 25.0);
@@ -104,7 +104,7 @@ void check_closed_reconstruction(const std::string& file, int genus, bool noisy)
 
 }  // namespace
 
-// Issue 4's acceptance clouds (slow: a heatcvt run and the two peers on 50k points each).
+// The acceptance clouds (slow: a heatcvt run and the two peers on 50k points each).
 TEST(Reconstruct, BunnyClean50k) { check_closed_reconstruction("bunny_pmp.off", 0, false); }
 TEST(Reconstruct, BunnyNoisy50k) { check_closed_reconstruction("bunny_pmp.off", 0, true); }
 TEST(Reconstruct, KittenClean50kGenus1) { check_closed_reconstruction("kitten.obj", 1, false); }

@@ -104,9 +104,8 @@ struct ReconstructionOptions {
   /// The CVT (Laplacian, heat Voronoi, Lloyd, dual candidates) runs on a spatially uniform subset
   /// of about this many points per site (one point per voxel of a grid sized to that count, the
   /// one nearest its voxel's centroid); the site positions are still fitted to every point, so
-  /// noise keeps averaging out over the whole cloud. 0 = every point. Default 10 (50k-point
-  /// acceptance clouds at 3,000 sites: 30k CVT points, each iteration ~40 % cheaper, every issue-4
-  /// target still met; at 8 the elephant's noisy cloud gained a handle).
+  /// noise keeps averaging out over the whole cloud. 0 = every point. Default 10 (the
+  /// measurements behind it are in docs/benchmarks.md).
   double cvt_points_per_site = 10.0;
   /// Project the CVT points onto the surface fitted to the whole cloud (the fit of the site
   /// positions) before the Laplacian is built: noise of the scan does not reach the Laplacian,
