@@ -68,15 +68,25 @@ struct TuftedResult {
   int64_t skipped = 0;  // non-Delaunay edges that could not be flipped (combinatorial guards)
 };
 
-TuftedResult tufted_intrinsic_delaunay(const std::vector<std::array<int, 3>>& soup, const Eigen::MatrixX3d& P,
-                                       double mollify_factor, double cot_clamp, double scale,
-                                       std::vector<std::pair<int64_t, double>>& edge_weights, Eigen::VectorXd& M) {
-  const int64_t n = P.rows();
+// The tufted cover of a triangle soup (Sharp & Crane 2020, §4): two sheets per triangle, as
+// half-edges 3·s + c of sheet s ∈ {2f (front), 2f+1 (back)} with intrinsic lengths.
+struct TuftedCover {
+  std::vector<int> tail;
+  std::vector<int64_t> next, twin;
+  std::vector<double> len;
+};
+
+// Both sheets of every triangle, with their next pointers (no twins yet).
+TuftedCover tufted_sheets(const std::vector<std::array<int, 3>>& soup) {
   const int64_t nf = static_cast<int64_t>(soup.size());
-  const int64_t nh = 6 * nf;  // half-edge 3·s + c of sheet s ∈ {2f (front), 2f+1 (back)}
-  std::vector<int> tail(nh);
-  std::vector<int64_t> next(nh), twin(nh, -1);
-  std::vector<double> len(nh);
+  const int64_t nh = 6 * nf;
+  TuftedCover c;
+  c.tail.resize(nh);
+  c.next.resize(nh);
+  c.twin.assign(nh, -1);
+  c.len.resize(nh);
+  std::vector<int>& tail = c.tail;
+  std::vector<int64_t>& next = c.next;
   for (int64_t f = 0; f < nf; ++f) {
     const std::array<int, 3>& t = soup[f];
     const int front[3] = {t[0], t[1], t[2]}, back[3] = {t[0], t[2], t[1]};
@@ -87,6 +97,16 @@ TuftedResult tufted_intrinsic_delaunay(const std::vector<std::array<int, 3>>& so
       next[6 * f + 3 + c] = 6 * f + 3 + (c + 1) % 3;
     }
   }
+  return c;
+}
+
+void glue_sheets(TuftedCover& c, const Eigen::MatrixX3d& P) {
+  std::vector<int>& tail = c.tail;
+  std::vector<int64_t>& next = c.next;
+  std::vector<int64_t>& twin = c.twin;
+  const int64_t nh = static_cast<int64_t>(tail.size());
+  const int64_t n = P.rows();
+  const int64_t nf = nh / 6;
   // Gluing: per undirected edge (a < b), the faces sorted by the angle of their third vertex
   // around the axis a→b (ties: soup order), then interleaved s0, s_h, s1, s_h+1, … (h = ⌈m/2⌉)
   // so that the faces on opposite sides of the edge alternate; consecutive faces are glued, the
@@ -147,6 +167,13 @@ TuftedResult tufted_intrinsic_delaunay(const std::vector<std::array<int, 3>>& so
     }
     r = e;
   }
+}
+
+void set_mollified_lengths(TuftedCover& c, const Eigen::MatrixX3d& P, double mollify_factor) {
+  std::vector<int>& tail = c.tail;
+  std::vector<int64_t>& next = c.next;
+  std::vector<double>& len = c.len;
+  const int64_t nh = static_cast<int64_t>(tail.size());
   // Lengths with mollification (Sharp & Crane §4.5).
   double mean_len = 0;
   for (int64_t h = 0; h < nh; ++h) {
@@ -163,6 +190,15 @@ TuftedResult tufted_intrinsic_delaunay(const std::vector<std::array<int, 3>>& so
   if (delta > 0)
     for (double& l : len) l += delta;
 
+}
+
+// Lawson flips of the cover's non-Delaunay edges (cotangent sum below zero).
+TuftedResult flip_to_delaunay(TuftedCover& c, double cot_clamp) {
+  std::vector<int>& tail = c.tail;
+  std::vector<int64_t>& next = c.next;
+  std::vector<int64_t>& twin = c.twin;
+  std::vector<double>& len = c.len;
+  const int64_t nh = static_cast<int64_t>(tail.size());
   auto halfedge_cot = [&](int64_t h) {  // cot of the angle opposite h in its face
     const double a = len[h], b = len[next[h]], c = len[next[next[h]]];
     return cot_opposite(a, b, c, triangle_area(a, b, c), cot_clamp);
@@ -216,7 +252,16 @@ TuftedResult tufted_intrinsic_delaunay(const std::vector<std::array<int, 3>>& so
       }
     }
   }
-  // Cotan weights and masses of the final triangulation: every half-edge lies in one face.
+  return result;
+}
+
+// Cotan weights and masses of the final triangulation: every half-edge lies in one face.
+void add_cover_weights(const TuftedCover& c, int64_t n, double cot_clamp, double scale,
+                       std::vector<std::pair<int64_t, double>>& edge_weights, Eigen::VectorXd& M) {
+  const std::vector<int>& tail = c.tail;
+  const std::vector<int64_t>& next = c.next;
+  const std::vector<double>& len = c.len;
+  const int64_t nh = static_cast<int64_t>(tail.size());
   const double w_scale = 0.5 * scale;  // ½ for the two sheets
   for (int64_t h = 0; h < nh; ++h) {
     const int a = tail[h], b = tail[next[h]];
@@ -227,6 +272,16 @@ TuftedResult tufted_intrinsic_delaunay(const std::vector<std::array<int, 3>>& so
     const int64_t key = std::min<int64_t>(a, b) * n + std::max<int64_t>(a, b);
     edge_weights.emplace_back(key, w_scale * 0.5 * cot_opposite(la, lb, lc, area, cot_clamp));
   }
+}
+
+TuftedResult tufted_intrinsic_delaunay(const std::vector<std::array<int, 3>>& soup, const Eigen::MatrixX3d& P,
+                                       double mollify_factor, double cot_clamp, double scale,
+                                       std::vector<std::pair<int64_t, double>>& edge_weights, Eigen::VectorXd& M) {
+  TuftedCover cover = tufted_sheets(soup);
+  glue_sheets(cover, P);
+  set_mollified_lengths(cover, P, mollify_factor);
+  const TuftedResult result = flip_to_delaunay(cover, cot_clamp);
+  add_cover_weights(cover, P.rows(), cot_clamp, scale, edge_weights, M);
   return result;
 }
 

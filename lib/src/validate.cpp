@@ -239,30 +239,28 @@ int mesh_genus(const Eigen::MatrixX3i& F, int num_vertices) {
   return genus;
 }
 
-ValidationReport validate_triangle_mesh(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
-                                        const ValidationOptions& options) {
-  const int nv = static_cast<int>(V.rows());
-  if (F.rows() == 0) throw InvalidInputError("validate_triangle_mesh: the mesh has no faces");
-  if (!V.allFinite()) throw InvalidInputError("validate_triangle_mesh: non-finite vertex coordinates");
-  if (F.minCoeff() < 0 || F.maxCoeff() >= nv)
-    throw InvalidInputError("validate_triangle_mesh: face index out of range [0, " + std::to_string(nv) + ")");
-  const int listed = std::max(0, options.max_listed);
-  ValidationReport rep;
-  Topology t = analyse(F, nv, listed);
+namespace {
+
+bool is_oriented_manifold(const Topology& t) {
+  return t.n_nonmanifold_edges == 0 && t.n_nonmanifold_vertices == 0 && t.n_inconsistent == 0;
+}
+
+// Counts, orientability, cross-caps and genus (per component: 2 − χ − loops = 2g, or the number
+// of cross-caps of a non-orientable one) from the combinatorial analysis.
+void fill_topology(ValidationReport& rep, const Topology& t) {
+  const bool manifold = is_oriented_manifold(t);
   rep.vertices = t.vertices;
   rep.edges = t.edges;
   rep.faces = t.faces;
   rep.components = t.components;
   rep.boundary_loops = t.boundary_loops;
   rep.euler_characteristic = t.vertices - t.edges + t.faces;
-  const bool manifold = t.n_nonmanifold_edges == 0 && t.n_nonmanifold_vertices == 0 && t.n_inconsistent == 0;
   rep.orientable = t.orientable;
   if (t.n_nonmanifold_edges == 0 && t.n_nonmanifold_vertices == 0) {
     rep.crosscaps = 0;
     for (int c = 0; c < t.components; ++c)
       if (t.non_orientable[c]) rep.crosscaps += 2 - t.chi[c] - t.loops[c];
   }
-  const bool accepted_non_orientable = options.allow_non_orientable && t.orientable == 0;
   if (manifold) {
     rep.genus = 0;
     for (int c = 0; c < t.components; ++c) {
@@ -274,6 +272,13 @@ ValidationReport validate_triangle_mesh(const Eigen::MatrixX3d& V, const Eigen::
       rep.genus += twice / 2;
     }
   }
+}
+
+// The combinatorial checks: manifold edges and vertices, orientation, closedness, unused
+// vertices, and the expected components / genus when asked for.
+void add_topology_checks(ValidationReport& rep, const Topology& t, const ValidationOptions& options,
+                         bool accepted_non_orientable) {
+  const bool manifold = is_oriented_manifold(t);
   rep.checks.push_back(make_check("manifold_edges", t.n_nonmanifold_edges, "edges with more than two faces",
                                   t.nonmanifold_edges));
   rep.checks.push_back(make_check("manifold_vertices", t.n_nonmanifold_vertices,
@@ -312,10 +317,23 @@ ValidationReport validate_triangle_mesh(const Eigen::MatrixX3d& V, const Eigen::
                         : "not computed: the mesh is not an oriented 2-manifold";
     rep.checks.push_back(c);
   }
+}
 
-  // CGAL: polygon-mesh structure, closedness, components, self-intersections.
-  std::vector<int> remap(nv, -1);
+// (V, F) as a CGAL polygon soup over the vertices in use. A non-orientable surface is cut open
+// along an orientation seam (vertices duplicated) so that CGAL can build a polygon mesh;
+// `original` maps every point back to its vertex of (V, F).
+struct CgalSoup {
   std::vector<Kernel::Point_3> points;
+  std::vector<std::vector<std::size_t>> polygons;
+  std::vector<int> original;
+};
+
+CgalSoup cgal_soup(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, bool accepted_non_orientable) {
+  const int nv = static_cast<int>(V.rows());
+  CgalSoup soup;
+  std::vector<Kernel::Point_3>& points = soup.points;
+  std::vector<std::vector<std::size_t>>& polygons = soup.polygons;
+  std::vector<int> remap(nv, -1);
   for (int f = 0; f < F.rows(); ++f)
     for (int k = 0; k < 3; ++k) {
       const int v = F(f, k);
@@ -327,13 +345,12 @@ ValidationReport validate_triangle_mesh(const Eigen::MatrixX3d& V, const Eigen::
   std::vector<int> back(points.size());
   for (int v = 0; v < nv; ++v)
     if (remap[v] >= 0) back[remap[v]] = v;
-  std::vector<std::vector<std::size_t>> polygons(F.rows());
+  polygons.resize(static_cast<std::size_t>(F.rows()));
   for (int f = 0; f < F.rows(); ++f)
     polygons[f] = {static_cast<std::size_t>(remap[F(f, 0)]), static_cast<std::size_t>(remap[F(f, 1)]),
                    static_cast<std::size_t>(remap[F(f, 2)])};
-  // A non-orientable surface is cut open along an orientation seam (vertices duplicated) so that
-  // CGAL can build a polygon mesh; `original` maps every point back to its vertex of (V, F).
-  std::vector<int> original(back);
+  std::vector<int>& original = soup.original;
+  original = back;
   if (accepted_non_orientable) {
     PMP::orient_polygon_soup(points, polygons);
     std::map<std::array<double, 3>, int> by_position;
@@ -342,6 +359,16 @@ ValidationReport validate_triangle_mesh(const Eigen::MatrixX3d& V, const Eigen::
     for (size_t i = back.size(); i < points.size(); ++i)
       original.push_back(by_position.at({points[i].x(), points[i].y(), points[i].z()}));
   }
+  return soup;
+}
+
+// CGAL's checks: polygon-mesh structure, closedness and components against the combinatorial
+// ones, self-intersections (faces touching at a vertex of the uncut surface do not count).
+void add_cgal_checks(ValidationReport& rep, const CgalSoup& soup, const Topology& t, const ValidationOptions& options,
+                     bool accepted_non_orientable, int listed) {
+  const std::vector<Kernel::Point_3>& points = soup.points;
+  const std::vector<std::vector<std::size_t>>& polygons = soup.polygons;
+  const std::vector<int>& original = soup.original;
   MeshCheck structure;
   structure.name = "cgal_polygon_mesh";
   structure.passed = PMP::is_polygon_soup_a_polygon_mesh(polygons);
@@ -407,6 +434,24 @@ ValidationReport validate_triangle_mesh(const Eigen::MatrixX3d& V, const Eigen::
     }
   }
   if (!si.name.empty()) rep.checks.push_back(si);
+}
+
+}  // namespace
+
+ValidationReport validate_triangle_mesh(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
+                                        const ValidationOptions& options) {
+  const int nv = static_cast<int>(V.rows());
+  if (F.rows() == 0) throw InvalidInputError("validate_triangle_mesh: the mesh has no faces");
+  if (!V.allFinite()) throw InvalidInputError("validate_triangle_mesh: non-finite vertex coordinates");
+  if (F.minCoeff() < 0 || F.maxCoeff() >= nv)
+    throw InvalidInputError("validate_triangle_mesh: face index out of range [0, " + std::to_string(nv) + ")");
+  const int listed = std::max(0, options.max_listed);
+  ValidationReport rep;
+  const Topology t = analyse(F, nv, listed);
+  fill_topology(rep, t);
+  const bool accepted_non_orientable = options.allow_non_orientable && t.orientable == 0;
+  add_topology_checks(rep, t, options, accepted_non_orientable);
+  add_cgal_checks(rep, cgal_soup(V, F, accepted_non_orientable), t, options, accepted_non_orientable, listed);
   return rep;
 }
 

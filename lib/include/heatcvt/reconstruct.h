@@ -66,7 +66,6 @@ struct ReconstructionOptions {
   double time_coefficient = 1.0;  ///< t = C·h̄². Default 1.
   std::uint32_t seed = 1;         ///< seed of the initial sites. Default 1.
   int threads = 0;                ///< 0 = all cores. Default 0.
-  // --- additive fields (not in the first pinned version) ---
   /// Boundary loops of the extracted mesh with at most this many edges are treated as holes of
   /// the extraction (not scan boundaries) and filled. Loops of up to 4× this many edges are
   /// filled only if their centre is > h/4 away from every triangle yet < h/2 from a cloud point
@@ -141,7 +140,6 @@ struct ReconstructionResult {
   int iterations = 0;              ///< Lloyd iterations run
   double min_angle_deg = 0;        ///< φmin: smallest interior angle over all triangles
   double mean_min_angle_deg = 0;   ///< φm: mean over triangles of their smallest angle
-  // --- additive fields (not in the first pinned version) ---
   int points_input = 0;            ///< rows of P
   int points_merged = 0;           ///< exact duplicates merged
   int points_denoised = 0;         ///< removed by the outlier filter
