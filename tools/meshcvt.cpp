@@ -18,7 +18,6 @@
 #include "heatcvt/errors.h"
 #include "heatcvt/heat_solver.h"
 #include "heatcvt/mesh_io.h"
-#include "heatcvt/normalize.h"
 #include "heatcvt/remesh.h"
 #include "heatcvt/validate.h"
 #include "report_json.h"
@@ -149,9 +148,6 @@ int main(int argc, char** argv) {
     const auto t_start = Clock::now();
     TriangleMesh mesh = read_mesh(mesh_path);
     validate_mesh(mesh.V, mesh.F, mesh_path);
-    // The CVT runs on the mesh in its unit bounding-box frame (normalize.h): the result does not
-    // depend on the units; the outputs are written back in the input's coordinates.
-    const NormalizationFrame frame = cli::on_file(mesh_path, [&] { return normalize_positions(mesh.V); });
     const int nv = static_cast<int>(mesh.V.rows());
     const SurfaceDescription input = describe_surface(mesh);
     const int input_genus = input.genus;
@@ -179,9 +175,13 @@ int main(int argc, char** argv) {
     remesh.cvt.surface_lloyd_iterations = surface_lloyd;
     remesh.cvt.split_nonmanifold_cells = !no_split;
     cli::Progress progress("lloyd", iterations, quiet);
-    RemeshResult res = remesh_cvt(mesh, remesh, [&](const CvtIterationStats& s) {
-      progress.update(s.iteration);
-      return true;
+    // remesh_cvt works in the mesh's unit bounding-box frame (normalize.h) and returns input
+    // coordinates: the result does not depend on the units.
+    const RemeshResult res = cli::on_file(mesh_path, [&] {
+      return remesh_cvt(mesh, remesh, [&](const CvtIterationStats& s) {
+        progress.update(s.iteration);
+        return true;
+      });
     });
     progress.finish();
     const CvtResult& r = res.cvt;
@@ -200,11 +200,6 @@ int main(int argc, char** argv) {
     const ValidationReport& checks = res.checks;
     const TriangleQuality& q = res.quality;
 
-    // Outputs in the input's coordinates.
-    TriangleMesh out_mesh = res.mesh;
-    restore_frame(out_mesh.V, frame);
-    Eigen::MatrixX3d cells_V = r.diagram.V;
-    restore_frame(cells_V, frame);
 
     const int done = static_cast<int>(r.iterations.size());
     double iter_s = 0;
@@ -261,12 +256,12 @@ int main(int argc, char** argv) {
     const int status = cli::finish_report(rep, res.stage_seconds, check_list);
     {
       OutputTransaction outputs;  // all outputs or none (atomic_file.h)
-      write_mesh(out_path, out_mesh.V, out_mesh.F);
+      write_mesh(out_path, res.mesh.V, res.mesh.F);
       if (!cells_path.empty()) {
         MeshAttributes attr;
         attr.face_int = r.diagram.face_cell;
         attr.face_color = cli::cell_colors(r.diagram.face_cell);
-        write_mesh(cells_path, cells_V, r.diagram.F, attr);
+        write_mesh(cells_path, r.diagram.V, r.diagram.F, attr);
       }
       if (!report_path.empty()) cli::write_json(report_path, rep);
       outputs.commit();

@@ -144,9 +144,6 @@ void run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options
   const MeshSurfaceProjector surface(input.V, input.F);
   SurfaceMesherOptions mo = options.mesher;
   mo.threads = options.cvt.threads;
-  // The boundary loops of an input mesh are real: only holes inside the input surface (missing
-  // dual triangles) are closed.
-  mo.holes.policy = HolePolicy::keep;
   DualSurfaceResult post;
   try {
     post = mesh_dual_surface(out.cvt.dual.V, out.cvt.dual.F, surface, mo);

@@ -80,8 +80,14 @@ struct RemeshOptions {
   /// Not run on non-orientable inputs (the stages orient closed pieces outward).
   /// false = the output is the dual itself (vertex i = site i). Default true.
   bool post_cvt_stages = true;
-  /// Options of those stages (threads: cvt.threads is used). Default SurfaceMesherOptions{}.
-  SurfaceMesherOptions mesher;
+  /// Options of those stages (threads: cvt.threads is used). Default SurfaceMesherOptions{} with
+  /// holes.policy = keep: the boundary loops of an input mesh are real, so only holes inside the
+  /// input surface (missing dual triangles) are closed.
+  SurfaceMesherOptions mesher = [] {
+    SurfaceMesherOptions m;
+    m.holes.policy = HolePolicy::keep;
+    return m;
+  }();
 };
 
 /// Result of remesh_cvt().
