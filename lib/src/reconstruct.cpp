@@ -441,8 +441,10 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   // 4. Sites on the fitted surface; dual candidates witnessed by the point triangles and the
   // Voronoi vertices; then the surface mesher's stages with the fit as projector.
   WorkingMesh mesh = sites_on_surface(cvt, T, cp, fit, options.threads);
+  DualCandidateOptions candidate_options = options.mesher.candidates;
+  candidate_options.threads = options.threads;
   const DualCandidates candidates = dual_candidates(T, cell_labels(cvt.diagram, static_cast<int>(cp.sub.size())),
-                                                    cvt.diagram, mesh, options.mesher.candidates);
+                                                    cvt.diagram, mesh, candidate_options);
   stage.done("sites and candidates");
   SurfaceMesherOptions mopt = options.mesher;
   mopt.holes.max_hole_edges = options.max_hole_edges;

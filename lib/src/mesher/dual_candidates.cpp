@@ -1,10 +1,17 @@
 // Candidate triangles of the dual of a surface Voronoi diagram.
 #include "heatcvt/mesher/dual_candidates.h"
 
+#include <CGAL/Delaunay_triangulation_2.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Triangulation_vertex_base_with_info_2.h>
+
 #include <Eigen/Geometry>
 
 #include <algorithm>
 #include <utility>
+
+#include "heatcvt/normals.h"
+#include "heatcvt/parallel.h"
 
 namespace heatcvt {
 namespace {
@@ -47,7 +54,64 @@ DualCandidates classify(const std::vector<MeshFace>& cand, const std::vector<Mes
   return out;
 }
 
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Delaunay = CGAL::Delaunay_triangulation_2<
+    Kernel, CGAL::Triangulation_data_structure_2<CGAL::Triangulation_vertex_base_with_info_2<int, Kernel>>>;
+
+// The triangles at site i of the Delaunay triangulation of i and its compatible neighbours in
+// i's tangent plane, as sorted vertex triples.
+std::vector<MeshFace> site_star(const WorkingMesh& mesh, int i, const Eigen::MatrixXi& knn, const StarCandidateOptions& o) {
+  const Eigen::Vector3d p = mesh.V.row(i).transpose(), n = mesh.N.row(i).transpose();
+  std::vector<MeshFace> out;
+  if (!(n.norm() > 0)) return out;
+  const Eigen::Vector3d u = n.unitOrthogonal(), w = n.cross(u);
+  std::vector<std::pair<Kernel::Point_2, int>> pts = {{Kernel::Point_2(0, 0), i}};
+  for (Eigen::Index q = 0; q < knn.cols(); ++q) {
+    const int j = knn(i, q);
+    if (j == i || mesh.N.row(j).dot(n) < o.min_normal_dot) continue;
+    const Eigen::Vector3d d = mesh.V.row(j).transpose() - p;
+    pts.push_back({Kernel::Point_2(d.dot(u), d.dot(w)), j});
+  }
+  if (pts.size() < 3) return out;
+  Delaunay dt;
+  dt.insert(pts.begin(), pts.end());
+  Delaunay::Vertex_handle centre;
+  for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v)
+    if (v->info() == i) centre = v;
+  if (centre == Delaunay::Vertex_handle()) return out;
+  Delaunay::Face_circulator f = dt.incident_faces(centre), end = f;
+  if (f == nullptr) return out;
+  do {
+    if (!dt.is_infinite(f)) {
+      MeshFace t = {f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()};
+      std::sort(t.begin(), t.end());
+      out.push_back(t);
+    }
+  } while (++f != end);
+  return out;
+}
+
 }  // namespace
+
+std::vector<DualCandidate> star_candidates(const WorkingMesh& mesh, const StarCandidateOptions& options,
+                                           const DualCandidateOptions& coherence, int threads) {
+  const int ns = mesh.num_vertices();
+  const int k = std::min(options.neighbors, ns - 1);
+  if (!options.enabled || k < 2) return {};
+  const Eigen::MatrixXi knn = k_nearest_neighbors(mesh.V, k, threads);
+  // Normals at the sites' own scale: the plane of each site and its nearest sites, turned to the
+  // side of the site's normal. Noise and depth steps below the site spacing do not tilt it.
+  WorkingMesh sites(mesh.V, estimate_normals(mesh.V, knn, threads), mesh.anchor);
+  for (int i = 0; i < ns; ++i)
+    if (sites.N.row(i).dot(mesh.N.row(i)) < 0) sites.N.row(i) *= -1;
+  std::vector<std::vector<MeshFace>> stars(ns);
+#pragma omp parallel for num_threads(resolve_threads(threads)) schedule(dynamic, 64)
+  for (int i = 0; i < ns; ++i) stars[i] = site_star(sites, i, knn, options);
+  std::vector<MeshFace> all;
+  for (const auto& s : stars) all.insert(all.end(), s.begin(), s.end());
+  std::sort(all.begin(), all.end());
+  return classify(all, {}, sites, coherence).coherent;
+}
 
 std::vector<int> cell_labels(const VoronoiDiagram& D, int num_points) {
   std::vector<int> label(num_points, -1);
@@ -85,7 +149,9 @@ DualCandidates dual_candidates(const Eigen::MatrixX3i& T, const std::vector<int>
   }
   std::sort(cand.begin(), cand.end());
   std::sort(cand_vv.begin(), cand_vv.end());
-  return classify(cand, cand_vv, mesh, options);
+  DualCandidates out = classify(cand, cand_vv, mesh, options);
+  out.star = star_candidates(mesh, options.stars, options, options.threads);
+  return out;
 }
 
 DualCandidates dual_candidates_from_faces(const Eigen::MatrixX3i& F, const WorkingMesh& mesh,
@@ -98,7 +164,9 @@ DualCandidates dual_candidates_from_faces(const Eigen::MatrixX3i& F, const Worki
     cand.push_back(l);
   }
   std::sort(cand.begin(), cand.end());
-  return classify(cand, {}, mesh, options);
+  DualCandidates out = classify(cand, {}, mesh, options);
+  out.star = star_candidates(mesh, options.stars, options, options.threads);
+  return out;
 }
 
 }  // namespace heatcvt

@@ -10,6 +10,8 @@
 #include <utility>
 
 #include "heatcvt/closest_point.h"
+#include "heatcvt/mesher/hole_sites.h"
+#include "heatcvt/mesher/mesh_checks.h"
 
 namespace heatcvt {
 namespace {
@@ -75,12 +77,124 @@ bool selected(const WorkingMesh& mesh, const SurfaceProjector& surface, const st
     case HolePolicy::automatic: break;
   }
   return (L <= o.max_hole_edges && o.fill_short_loops) || (L <= o.sampled_hole_factor * o.max_hole_edges && is_sampled_hole(mesh, surface, loop, o)) ||
-         is_surrounded_hole(mesh, surface, loop, o);
+         (L <= o.surrounded_hole_factor * o.max_hole_edges && is_surrounded_hole(mesh, surface, loop, o));
+}
+
+// Whether the triangles face the way their corners' normals do, on area-weighted average. Filling
+// the border of a piece of surface (rather than a hole in it) would add its back side.
+bool faces_agree_with_normals(const WorkingMesh& mesh, const std::vector<MeshFace>& tris, double min_agreement) {
+  double agree = 0, area = 0;
+  for (const MeshFace& t : tris) {
+    const Eigen::Vector3d a = mesh.V.row(t[0]), b = mesh.V.row(t[1]), c = mesh.V.row(t[2]);
+    const Eigen::Vector3d fn = (b - a).cross(c - a);
+    const Eigen::Vector3d vn = mesh.N.row(t[0]) + mesh.N.row(t[1]) + mesh.N.row(t[2]);
+    if (!(fn.norm() > 0) || !(vn.norm() > 0)) continue;
+    agree += fn.dot(vn.normalized());
+    area += fn.norm();
+  }
+  return !(area > 0) || agree >= min_agreement * area;
+}
+
+// The edge-connected pieces of the mesh with the number of boundary half-edges of each.
+struct PieceBoundaries {
+  FaceComponents components;
+  std::vector<int> boundary_edges;
+  explicit PieceBoundaries(const WorkingMesh& mesh) : components(face_components(mesh, false)) {
+    boundary_edges.assign(components.size.size(), 0);
+    for (int f = 0; f < mesh.num_faces(); ++f)
+      for (int k = 0; k < 3; ++k)
+        if (!mesh.has_half_edge(mesh.face(f)[(k + 1) % 3], mesh.face(f)[k])) ++boundary_edges[components.of_face[f]];
+  }
+};
+
+// Whether the triangles close the loop's piece (it is the piece's only boundary) into a surface
+// that encloses a volume of at least min_ratio · area^(3/2): a closed object missing a cap, not
+// the two sides of a flat piece pressed together.
+bool closes_a_volume(const WorkingMesh& mesh, const PieceBoundaries& pieces, const std::vector<int>& loop,
+                     const std::vector<MeshFace>& tris, double min_ratio) {
+  const int f0 = mesh.half_edge_face(loop[0], loop[1]);
+  if (f0 < 0) return false;
+  const int piece = pieces.components.of_face[f0];
+  if (pieces.boundary_edges[piece] != static_cast<int>(loop.size())) return false;
+  double volume = 0, area = 0;
+  auto add = [&](const MeshFace& t) {
+    const Eigen::Vector3d a = mesh.V.row(t[0]), b = mesh.V.row(t[1]), c = mesh.V.row(t[2]);
+    volume += a.dot(b.cross(c)) / 6.0;
+    area += 0.5 * (b - a).cross(c - a).norm();
+  };
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (pieces.components.of_face[f] == piece) add(mesh.face(f));
+  for (const MeshFace& t : tris) add(t);
+  return std::abs(volume) >= min_ratio * std::pow(area, 1.5);
+}
+
+// Vertices in no face, and a lookup of those near a point.
+class UnusedSites {
+ public:
+  explicit UnusedSites(const WorkingMesh& mesh) : mesh_(mesh), free_(mesh.num_vertices(), 1) {
+    for (const MeshFace& f : mesh.faces())
+      for (int v : f) free_[v] = 0;
+    for (int v = 0; v < mesh.num_vertices(); ++v)
+      if (free_[v]) list_.push_back(v);
+  }
+  bool any() const { return !list_.empty(); }
+  // Free vertices within `radius` of `centre`, ascending.
+  std::vector<int> near(const Eigen::Vector3d& centre, double radius) const {
+    std::vector<int> out;
+    for (int v : list_)
+      if (free_[v] && (mesh_.V.row(v).transpose() - centre).norm() <= radius) out.push_back(v);
+    return out;
+  }
+  void take(const std::vector<int>& vs) {
+    for (int v : vs) free_[v] = 0;
+  }
+
+ private:
+  const WorkingMesh& mesh_;
+  std::vector<char> free_;
+  std::vector<int> list_;
+};
+
+// Triangulates a selected loop: with the unused sites inside it when there are any (hole_sites.h),
+// else by the max-min-angle triangulation of the loop alone.
+bool triangulate_selected(const WorkingMesh& mesh, const std::vector<int>& loop, const HoleTriangulation& with_sites,
+                          bool sites_ok, std::vector<MeshFace>& tris) {
+  if (sites_ok && !with_sites.interior_sites.empty()) {
+    tris = with_sites.faces;
+    return true;
+  }
+  return triangulate_loop(mesh, loop, tris);
+}
+
+// Adds the fills' triangles; with o.reject_intersecting_fills, the rejectable fills that
+// self-intersect the result are taken out again (one global test for the whole pass). Returns the fills kept and
+// appends their loop lengths to `sizes`.
+int add_fills_without_intersections(WorkingMesh& mesh, const std::vector<MeshFace>& added, const std::vector<int>& fill_of,
+                                    const std::vector<int>& fill_sizes, const std::vector<char>& rejectable,
+                                    const HoleFillingOptions& o, std::vector<int>* sizes) {
+  const int first = mesh.num_faces();
+  for (const MeshFace& t : added) mesh.add_face(t);
+  std::vector<char> failed(fill_sizes.size(), 0);
+  if (o.reject_intersecting_fills && !added.empty())
+    for (int f : self_intersecting_faces(mesh))
+      if (f >= first && rejectable[fill_of[f - first]]) failed[fill_of[f - first]] = 1;
+  std::vector<char> drop(mesh.num_faces(), 0);
+  for (size_t t = 0; t < added.size(); ++t) drop[first + t] = failed[fill_of[t]];
+  mesh.remove_faces(drop);
+  int kept = 0;
+  for (size_t i = 0; i < fill_sizes.size(); ++i)
+    if (!failed[i]) {
+      if (sizes) sizes->push_back(fill_sizes[i]);
+      ++kept;
+    }
+  return kept;
 }
 
 // One pass: every simple boundary loop that qualifies is triangulated. Returns the loops filled.
 int fill_pass(WorkingMesh& mesh, const SurfaceProjector& surface, const HoleFillingOptions& o, std::vector<int>* sizes) {
-  const int max_loop = o.policy == HolePolicy::fill ? o.max_fill_edges : o.surrounded_hole_factor * o.max_hole_edges;
+  const int max_loop = std::max(o.max_fill_edges, o.surrounded_hole_factor * o.max_hole_edges);
+  UnusedSites unused(mesh);
+  const PieceBoundaries pieces(mesh);
   std::unordered_map<int, std::vector<int>> next;  // boundary half-edge a->b (face side) by start vertex
   std::vector<std::pair<int, int>> bedges;
   for (const MeshFace& f : mesh.faces())
@@ -92,10 +206,14 @@ int fill_pass(WorkingMesh& mesh, const SurfaceProjector& surface, const HoleFill
       }
     }
   if (bedges.empty()) return 0;
+  // Pieces of an open scan, rather than a nearly closed surface with gaps.
+  const bool open_surface = static_cast<double>(bedges.size()) > o.open_surface_fraction * 1.5 * mesh.num_faces();
   std::sort(bedges.begin(), bedges.end());
   std::unordered_map<long long, char> used;
   std::vector<MeshFace> added;
-  int filled = 0;
+  std::vector<int> fill_of;     // added triangle -> its fill
+  std::vector<int> fill_sizes;  // loop length of each fill
+  std::vector<char> rejectable;  // whether the fill is taken out if it self-intersects
   for (const auto& [a0, b0] : bedges) {
     if (used.count(WorkingMesh::edge_key(a0, b0))) continue;
     std::vector<int> loop = {a0};
@@ -114,19 +232,43 @@ int fill_pass(WorkingMesh& mesh, const SurfaceProjector& surface, const HoleFill
     }
     const int L = static_cast<int>(loop.size());
     if (!simple || cur != a0 || L > max_loop || L < 3) continue;
-    if (!selected(mesh, surface, loop, o)) continue;
     std::vector<int> sorted = loop;
     std::sort(sorted.begin(), sorted.end());
     if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) continue;
     if (L == 3 && is_back_of_face(mesh, loop)) continue;  // would duplicate that face
+    HoleTriangulation with_sites;
+    bool sites_ok = false;
+    if (o.sites.enabled) {
+      Eigen::Vector3d g = Eigen::Vector3d::Zero();
+      for (int v : loop) g += mesh.V.row(v).transpose();
+      g /= L;
+      double radius = 0;
+      for (int v : loop) radius = std::max(radius, (mesh.V.row(v).transpose() - g).norm());
+      sites_ok = triangulate_hole_with_sites(mesh, loop, unused.near(g, radius), o.sites, with_sites);
+    }
+    const bool sampled_by_sites = sites_ok && !with_sites.interior_sites.empty() && L <= o.max_fill_edges &&
+                                  with_sites.interior_sites.size() >= o.sites.sampled_fraction * with_sites.expected_sites;
+    if (L > (o.policy == HolePolicy::fill ? o.max_fill_edges : o.surrounded_hole_factor * o.max_hole_edges) && !sampled_by_sites)
+      continue;
+    if (!sampled_by_sites && !selected(mesh, surface, loop, o)) continue;
     std::vector<MeshFace> tris;
-    if (!triangulate_loop(mesh, loop, tris)) continue;
+    if (!triangulate_selected(mesh, loop, with_sites, sites_ok, tris)) continue;
+    // Beyond the extraction's own small gaps, a loop is filled only when the fill does not face
+    // against its corners' normals (closing the border of a piece would turn its back side up).
+    if (L > o.max_hole_edges && !faces_agree_with_normals(mesh, tris, o.min_fill_normal_agreement) &&
+        !closes_a_volume(mesh, pieces, loop, tris, o.min_closed_volume))
+      continue;
+    if (sites_ok) unused.take(with_sites.interior_sites);
     added.insert(added.end(), tris.begin(), tris.end());
-    if (sizes) sizes->push_back(L);
-    ++filled;
+    fill_of.insert(fill_of.end(), tris.size(), static_cast<int>(fill_sizes.size()));
+    fill_sizes.push_back(L);
+    // Only the fill of what looks like the border of a piece, from its sites' side, is taken out
+    // when it cuts through the mesh: a gap of the extraction, or a loop around the tip of a thin
+    // part, is filled and untangled after.
+    rejectable.push_back(open_surface && L > o.max_hole_edges &&
+                         (with_sites.shape == LoopShape::outer_border || with_sites.shape == LoopShape::not_simple));
   }
-  for (const MeshFace& t : added) mesh.add_face(t);
-  return filled;
+  return add_fills_without_intersections(mesh, added, fill_of, fill_sizes, rejectable, o, sizes);
 }
 
 }  // namespace

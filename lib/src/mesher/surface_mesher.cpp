@@ -38,7 +38,8 @@ void mesh_from_candidates(WorkingMesh& mesh, const DualCandidates& candidates, c
   stats.candidate_triangles = static_cast<int>(candidates.coherent.size());
   stats.rejected_triangles += extract_manifold(mesh, candidates.coherent);
   stats.removed_triangles += make_vertices_manifold(mesh, options.manifold);
-  stats.rejected_triangles -= add_compatible_candidates(mesh, candidates.coherent, candidates.loose);
+  stats.rejected_triangles -= add_compatible_candidates(mesh, candidates.coherent, {});
+  stats.star_triangles += add_compatible_candidates(mesh, candidates.star, candidates.loose);
   stats.holes_filled +=
       fill_holes(mesh, surface, options.holes, options.manifold, stats.removed_triangles, &stats.filled_hole_edges);
   timer.done("extraction and holes");
@@ -78,7 +79,9 @@ DualSurfaceResult mesh_dual_surface(const Eigen::MatrixX3d& sites, const Eigen::
     mesh.V.row(s) = pos.transpose();
     mesh.N.row(s) = nrm.transpose();
   }
-  const DualCandidates candidates = dual_candidates_from_faces(dual_faces, mesh, options.candidates);
+  DualCandidateOptions candidate_options = options.candidates;
+  candidate_options.threads = options.threads;
+  const DualCandidates candidates = dual_candidates_from_faces(dual_faces, mesh, candidate_options);
   timer.done("sites");
   mesh_from_candidates(mesh, candidates, surface, options, out.stats);
   StageTimer finish_timer(out.stats);

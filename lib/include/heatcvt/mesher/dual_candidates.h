@@ -11,6 +11,18 @@
 
 namespace heatcvt {
 
+/// Options of star_candidates().
+struct StarCandidateOptions {
+  /// Compute them at all. Default true.
+  bool enabled = true;
+  /// Sites around each site whose tangent-plane Delaunay triangulation gives its star. Default 12
+  /// (two rings of a centroidal tessellation).
+  int neighbors = 12;
+  /// Only neighbours whose normal has at least this dot product with the site's take part (the
+  /// other side of a thin part, or a surface crossing at a steep angle, stays out). Default 0.5.
+  double min_normal_dot = 0.5;
+};
+
 /// Options of dual_candidates().
 struct DualCandidateOptions {
   /// A Voronoi vertex where more than this many cells meet is ignored (every triple of its cells
@@ -24,6 +36,11 @@ struct DualCandidateOptions {
   /// the dual triangles that turn around the rim of a part thinner than the site spacing, tried
   /// only to close holes (add_compatible_candidates()). Default −0.3.
   double loose_min_dot = -0.3;
+  /// The sites' own tangent-plane Delaunay stars, tried after the diagram's candidates
+  /// (star_candidates()).
+  StarCandidateOptions stars;
+  /// Threads of the star computation; 0 = all cores. Default 0.
+  int threads = 0;
 };
 
 /// A candidate triangle, oriented so that its normal agrees with the sum of its sites' normals.
@@ -39,6 +56,7 @@ struct DualCandidate {
 struct DualCandidates {
   std::vector<DualCandidate> coherent;
   std::vector<DualCandidate> loose;
+  std::vector<DualCandidate> star;  ///< star_candidates() (with options.stars.enabled)
 };
 
 /// Cell of each of the first `num_points` vertices of the tessellated mesh (−1 when none).
@@ -50,6 +68,16 @@ std::vector<int> cell_labels(const VoronoiDiagram& D, int num_points);
 /// three sites. Sites are the vertices of `mesh` (positions and normals; no faces needed).
 DualCandidates dual_candidates(const Eigen::MatrixX3i& T, const std::vector<int>& label, const VoronoiDiagram& D,
                                const WorkingMesh& mesh, const DualCandidateOptions& options = {});
+
+/// Candidates from the sites alone: the star of each site in the Delaunay triangulation of it
+/// and its nearest sites, projected onto its tangent plane (normal mesh.N). A triangle is
+/// witnessed once by each of its corners whose star holds it. Where the diagram's own witnesses
+/// are missing or were rejected (noisy or cluttered scans: cells torn by depth jumps, flying
+/// pixels, layered depth), these are the triangles of the sites' local Delaunay triangulation,
+/// which a centroidal site set makes about equilateral. Only coherent ones (as in
+/// dual_candidates()) are returned, ordered like them.
+std::vector<DualCandidate> star_candidates(const WorkingMesh& mesh, const StarCandidateOptions& options,
+                                           const DualCandidateOptions& coherence, int threads = 0);
 
 /// Candidates from a ready-made dual triangulation F (#F by 3 vertex indices of `mesh`; e.g.
 /// CvtResult::dual): each distinct triangle is witnessed once per occurrence.

@@ -6,6 +6,7 @@
 
 #include "heatcvt/mesher/manifold_extraction.h"
 #include "heatcvt/mesher/projector.h"
+#include "heatcvt/mesher/hole_sites.h"
 #include "heatcvt/mesher/working_mesh.h"
 
 namespace heatcvt {
@@ -46,8 +47,34 @@ struct HoleFillingOptions {
   /// tip find it; across the border of an open scan none does). Default 8.
   int surrounded_hole_factor = 8;
   double surrounded_fraction = 0.3;  ///< Default 0.3.
+  /// A loop of more than max_hole_edges edges is filled only when its triangles face the way
+  /// their corners' normals do: the area-weighted mean cosine between them is at least this.
+  /// Closing the border of a piece of surface would add the piece's back side (mean cosine near
+  /// −1). Smaller loops are gaps of the extraction, often at the tips of thin parts where the
+  /// corners' normals point every way, and are not tested; nor is a loop whose fill closes its
+  /// piece around a volume (below). Default −0.5 (a cap over the tip of a thin part, whose
+  /// corners' normals lie across it, scores about 0).
+  double min_fill_normal_agreement = -0.5;
+  /// A fill closes its piece around a volume when the loop is the piece's only boundary and the
+  /// closed piece encloses at least this times its area^(3/2) (a sphere: 0.094; two sides of a
+  /// flat piece pressed together: about 0). Default 0.005.
+  double min_closed_volume = 0.005;
+  /// On an open surface (below), the fill of a loop longer than max_hole_edges that runs
+  /// counter-clockwise seen from its sites' mean normal (LoopShape::outer_border: the border of a
+  /// piece, as between the fragments of a cluttered scan) or whose projection crosses itself, and
+  /// whose triangles cut through the mesh, is taken out again, leaving the loop open. Other fills
+  /// (gaps of the extraction, caps over the tips of thin parts, the holes of a nearly closed
+  /// surface) are kept and untangled after. Default true.
+  bool reject_intersecting_fills = true;
+  /// The surface counts as open when more than this fraction of its edges are on its boundary.
+  /// Default 0.02.
+  double open_surface_fraction = 0.02;
   /// Rounds of "find loops, fill, make the vertices manifold again". Default 3.
   int passes = 3;
+  /// Closing holes with the unused sites inside them (hole_sites.h). A loop of at most
+  /// max_fill_edges edges that holds enough of them (HoleSiteOptions::sampled_fraction) is
+  /// sampled surface and is closed under every policy.
+  HoleSiteOptions sites;
 };
 
 /// Max-min-angle triangulation (dynamic programming over the polygon) of the loop of vertices

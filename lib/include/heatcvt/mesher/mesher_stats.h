@@ -13,6 +13,7 @@ struct MesherStats {
   int candidate_triangles = 0;  ///< dual candidates that span one sheet of the surface
   int rejected_triangles = 0;   ///< candidates not kept (non-manifold or orientation conflict)
   int removed_triangles = 0;    ///< kept, then removed (non-manifold vertices, small pieces, intersections)
+  int star_triangles = 0;       ///< triangles of the sites' own stars added where the dual had none (star_candidates())
   int holes_filled = 0;         ///< boundary loops triangulated by fill_holes()
   std::vector<int> filled_hole_edges;  ///< edge count of each filled loop, in filling order
   int flipped_edges = 0;        ///< edge flips

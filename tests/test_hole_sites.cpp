@@ -1,0 +1,215 @@
+// Tests of the mesher's recovery of sites the extraction left out: holes closed with the sites
+// inside them (hole_sites.h), the shapes of boundary loops, and the sites' own Delaunay stars
+// (star_candidates() in dual_candidates.h). Shapes built in code.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <random>
+#include <vector>
+
+#include "heatcvt/mesh.h"
+#include "heatcvt/mesher/compaction.h"
+#include "heatcvt/mesher/dual_candidates.h"
+#include "heatcvt/mesher/hole_filling.h"
+#include "heatcvt/mesher/hole_sites.h"
+#include "heatcvt/mesher/manifold_extraction.h"
+#include "heatcvt/mesher/projector.h"
+#include "heatcvt/mesher/working_mesh.h"
+#include "heatcvt/validate.h"
+#include "test_support.h"
+
+namespace heatcvt {
+namespace {
+
+WorkingMesh working(const TriangleMesh& m) {
+  WorkingMesh w(m.V, vertex_normals(m.V, m.F), std::vector<int>(m.V.rows(), -1));
+  std::vector<MeshFace> faces;
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f) faces.push_back({m.F(f, 0), m.F(f, 1), m.F(f, 2)});
+  w.set_faces(faces);
+  return w;
+}
+
+int used_vertices(const WorkingMesh& w) {
+  std::vector<char> used(w.num_vertices(), 0);
+  for (const MeshFace& f : w.faces())
+    for (int v : f) used[v] = 1;
+  return static_cast<int>(std::count(used.begin(), used.end(), 1));
+}
+
+// The boundary loops, each followed along its faces' half-edges (the hole on the right).
+std::vector<std::vector<int>> boundary_loops(const WorkingMesh& w) {
+  std::map<int, int> next;
+  for (const MeshFace& f : w.faces())
+    for (int k = 0; k < 3; ++k)
+      if (!w.has_half_edge(f[(k + 1) % 3], f[k])) next[f[k]] = f[(k + 1) % 3];
+  std::vector<std::vector<int>> loops;
+  std::map<int, char> seen;
+  for (const auto& [start, unused] : next) {
+    if (seen[start]) continue;
+    std::vector<int> loop;
+    for (int v = start; !seen[v]; v = next.at(v)) seen[v] = 1, loop.push_back(v);
+    loops.push_back(loop);
+  }
+  return loops;
+}
+
+// Removes the faces with a corner within `radius` of `centre`; returns the vertices left in no face.
+int punch(WorkingMesh& w, const Eigen::Vector3d& centre, double radius) {
+  std::vector<char> drop(w.num_faces(), 0);
+  for (int f = 0; f < w.num_faces(); ++f)
+    for (int v : w.face(f)) drop[f] |= (w.V.row(v).transpose() - centre).norm() < radius;
+  w.remove_faces(drop);
+  return w.num_vertices() - used_vertices(w);
+}
+
+ValidationReport validate(const WorkingMesh& w, bool closed) {
+  const TriangleMesh m = compact_mesh(w);
+  ValidationOptions o;
+  o.require_closed = closed;
+  return validate_triangle_mesh(m.V, m.F, o);
+}
+
+TEST(HoleSites, ASphereHoleIsClosedWithTheSitesInsideIt) {
+  const TriangleMesh s = test::icosphere(3);
+  const MeshSurfaceProjector surface(s.V, s.F);
+  for (bool with_sites : {true, false}) {
+    WorkingMesh w = working(s);
+    const int left_out = punch(w, Eigen::Vector3d(0, 0, 1), 0.45);
+    ASSERT_GE(left_out, 5);
+    HoleFillingOptions o;
+    o.sites.enabled = with_sites;
+    int removed = 0;
+    EXPECT_EQ(fill_holes(w, surface, o, {}, removed), 1);
+    const ValidationReport r = validate(w, true);
+    EXPECT_TRUE(r.ok()) << r.summary();
+    EXPECT_EQ(r.genus, 0);
+    // With the sites every vertex is back in the mesh; without them the hole is closed across them.
+    EXPECT_EQ(used_vertices(w), with_sites ? s.V.rows() : s.V.rows() - left_out);
+  }
+}
+
+TEST(HoleSites, FillOfAPlaneHoleIsTheConstrainedDelaunayTriangulation) {
+  const TriangleMesh g = test::grid(12, 0, 1, 0, 1, true);
+  WorkingMesh w = working(g);
+  const int left_out = punch(w, Eigen::Vector3d(0.5, 0.5, 0), 0.2);
+  ASSERT_GE(left_out, 9);
+  const std::vector<std::vector<int>> loops = boundary_loops(w);
+  ASSERT_EQ(loops.size(), 2u);
+  std::vector<int> free_vertices;
+  for (int v = 0; v < w.num_vertices(); ++v)
+    if (std::none_of(w.faces().begin(), w.faces().end(), [&](const MeshFace& f) { return f[0] == v || f[1] == v || f[2] == v; }))
+      free_vertices.push_back(v);
+  int holes = 0, borders = 0;
+  for (const std::vector<int>& loop : loops) {
+    HoleTriangulation t;
+    const bool ok = triangulate_hole_with_sites(w, loop, free_vertices, {}, t);
+    if (t.shape == LoopShape::outer_border) {
+      ++borders;
+      EXPECT_FALSE(ok);
+      EXPECT_TRUE(t.faces.empty());
+      continue;
+    }
+    ++holes;
+    ASSERT_TRUE(ok);
+    EXPECT_EQ(t.shape, LoopShape::hole);
+    EXPECT_EQ(static_cast<int>(t.interior_sites.size()), left_out);
+    // A triangulated polygon of L corners with I points inside has L − 2 + 2I triangles, each
+    // facing +z like the grid, and (a grid's points being cocircular) no angle below 45°.
+    EXPECT_EQ(static_cast<int>(t.faces.size()), static_cast<int>(loop.size()) - 2 + 2 * left_out);
+    for (const MeshFace& f : t.faces) {
+      const Eigen::Vector3d a = w.V.row(f[0]), b = w.V.row(f[1]), c = w.V.row(f[2]);
+      EXPECT_GT((b - a).cross(c - a).z(), 0);
+      EXPECT_GE(face_min_angle(w, f), M_PI / 4 - 1e-9);
+    }
+    for (const MeshFace& f : t.faces) w.add_face(f);
+  }
+  EXPECT_EQ(holes, 1);
+  EXPECT_EQ(borders, 1);
+  const ValidationReport r = validate(w, false);
+  EXPECT_TRUE(r.ok()) << r.summary();
+  EXPECT_EQ(r.boundary_loops, 1);
+  EXPECT_EQ(used_vertices(w), w.num_vertices());
+}
+
+TEST(HoleSites, ALoopWhoseProjectionCrossesItselfIsNotTriangulated) {
+  // A bow-tie: four corners on the plane z = 0, visited so that edges 0-1 and 2-3 cross.
+  WorkingMesh w(Eigen::MatrixX3d(4, 3), Eigen::MatrixX3d(4, 3), std::vector<int>(4, -1));
+  w.V << 0, 0, 0, 1, 1, 0, 1, 0, 0, 0, 1, 0;
+  w.N.setZero();
+  w.N.col(2).setOnes();
+  HoleTriangulation t;
+  EXPECT_FALSE(triangulate_hole_with_sites(w, {0, 1, 2, 3}, {}, {}, t));
+  EXPECT_EQ(t.shape, LoopShape::not_simple);
+  // Normals that cancel out leave no plane to look from.
+  w.N.row(0) << 0, 0, -1;
+  w.N.row(1) << 0, 0, -1;
+  EXPECT_FALSE(triangulate_hole_with_sites(w, {0, 2, 1, 3}, {}, {}, t));
+  EXPECT_EQ(t.shape, LoopShape::unknown);
+}
+
+TEST(HoleSites, TheBorderOfAFragmentIsNotClosedIntoAPillow) {
+  // An open sheet of many fragments (an open surface): a lone strip's border would be closed
+  // into its own back side. The strip stays open.
+  const TriangleMesh g = test::grid(10, 0, 1, 0, 1, true);
+  WorkingMesh w = working(g);
+  std::vector<char> drop(w.num_faces(), 0);
+  for (int f = 0; f < w.num_faces(); ++f) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (int v : w.face(f)) c += w.V.row(v).transpose() / 3.0;
+    drop[f] = !(c.y() > 0.2 && c.y() < 0.4 && c.x() > 0.1 && c.x() < 0.9);  // keep one strip
+  }
+  w.remove_faces(drop);
+  const int faces = w.num_faces();
+  ASSERT_GE(faces, 20);
+  const MeshSurfaceProjector surface(g.V, g.F);
+  HoleFillingOptions o;
+  o.policy = HolePolicy::fill;
+  int removed = 0;
+  EXPECT_EQ(fill_holes(w, surface, o, {}, removed), 0);
+  EXPECT_EQ(w.num_faces(), faces);
+}
+
+TEST(StarCandidates, JitteredPlanarSitesGiveAConsistentTriangulation) {
+  // Sites of a jittered 20 x 20 grid on z = 0 with normals +z: every interior triangle of their
+  // Delaunay triangulation is in the stars of its three corners, and the stars alone give a
+  // manifold disk through every site.
+  const int n = 20;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> jitter(-0.2, 0.2);
+  Eigen::MatrixX3d V(n * n, 3), N(n * n, 3);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      V.row(j * n + i) << i + jitter(rng), j + jitter(rng), 0;
+      N.row(j * n + i) << 0, 0, 1;
+    }
+  WorkingMesh w(V, N, std::vector<int>(n * n, -1));
+  const std::vector<DualCandidate> stars = star_candidates(w, {}, {}, 2);
+  ASSERT_FALSE(stars.empty());
+  int three = 0;
+  for (const DualCandidate& c : stars) {
+    EXPECT_GE(c.witnesses, 1);
+    EXPECT_LE(c.witnesses, 3);
+    three += c.witnesses == 3;
+    const Eigen::Vector3d a = V.row(c.f[0]), b = V.row(c.f[1]), d = V.row(c.f[2]);
+    EXPECT_GT((b - a).cross(d - a).z(), 0) << "oriented by the site normals";
+  }
+  // Triangles in some star but not in all three are confined to the grid's rim.
+  EXPECT_GE(three, static_cast<int>(stars.size()) - 4 * n);
+  const int rejected = extract_manifold(w, stars);
+  EXPECT_EQ(rejected, static_cast<int>(stars.size()) - w.num_faces());
+  EXPECT_LE(rejected, 4 * n) << "only along the rim do stars disagree";
+  make_vertices_manifold(w, {});
+  const ValidationReport r = validate(w, false);
+  EXPECT_TRUE(r.ok()) << r.summary();
+  EXPECT_EQ(r.boundary_loops, 1);
+  EXPECT_EQ(used_vertices(w), n * n);
+  // The same for any thread count.
+  EXPECT_EQ(star_candidates(w, {}, {}, 1).size(), stars.size());
+}
+
+}  // namespace
+}  // namespace heatcvt
