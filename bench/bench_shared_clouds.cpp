@@ -1,0 +1,184 @@
+// Reconstruction of every real cloud of ../shared/data/clouds with at least 10 points per requested
+// vertex: vertices (against -n), components, boundary loops, genus, smallest angle overall and
+// of the triangles on a boundary, mean smallest angle, time. Beside each row, in the same run,
+// PCL's greedy projection triangulation (the usual PCL mesher of open scans) on the cloud voxel-
+// downsampled to about the same number of vertices.
+//
+// Usage: bench_shared_clouds [N = 2000] [--no-peer] [--threads T]
+#include <pcl/features/normal_3d_omp.h>
+#include <pcl/filters/voxel_grid.h>
+#include <pcl/kdtree/kdtree_flann.h>
+#include <pcl/surface/gp3.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "bench_util.h"
+#include "heatcvt/cloud_io.h"
+#include "heatcvt/mesh.h"
+#include "heatcvt/reconstruct.h"
+#include "heatcvt/validate.h"
+
+namespace {
+
+using namespace heatcvt;
+
+struct Row {
+  int vertices = 0, components = 0, loops = 0, genus = -1;
+  double phi_min = 0, phi_boundary = 180, phi_mean = 0, seconds = 0;
+};
+
+// Smallest angle (degrees) of the triangles with an edge on the boundary; 180 when closed.
+double boundary_min_angle(const TriangleMesh& m) {
+  std::vector<std::array<int, 2>> edges;
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = m.F(f, k), b = m.F(f, (k + 1) % 3);
+      edges.push_back({std::min(a, b), std::max(a, b)});
+    }
+  std::sort(edges.begin(), edges.end());
+  double out = 180;
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f) {
+    bool on_boundary = false;
+    for (int k = 0; k < 3 && !on_boundary; ++k) {
+      const int a = m.F(f, k), b = m.F(f, (k + 1) % 3);
+      const std::array<int, 2> e = {std::min(a, b), std::max(a, b)};
+      const auto r = std::equal_range(edges.begin(), edges.end(), e);
+      on_boundary = r.second - r.first == 1;
+    }
+    if (!on_boundary) continue;
+    Eigen::MatrixX3i one(1, 3);
+    one.row(0) = m.F.row(f);
+    out = std::min(out, triangle_quality(m.V, one).min_angle_deg);
+  }
+  return out;
+}
+
+Row describe(const TriangleMesh& m, double seconds) {
+  Row r;
+  ValidationOptions vo;
+  vo.require_closed = false;
+  const ValidationReport v = validate_triangle_mesh(m.V, m.F, vo);
+  const TriangleQuality q = triangle_quality(m.V, m.F);
+  r.vertices = v.vertices;
+  r.components = v.components;
+  r.loops = v.boundary_loops;
+  r.genus = v.genus;
+  r.phi_min = q.min_angle_deg;
+  r.phi_mean = q.mean_min_angle_deg;
+  r.phi_boundary = boundary_min_angle(m);
+  r.seconds = seconds;
+  return r;
+}
+
+// PCL greedy projection triangulation of the cloud voxel-downsampled to about `target` points.
+Row greedy_projection(const Eigen::MatrixX3d& P, int target) {
+  const double t0 = bench::now_seconds();
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+  for (Eigen::Index i = 0; i < P.rows(); ++i) cloud->push_back(pcl::PointXYZ(P(i, 0), P(i, 1), P(i, 2)));
+  const Eigen::Vector3d extent = P.colwise().maxCoeff() - P.colwise().minCoeff();
+  double leaf = extent.maxCoeff() / std::sqrt(static_cast<double>(target));
+  pcl::PointCloud<pcl::PointXYZ>::Ptr down(new pcl::PointCloud<pcl::PointXYZ>);
+  for (int step = 0; step < 8; ++step) {  // secant steps on the leaf size: occupied voxels ~ area / leaf²
+    pcl::VoxelGrid<pcl::PointXYZ> vg;
+    vg.setInputCloud(cloud);
+    vg.setLeafSize(leaf, leaf, leaf);
+    vg.filter(*down);
+    if (std::abs(static_cast<double>(down->size()) - target) <= 0.02 * target) break;
+    leaf *= std::sqrt(static_cast<double>(down->size()) / target);
+  }
+  pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> ne;
+  pcl::search::KdTree<pcl::PointXYZ>::Ptr tree(new pcl::search::KdTree<pcl::PointXYZ>);
+  pcl::PointCloud<pcl::Normal>::Ptr normals(new pcl::PointCloud<pcl::Normal>);
+  ne.setInputCloud(down);
+  ne.setSearchMethod(tree);
+  ne.setKSearch(20);
+  ne.compute(*normals);
+  pcl::PointCloud<pcl::PointNormal>::Ptr with(new pcl::PointCloud<pcl::PointNormal>);
+  pcl::concatenateFields(*down, *normals, *with);
+  pcl::search::KdTree<pcl::PointNormal>::Ptr tree2(new pcl::search::KdTree<pcl::PointNormal>);
+  pcl::GreedyProjectionTriangulation<pcl::PointNormal> gp3;
+  gp3.setSearchRadius(3.0 * leaf);
+  gp3.setMu(2.5);
+  gp3.setMaximumNearestNeighbors(100);
+  gp3.setMaximumSurfaceAngle(M_PI / 4);
+  gp3.setMinimumAngle(M_PI / 18);
+  gp3.setMaximumAngle(2 * M_PI / 3);
+  gp3.setNormalConsistency(false);
+  gp3.setInputCloud(with);
+  gp3.setSearchMethod(tree2);
+  pcl::PolygonMesh pm;
+  gp3.reconstruct(pm);
+  TriangleMesh m;
+  m.V.resize(static_cast<Eigen::Index>(down->size()), 3);
+  for (size_t i = 0; i < down->size(); ++i) m.V.row(i) << (*down)[i].x, (*down)[i].y, (*down)[i].z;
+  m.F.resize(static_cast<Eigen::Index>(pm.polygons.size()), 3);
+  for (size_t f = 0; f < pm.polygons.size(); ++f)
+    for (int k = 0; k < 3; ++k) m.F(f, k) = static_cast<int>(pm.polygons[f].vertices[k]);
+  return describe(m, bench::now_seconds() - t0);
+}
+
+void print(const char* method, const Row& r, int n) {
+  std::printf("| %s | %d (%+.1f %%) | %d | %d | %d | %.1f | %.1f | %.1f | %.2f |\n", method, r.vertices,
+              100.0 * (r.vertices - n) / n, r.components, r.loops, r.genus, r.phi_min, r.phi_boundary, r.phi_mean,
+              r.seconds);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int n = 2000, threads = 0;
+  bool peer = true;
+  for (int a = 1; a < argc; ++a) {
+    const std::string s = argv[a];
+    if (s == "--no-peer") peer = false;
+    else if (s == "--threads" && a + 1 < argc) threads = std::atoi(argv[++a]);
+    else n = std::atoi(argv[a]);
+  }
+  const std::filesystem::path dir = std::filesystem::path(HEATCVT_DATA_DIR) / "clouds";
+  if (!std::filesystem::is_directory(dir)) {
+    std::fprintf(stderr, "bench_shared_clouds: %s is missing (the shared data)\n", dir.c_str());
+    return 2;
+  }
+  std::vector<std::filesystem::path> files;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    if (e.path().extension() != ".md") files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  std::printf("cloud2mesh defaults, -n %d, every shared cloud with at least %d points; phi_b = smallest angle of the "
+              "triangles on a boundary. Peer: PCL GreedyProjectionTriangulation on the cloud voxel-downsampled to about "
+              "-n points (radius 3 voxels, mu 2.5, 10-120 deg).\n\n",
+              n, 10 * n);
+  std::printf("| cloud | method | V (vs -n) | components | loops | genus | phi_min | phi_b | phi_m | time s |\n");
+  std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  for (const auto& f : files) {
+    PointCloud cloud;
+    try {
+      cloud = read_cloud(f.string());
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s: %s\n", f.filename().c_str(), e.what());
+      continue;
+    }
+    if (cloud.P.rows() < 10L * n) continue;
+    ReconstructionOptions o;
+    o.sites = n;
+    o.threads = threads;
+    const double t0 = bench::now_seconds();
+    std::printf("| %s ", f.filename().c_str());
+    try {
+      const ReconstructionResult r = reconstruct_surface(cloud.P, o);
+      print("heatcvt", describe(r.mesh, bench::now_seconds() - t0), n);
+    } catch (const std::exception& e) {
+      std::printf("| heatcvt | failed: %s |||||||\n", e.what());
+    }
+    if (peer) {
+      std::printf("| %s ", f.filename().c_str());
+      print("PCL GP3", greedy_projection(cloud.P, n), n);
+    }
+    std::fflush(stdout);
+  }
+  return 0;
+}
