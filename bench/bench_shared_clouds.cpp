@@ -32,32 +32,6 @@ struct Row {
   double phi_min = 0, phi_boundary = 180, phi_mean = 0, seconds = 0;
 };
 
-// Smallest angle (degrees) of the triangles with an edge on the boundary; 180 when closed.
-double boundary_min_angle(const TriangleMesh& m) {
-  std::vector<std::array<int, 2>> edges;
-  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      const int a = m.F(f, k), b = m.F(f, (k + 1) % 3);
-      edges.push_back({std::min(a, b), std::max(a, b)});
-    }
-  std::sort(edges.begin(), edges.end());
-  double out = 180;
-  for (Eigen::Index f = 0; f < m.F.rows(); ++f) {
-    bool on_boundary = false;
-    for (int k = 0; k < 3 && !on_boundary; ++k) {
-      const int a = m.F(f, k), b = m.F(f, (k + 1) % 3);
-      const std::array<int, 2> e = {std::min(a, b), std::max(a, b)};
-      const auto r = std::equal_range(edges.begin(), edges.end(), e);
-      on_boundary = r.second - r.first == 1;
-    }
-    if (!on_boundary) continue;
-    Eigen::MatrixX3i one(1, 3);
-    one.row(0) = m.F.row(f);
-    out = std::min(out, triangle_quality(m.V, one).min_angle_deg);
-  }
-  return out;
-}
-
 Row describe(const TriangleMesh& m, double seconds) {
   Row r;
   ValidationOptions vo;
@@ -70,7 +44,7 @@ Row describe(const TriangleMesh& m, double seconds) {
   r.genus = v.genus;
   r.phi_min = q.min_angle_deg;
   r.phi_mean = q.mean_min_angle_deg;
-  r.phi_boundary = boundary_min_angle(m);
+  r.phi_boundary = q.boundary_min_angle_deg;
   r.seconds = seconds;
   return r;
 }

@@ -109,12 +109,16 @@ cli::Json make_report(const std::string& cloud_path, const std::vector<std::stri
   j["rejected_triangles"] = res.rejected_triangles;
   j["removed_triangles"] = res.removed_triangles;
   j["holes_filled"] = res.holes_filled;
+  j["star_triangles"] = res.star_triangles;
+  j["trimmed_faces"] = res.trimmed_faces;
+  j["pieces_removed"] = res.pieces_removed;
   j["boundary_loops"] = res.validation.boundary_loops;
   j["components"] = res.validation.components;
   j["genus"] = res.validation.genus;
   j["self_intersecting_pairs"] = res.validation.self_intersecting_pairs;
   j["phi_min_deg"] = res.min_angle_deg;
   j["phi_mean_deg"] = res.mean_min_angle_deg;
+  j["phi_min_boundary_deg"] = res.boundary_min_angle_deg;
   j["blas"] = heatcvt::blas_description();
   j["laplacian_s"] = res.laplacian_seconds;
   j["factor_s"] = res.factor_seconds;
@@ -212,6 +216,9 @@ int main(int argc, char** argv) {
                  "(memory bounded by the output size) instead of being held whole (about 2.1 KB per point)")
       ->capture_default_str();
   app.add_flag("--normals", write_normals, "write per-vertex normals (outward on closed pieces) with the mesh");
+  app.add_flag("--keep-small", [&](std::int64_t) { opt.mesher.min_piece_faces = 0, opt.mesher.min_piece_vertex_fraction = 0; },
+               "keep every piece of the mesh; by default pieces of fewer than 20 triangles or fewer than 1 % of the "
+               "vertices (stray bits of clutter) are dropped and counted in the report");
   app.add_option("-o,--output", out_path, "output mesh (.ply .obj .off .stl)")->required();
   app.add_option("-n,--sites", opt.sites, "number of output vertices (CVT sites)")->capture_default_str();
   app.add_option("-i,--iterations", opt.iterations, "maximum heat Lloyd iterations (after the surface Lloyd; use 30 with --surface-lloyd 0)")->capture_default_str();
@@ -345,10 +352,11 @@ int main(int argc, char** argv) {
       for (const auto& [name, seconds] : res.stage_seconds) std::printf(" %s %.2f s;", name.c_str(), seconds);
       std::printf("\n");
       std::printf("  mesh: %ld vertices, %ld faces, %d components, %d boundary loops, genus %d; %d holes filled, "
-                  "%d unused sites\n",
+                  "%d unused sites, %d small pieces dropped\n",
                   static_cast<long>(res.mesh.V.rows()), static_cast<long>(res.mesh.F.rows()), val.components,
-                  val.boundary_loops, val.genus, res.holes_filled, res.unused_sites);
-      std::printf("  quality: phi_min %.2f deg, phi_m %.2f deg\n", res.min_angle_deg, res.mean_min_angle_deg);
+                  val.boundary_loops, val.genus, res.holes_filled, res.unused_sites, res.pieces_removed);
+      std::printf("  quality: phi_min %.2f deg (boundary triangles %.2f deg), phi_m %.2f deg\n", res.min_angle_deg,
+                  res.boundary_min_angle_deg, res.mean_min_angle_deg);
       if (stream)
         std::printf("  streamed: %ld points in %d passes into voxels of %g, reconstructed from %ld voxel points\n",
                     static_cast<long>(streamed.points_read), streamed.passes, streamed.voxel_size,

@@ -214,6 +214,23 @@ TriangleQuality triangle_quality(const Eigen::MatrixX3d& V, const Eigen::MatrixX
   q.min_angle_deg = a.minCoeff();
   q.mean_min_angle_deg = a.mean();
   q.below_30_fraction = static_cast<double>((a.array() < 30.0).count()) / static_cast<double>(a.size());
+  std::vector<std::array<int, 2>> edges;
+  edges.reserve(3 * F.rows());
+  auto edge = [&](Eigen::Index f, int k) {
+    const int u = F(f, k), v = F(f, (k + 1) % 3);
+    return std::array<int, 2>{std::min(u, v), std::max(u, v)};
+  };
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) edges.push_back(edge(f, k));
+  std::sort(edges.begin(), edges.end());
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const auto range = std::equal_range(edges.begin(), edges.end(), edge(f, k));
+      if (range.second - range.first != 1) continue;
+      q.boundary_min_angle_deg = std::min(q.boundary_min_angle_deg, a[f]);
+      ++q.boundary_triangles;
+      break;
+    }
   return q;
 }
 

@@ -72,6 +72,8 @@ void check_options(const ReconstructionOptions& o) {
   if (o.fit.min_oriented_points < 1 || o.fit.min_quadratic_points < 6 || o.fit.max_walk_steps < 0)
     bad("fit.min_oriented_points must be >= 1, fit.min_quadratic_points >= 6 (six coefficients), fit.max_walk_steps >= 0");
   if (o.mesher.min_piece_faces < 0) bad("mesher.min_piece_faces must be >= 0");
+  if (!(o.mesher.min_piece_vertex_fraction >= 0 && o.mesher.min_piece_vertex_fraction < 1))
+    bad("mesher.min_piece_vertex_fraction must be in [0, 1)");
 }
 
 pcl::PointCloud<pcl::PointXYZ>::Ptr to_pcl(const Eigen::MatrixX3d& P) {
@@ -316,6 +318,9 @@ void copy_stats(const MesherStats& st, ReconstructionResult& res) {
   res.rejected_triangles = st.rejected_triangles;
   res.removed_triangles = st.removed_triangles;
   res.holes_filled = st.holes_filled;
+  res.star_triangles = st.star_triangles;
+  res.trimmed_faces = st.trimmed_faces;
+  res.pieces_removed = st.pieces_removed;
   res.filled_hole_edges = st.filled_hole_edges;
   res.flipped_edges = st.flipped_edges;
   res.polish_fallback = st.polish_fallback;
@@ -450,6 +455,9 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   mopt.holes.max_hole_edges = options.max_hole_edges;
   mopt.polish.relaxation_iterations = options.relaxation_iterations;
   mopt.threads = options.threads;
+  // The long-edge splits may add vertices up to the vertex count asked for, plus the 2 % the
+  // count is allowed to be off by.
+  if (mopt.split.max_vertices == 0) mopt.split.max_vertices = options.sites + options.sites / 50;
   MesherStats stats;
   mesh_from_candidates(mesh, candidates, fit, mopt, stats);
   stage.t = Clock::now();
@@ -462,6 +470,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   const TriangleQuality tq = triangle_quality(res.mesh.V, res.mesh.F);
   res.min_angle_deg = tq.min_angle_deg;
   res.mean_min_angle_deg = tq.mean_min_angle_deg;
+  res.boundary_min_angle_deg = tq.boundary_min_angle_deg;
   stage.done("compact");
 
   // 5. Validation (open scans legitimately keep boundaries).

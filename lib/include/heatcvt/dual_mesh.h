@@ -56,9 +56,13 @@ struct TriangleQuality {
   double mean_min_angle_deg = 0; ///< φm
   double below_30_fraction = 0;  ///< share of triangles whose smallest angle is < 30°
   int triangles = 0;
+  /// φmin of the triangles with an edge on the boundary (an edge of one triangle only); 180
+  /// when there are none.
+  double boundary_min_angle_deg = 180;
+  int boundary_triangles = 0;
 };
-/// φmin, φm and the share below 30° of the triangles (V, F); V #V by 3, F #F by 3. An empty F
-/// gives all zeros.
+/// φmin, φm, the share below 30° and the φmin of boundary triangles of the triangles (V, F);
+/// V #V by 3, F #F by 3. An empty F gives all zeros (boundary φmin 180).
 TriangleQuality triangle_quality(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F);
 
 }  // namespace heatcvt

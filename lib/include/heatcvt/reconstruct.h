@@ -140,6 +140,7 @@ struct ReconstructionResult {
   int iterations = 0;              ///< Lloyd iterations run
   double min_angle_deg = 0;        ///< φmin: smallest interior angle over all triangles
   double mean_min_angle_deg = 0;   ///< φm: mean over triangles of their smallest angle
+  double boundary_min_angle_deg = 180;  ///< φmin of the triangles with an edge on the boundary (180: none)
   int points_input = 0;            ///< rows of P
   int points_merged = 0;           ///< exact duplicates merged
   int points_denoised = 0;         ///< removed by the outlier filter
@@ -149,6 +150,9 @@ struct ReconstructionResult {
   int rejected_triangles = 0;      ///< candidates not kept (non-manifold or orientation conflict)
   int removed_triangles = 0;       ///< kept, then removed to make vertices manifold / drop tiny pieces
   int holes_filled = 0;            ///< boundary loops filled (mesher.holes.policy decides which)
+  int star_triangles = 0;          ///< triangles of the sites' own stars added where the dual had none
+  int trimmed_faces = 0;           ///< slivers flat along the border removed
+  int pieces_removed = 0;          ///< small and stray pieces dropped (mesher.min_piece_faces, min_piece_vertex_fraction)
   std::vector<int> filled_hole_edges;  ///< edge count of each filled loop
   int flipped_edges = 0;           ///< edge flips on the extracted mesh (max-min-angle and valence)
   bool polish_fallback = false;    ///< the valence-flip polish self-intersected; redone with Delaunay flips only

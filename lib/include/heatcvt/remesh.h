@@ -82,10 +82,12 @@ struct RemeshOptions {
   bool post_cvt_stages = true;
   /// Options of those stages (threads: cvt.threads is used). Default SurfaceMesherOptions{} with
   /// holes.policy = keep: the boundary loops of an input mesh are real, so only holes inside the
-  /// input surface (missing dual triangles) are closed.
+  /// input surface (missing dual triangles) are closed; and min_piece_vertex_fraction = 0: every
+  /// component of an input mesh is real, however small.
   SurfaceMesherOptions mesher = [] {
     SurfaceMesherOptions m;
     m.holes.policy = HolePolicy::keep;
+    m.min_piece_vertex_fraction = 0;
     return m;
   }();
 };

@@ -4,6 +4,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <iterator>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -57,8 +58,15 @@ std::vector<std::vector<int>> colour_classes(const WorkingMesh& mesh, const std:
   return by_colour;
 }
 
-// Every ring edge (v, b) appears as (c, v) of another face: v is interior.
-bool is_interior(const WorkingMesh& mesh, int v, const std::vector<int>& faces) {
+// The fan of v: every ring edge (v, b) appears as (c, v) of another face when v is interior;
+// on the boundary exactly one b (`next`, the boundary edge v→next) and one c (`prev`, the
+// boundary edge prev→v) have no partner.
+struct Fan {
+  bool interior = false;
+  int next = -1, prev = -1;  ///< boundary neighbours (a single open fan only)
+};
+
+Fan fan_of(const WorkingMesh& mesh, int v, const std::vector<int>& faces) {
   std::vector<int> out_b, in_c;
   for (int id : faces) {
     const MeshFace& f = mesh.face(id);
@@ -69,7 +77,14 @@ bool is_interior(const WorkingMesh& mesh, int v, const std::vector<int>& faces) 
   }
   std::sort(out_b.begin(), out_b.end());
   std::sort(in_c.begin(), in_c.end());
-  return out_b == in_c;
+  Fan fan;
+  fan.interior = out_b == in_c;
+  if (fan.interior) return fan;
+  std::vector<int> only_out, only_in;
+  std::set_difference(out_b.begin(), out_b.end(), in_c.begin(), in_c.end(), std::back_inserter(only_out));
+  std::set_difference(in_c.begin(), in_c.end(), out_b.begin(), out_b.end(), std::back_inserter(only_in));
+  if (only_out.size() == 1 && only_in.size() == 1) fan.next = only_out[0], fan.prev = only_in[0];
+  return fan;
 }
 
 class VertexMover {
@@ -124,9 +139,23 @@ class VertexMover {
       centroid += ar * (b2 + c2) / 3.0;
       area_sum += ar;
     }
-    if (!(area_sum > 0) || !is_interior(mesh_, v, vf_[v])) return false;
+    const Fan fan = fan_of(mesh_, v, vf_[v]);
+    if (!(area_sum > 0) || (!fan.interior && (fan.next < 0 || !o_.boundary))) return false;
     mean_edge /= ring.size();
     centroid /= area_sum;
+    // A boundary vertex slides along the chord of its two boundary neighbours, only where the
+    // boundary is nearly straight, so the border keeps its course.
+    Eigen::Vector2d slide = Eigen::Vector2d::Zero();
+    if (!fan.interior) {
+      const Eigen::Vector3d a = S.row(fan.prev).transpose() - x, b = S.row(fan.next).transpose() - x;
+      if (!(a.norm() > 0) || !(b.norm() > 0) || (-a).normalized().dot(b.normalized()) < std::cos(o_.max_boundary_turn_deg * M_PI / 180.0))
+        return false;
+      const Eigen::Vector3d chord = b - a;
+      slide = Eigen::Vector2d(chord.dot(u), chord.dot(w));
+      if (!(slide.norm() > 0)) return false;
+      slide.normalize();
+      centroid = centroid.dot(slide) * slide;
+    }
     auto q2 = [&](const Eigen::Vector2d& y) {
       RingQuality q;
       for (const auto& [b, c] : ring) {
@@ -146,9 +175,11 @@ class VertexMover {
     double step = o_.initial_step * mean_edge;
     for (int iter = 0; iter < o_.max_search_steps && step > o_.final_step * mean_edge; ++iter) {
       bool improved = false;
-      for (int d = 0; d < 8; ++d) {
-        const double ang = d * M_PI / 4;
-        const Eigen::Vector2d y = best + step * Eigen::Vector2d(std::cos(ang), std::sin(ang));
+      const int directions = fan.interior ? 8 : 2;
+      for (int d = 0; d < directions; ++d) {
+        const double ang = d * 2 * M_PI / directions;
+        const Eigen::Vector2d dir = fan.interior ? Eigen::Vector2d(std::cos(ang), std::sin(ang)) : (d == 0 ? slide : -slide);
+        const Eigen::Vector2d y = best + step * dir;
         const RingQuality qy = q2(y);
         if (better(qy, qb)) best = y, qb = qy, improved = true;
       }

@@ -19,7 +19,7 @@ struct Split {
 // One pass: splits the longest edge of each sliver where allowed. Returns the splits; marks the
 // vertices of the edited faces in near_new (resized to the new vertex count).
 std::vector<Split> split_pass(WorkingMesh& mesh, const SurfaceProjector& surface, const EdgeSplitOptions& o,
-                              const std::set<long long>& excluded, std::vector<char>& near_new) {
+                              const std::set<long long>& excluded, std::vector<char>& near_new, int budget) {
   const double thr = o.sliver_angle_deg * M_PI / 180.0;
   double mean_edge = 0;
   for (const MeshFace& f : mesh.faces())
@@ -30,7 +30,7 @@ std::vector<Split> split_pass(WorkingMesh& mesh, const SurfaceProjector& surface
   std::vector<MeshFace> added;
   std::vector<Split> made;
   near_new.assign(mesh.num_vertices(), 0);
-  for (int id = 0; id < nf; ++id) {
+  for (int id = 0; id < nf && (budget < 0 || static_cast<int>(made.size()) < budget); ++id) {
     const MeshFace f = mesh.face(id);
     if (touched[id] || face_min_angle(mesh, f) >= thr) continue;
     int k = 0;
@@ -80,7 +80,14 @@ int split_long_edges(WorkingMesh& mesh, const SurfaceProjector& surface, const E
     std::vector<Split> made;
     for (int pass = 0; pass < options.passes && !mesh.empty(); ++pass) {
       std::vector<char> near_new;
-      const std::vector<Split> pass_made = split_pass(mesh, surface, options, excluded, near_new);
+      int budget = -1;  // splits left before the mesh has options.max_vertices vertices in faces
+      if (options.max_vertices > 0) {
+        std::vector<char> used(mesh.num_vertices(), 0);
+        for (const MeshFace& f : mesh.faces())
+          for (int v : f) used[v] = 1;
+        budget = std::max(0, options.max_vertices - static_cast<int>(std::count(used.begin(), used.end(), 1)));
+      }
+      const std::vector<Split> pass_made = split_pass(mesh, surface, options, excluded, near_new, budget);
       if (pass_made.empty()) break;
       made.insert(made.end(), pass_made.begin(), pass_made.end());
       stats.flipped_edges += flip_edges(mesh, fo, &near_new);

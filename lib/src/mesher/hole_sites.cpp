@@ -185,7 +185,7 @@ bool triangulate_hole_with_sites(const WorkingMesh& mesh, const std::vector<int>
     const Eigen::Vector3d a = mesh.V.row(t[0]), b = mesh.V.row(t[1]), c = mesh.V.row(t[2]);
     const Eigen::Vector3d fn = (b - a).cross(c - a);
     bool agrees = fn.norm() > 0;
-    for (int k = 0; k < 3 && agrees; ++k) agrees = fn.normalized().dot(mesh.N.row(t[k]).transpose()) >= options.min_normal_dot;
+    for (int k = 0; k < 3 && agrees; ++k) agrees = fn.normalized().dot(mesh.N.row(t[k]).transpose()) > options.min_triangle_dot;
     if (!agrees) {
       out.faces.clear();
       out.interior_sites.clear();

@@ -3,17 +3,29 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <utility>
 
 namespace heatcvt {
 
-int remove_small_pieces(WorkingMesh& mesh, int min_faces) {
+int remove_small_pieces(WorkingMesh& mesh, int min_faces, double min_vertex_fraction, int* pieces_removed) {
   const FaceComponents pieces = face_components(mesh, true);
+  const int np = static_cast<int>(pieces.size.size());
+  // Vertices of each piece (a vertex belongs to the piece of any of its faces).
+  std::vector<int> piece_of_vertex(mesh.num_vertices(), -1), vertices(np, 0);
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int v : mesh.face(f))
+      if (piece_of_vertex[v] < 0) piece_of_vertex[v] = pieces.of_face[f], ++vertices[pieces.of_face[f]];
+  int total = 0;
+  for (int c : vertices) total += c;
+  std::vector<char> small(np, 0);
+  for (int c = 0; c < np; ++c) small[c] = pieces.size[c] < min_faces || vertices[c] < min_vertex_fraction * total;
   std::vector<char> drop(mesh.num_faces(), 0);
   int dropped = 0;
   for (int f = 0; f < mesh.num_faces(); ++f)
-    if (pieces.size[pieces.of_face[f]] < min_faces) drop[f] = 1, ++dropped;
+    if (small[pieces.of_face[f]]) drop[f] = 1, ++dropped;
   if (dropped == mesh.num_faces()) return 0;
+  if (pieces_removed) *pieces_removed += static_cast<int>(std::count(small.begin(), small.end(), 1));
   return mesh.remove_faces(drop);
 }
 

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <set>
 
+#include "heatcvt/mesher/manifold_extraction.h"
 #include "heatcvt/mesher/mesh_checks.h"
 
 namespace heatcvt {
@@ -162,6 +163,39 @@ int collapse_slivers(WorkingMesh& mesh, const SurfaceProjector& surface, const S
   }
   remove_sliver_valence3(mesh, options, stats);
   return collapsed;
+}
+
+int trim_boundary_slivers(WorkingMesh& mesh, const BoundaryTrimOptions& options) {
+  if (!options.enabled) return 0;
+  const double sliver = options.sliver_angle_deg * M_PI / 180.0, apex_min = options.min_apex_angle_deg * M_PI / 180.0;
+  int removed = 0;
+  for (int pass = 0; pass < options.passes; ++pass) {
+    const std::vector<std::vector<int>> vf = mesh.vertex_faces();
+    std::vector<char> drop(mesh.num_faces(), 0), touched(mesh.num_vertices(), 0);
+    int dropped = 0;
+    for (int id = 0; id < mesh.num_faces(); ++id) {
+      const MeshFace& f = mesh.face(id);
+      int boundary = 0, k_edge = -1;
+      for (int k = 0; k < 3; ++k)
+        if (mesh.edge_face_count(f[k], f[(k + 1) % 3]) == 1) ++boundary, k_edge = k;
+      if (boundary != 1 || face_min_angle(mesh, f) >= sliver) continue;
+      const int a = f[k_edge], b = f[(k_edge + 1) % 3], c = f[(k_edge + 2) % 3];
+      const Eigen::Vector3d ca = mesh.V.row(a) - mesh.V.row(c), cb = mesh.V.row(b) - mesh.V.row(c);
+      if (!(ca.norm() > 0) || !(cb.norm() > 0) || std::acos(std::clamp(ca.normalized().dot(cb.normalized()), -1.0, 1.0)) < apex_min)
+        continue;
+      if (touched[a] || touched[b] || touched[c] || vf[a].size() < 2 || vf[b].size() < 2 || vf[c].size() < 2) continue;
+      std::vector<int> rest;
+      for (int g : vf[c])
+        if (g != id) rest.push_back(g);
+      if (vertex_fans(mesh, c, rest).size() != 1) continue;
+      drop[id] = 1;
+      touched[a] = touched[b] = touched[c] = 1;
+      ++dropped;
+    }
+    if (dropped == 0) break;
+    removed += mesh.remove_faces(drop);
+  }
+  return removed;
 }
 
 }  // namespace heatcvt

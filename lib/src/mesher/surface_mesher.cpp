@@ -47,16 +47,21 @@ void mesh_from_candidates(WorkingMesh& mesh, const DualCandidates& candidates, c
   timer.done("untangle");
   relaxation_polish(mesh, surface, polish, options.untangle, options.holes, options.manifold, stats);
   timer.done("relaxation polish");
+  // Slivers flat along the border first: the angle polish then moves the vertices they expose.
+  if (polish.relaxation_iterations > 0) stats.trimmed_faces += trim_boundary_slivers(mesh, options.boundary_slivers);
   angle_polish_stage(mesh, surface, polish, stats);
   timer.done("angle polish");
   if (polish.relaxation_iterations > 0) stats.collapsed_edges = collapse_slivers(mesh, surface, options.slivers, stats);
   timer.done("sliver collapse");
   if (polish.relaxation_iterations > 0) stats.split_edges = split_long_edges(mesh, surface, split, stats);
   timer.done("long-edge split");
+  if (polish.relaxation_iterations > 0) stats.trimmed_faces += trim_boundary_slivers(mesh, options.boundary_slivers);
+  timer.done("boundary sliver trim");
 }
 
 TriangleMesh finish_mesh(WorkingMesh& mesh, const SurfaceMesherOptions& options, MesherStats& stats) {
-  stats.removed_triangles += remove_small_pieces(mesh, options.min_piece_faces);
+  stats.removed_triangles +=
+      remove_small_pieces(mesh, options.min_piece_faces, options.min_piece_vertex_fraction, &stats.pieces_removed);
   stats.faces_turned_outward += orient_closed_pieces_outward(mesh);
   if (mesh.empty())
     throw Error("surface mesher: no triangle could be extracted from the dual of " +

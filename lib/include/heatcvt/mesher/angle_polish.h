@@ -17,12 +17,18 @@ struct AnglePolishOptions {
   double initial_step = 0.1;   ///< pattern-search step, times the ring's mean edge length. Default 0.1.
   double final_step = 0.005;   ///< search stops below this step (times mean edge). Default 0.005.
   int max_search_steps = 24;   ///< Default 24.
+  /// Boundary vertices move too, along the chord of their two boundary neighbours (so boundary
+  /// triangles are polished like interior ones and the border keeps its course). Default true.
+  bool boundary = true;
+  /// ... but only where the border turns by at most this much at the vertex. Default 30°.
+  double max_boundary_turn_deg = 30;
 };
 
 /// Gauss–Seidel rounds over the vertices in a fixed colouring (a greedy colouring of the vertex
 /// graph in index order; the vertices of one colour move in parallel, so the result does not
 /// depend on the thread count). Each interior vertex not `frozen` is moved by an 8-direction
-/// pattern search from the ring's area-weighted centroid and its position, in its tangent plane;
+/// pattern search from the ring's area-weighted centroid and its position, in its tangent plane
+/// (a boundary vertex by a 2-direction search along its border, options.boundary);
 /// the target is projected to the surface and kept only if, measured in 3D, (ring min capped,
 /// ring sum) improves and no ring triangle turns against the vertex normal. Stops after `rounds`
 /// or a round without moves. Returns the moves kept.

@@ -20,6 +20,9 @@ struct EdgeSplitOptions {
   FlipOptions flips;    ///< max-min-angle flips around the new vertices (valence_mode ignored)
   AnglePolishOptions angle;
   int threads = 0;      ///< 0 = all cores; results do not depend on it. Default 0.
+  /// Splits stop once the mesh has this many vertices in faces (the vertex budget of the
+  /// caller, e.g. cloud2mesh's -n plus 2 %); 0 = no limit. Default 0.
+  int max_vertices = 0;
 };
 
 /// Each sliver's longest edge, if long and interior, is split at its midpoint projected to the

@@ -20,10 +20,12 @@ struct HoleSiteOptions {
   /// this long. Default 0.5.
   double min_mean_normal = 0.5;
   /// A site is inside the hole when its normal has at least this dot product with the loop's
-  /// mean normal (the far side of a thin part faces away); and the triangulation is used only
-  /// when each triangle's normal has at least this dot product with its corners' normals (a
-  /// plane across a depth jump would lift to steep slivers). Default 0.5 (60°).
+  /// mean normal (the far side of a thin part faces away). Default 0.5 (60°).
   double min_normal_dot = 0.5;
+  /// The triangulation is used only when each triangle's normal has more than this dot product
+  /// with each of its corners' normals, the coherence rule of the dual's candidates (a plane
+  /// across a depth jump would lift to steep slivers). Default 0.25.
+  double min_triangle_dot = 0.25;
   /// ... and it lies within this many loop radii (largest distance of a loop vertex from the
   /// loop's centroid) of the loop's mean plane. Default 0.5.
   double max_height = 0.5;

@@ -19,6 +19,23 @@ struct SliverCollapseOptions {
   Valence3Options valence3;
 };
 
+/// Options of trim_boundary_slivers().
+struct BoundaryTrimOptions {
+  bool enabled = true;           ///< Default true.
+  double sliver_angle_deg = 25;  ///< a sliver has a smallest angle below this. Default 25°.
+  /// The sliver lies flat along the border: its angle opposite its boundary edge is at least
+  /// this (its height is then at most tan(90° − apex/2) / 2 ≈ 0.29 of that edge). Default 120°.
+  double min_apex_angle_deg = 120;
+  int passes = 1;                ///< Default 1 (each pass exposes new border triangles: more passes eat into the surface).
+};
+
+/// Removes the slivers that lie flat along the border (exactly one boundary edge, obtuse apex
+/// opposite it) when every corner keeps a face and the apex keeps a single fan: the border moves
+/// onto the apex, by less than the sliver's height, and no vertex is lost. Such slivers are where
+/// the border of a scan turns between sites; no vertex move can open them. Returns the faces
+/// removed.
+int trim_boundary_slivers(WorkingMesh& mesh, const BoundaryTrimOptions& options);
+
 /// In each pass, every sliver away from the boundary (faces visited in order, none sharing a
 /// vertex with an edited ring) has its edges tried shortest first: an edge (a, b) is collapsed
 /// when the link condition holds, the two opposite vertices keep valence ≥ 3, no ring triangle

@@ -31,9 +31,14 @@ struct SurfaceMesherOptions {
   UntangleOptions untangle;
   PolishOptions polish;  ///< polish.relaxation_iterations = 0 skips every polish stage
   SliverCollapseOptions slivers;
+  BoundaryTrimOptions boundary_slivers;
   EdgeSplitOptions split;
   /// Vertex-connected pieces with fewer faces are removed at the end. Default 20.
   int min_piece_faces = 20;
+  /// ... and so are the stray pieces with fewer vertices than this fraction of the mesh's (bits of
+  /// clutter, flying pixels, a few sites cut off at a depth jump); 0 keeps them
+  /// (cloud2mesh --keep-small). Default 0.01.
+  double min_piece_vertex_fraction = 0.01;
   /// Worker threads of the parallel stages (overrides polish.threads and split.threads);
   /// 0 = all cores. Results do not depend on it. Default 0.
   int threads = 0;
