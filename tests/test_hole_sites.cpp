@@ -11,7 +11,9 @@
 #include <random>
 #include <vector>
 
+#include "heatcvt/dual_mesh.h"
 #include "heatcvt/mesh.h"
+#include "heatcvt/mesher/border_growth.h"
 #include "heatcvt/mesher/compaction.h"
 #include "heatcvt/mesher/dual_candidates.h"
 #include "heatcvt/mesher/hole_filling.h"
@@ -209,6 +211,67 @@ TEST(StarCandidates, JitteredPlanarSitesGiveAConsistentTriangulation) {
   EXPECT_EQ(used_vertices(w), n * n);
   // The same for any thread count.
   EXPECT_EQ(star_candidates(w, {}, {}, 1).size(), stars.size());
+}
+
+// Sites of a 20 x 12 grid on z = 0 (normals +z) with the triangles of columns 0-7 and 12-19
+// only: two pieces with a strip of 3 columns of sites in no triangle between them. `rise` lifts
+// the right piece and the strip's right half above the left (a depth jump).
+WorkingMesh two_pieces(double rise) {
+  const int nx = 20, ny = 12;
+  Eigen::MatrixX3d V(nx * ny, 3), N = Eigen::MatrixX3d::Zero(nx * ny, 3);
+  N.col(2).setOnes();
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) V.row(j * nx + i) << i, j, i >= 10 ? rise : 0.0;
+  std::vector<MeshFace> faces;
+  for (int j = 0; j + 1 < ny; ++j)
+    for (int i = 0; i + 1 < nx; ++i) {
+      if (i >= 7 && i < 12) continue;
+      const int a = j * nx + i, b = a + 1, c = a + nx, d = c + 1;
+      faces.push_back({a, b, d});
+      faces.push_back({a, d, c});
+    }
+  WorkingMesh w(V, N, std::vector<int>(nx * ny, -1));
+  w.set_faces(faces);
+  return w;
+}
+
+// (Fronts that meet do not zip: joining two pieces takes a triangle that first touches the other
+// piece at a single vertex, which the one-fan rule refuses. The pieces stay two.)
+TEST(BorderGrowth, PiecesGrowOverTheSitesBetweenThem) {
+  WorkingMesh w = two_pieces(0.0);
+  ASSERT_LT(used_vertices(w), w.num_vertices());
+  const int before = w.num_faces();
+  const int added = grow_borders(w, {});
+  EXPECT_EQ(w.num_faces(), before + added);
+  EXPECT_EQ(used_vertices(w), w.num_vertices());
+  const ValidationReport r = validate(w, false);
+  EXPECT_TRUE(r.ok()) << r.summary();
+  EXPECT_EQ(r.components, 2);
+  EXPECT_EQ(r.boundary_loops, 2);
+  Eigen::MatrixX3i F(w.num_faces(), 3);
+  for (int f = 0; f < w.num_faces(); ++f) F.row(f) << w.face(f)[0], w.face(f)[1], w.face(f)[2];
+  EXPECT_GE(triangle_quality(w.V, F).min_angle_deg, 20.0);
+}
+
+TEST(BorderGrowth, NoTriangleStandsAcrossADepthJump) {
+  // The two halves 5 spacings apart in depth: triangles across the jump stand on edge.
+  WorkingMesh w = two_pieces(5.0);
+  grow_borders(w, {});
+  for (const MeshFace& f : w.faces()) {
+    const double zmin = std::min({w.V(f[0], 2), w.V(f[1], 2), w.V(f[2], 2)});
+    const double zmax = std::max({w.V(f[0], 2), w.V(f[1], 2), w.V(f[2], 2)});
+    EXPECT_EQ(zmin, zmax) << "a triangle spans the jump";
+  }
+  EXPECT_EQ(validate(w, false).components, 2);
+}
+
+TEST(BorderGrowth, ANearlyClosedSurfaceIsLeftToTheHoleFilling) {
+  const TriangleMesh s = test::icosphere(3);
+  WorkingMesh w = working(s);
+  punch(w, Eigen::Vector3d(0, 0, 1), 0.3);
+  const int faces = w.num_faces();
+  EXPECT_EQ(grow_borders(w, {}), 0);
+  EXPECT_EQ(w.num_faces(), faces);
 }
 
 }  // namespace

@@ -43,6 +43,12 @@ void mesh_from_candidates(WorkingMesh& mesh, const DualCandidates& candidates, c
   stats.holes_filled +=
       fill_holes(mesh, surface, options.holes, options.manifold, stats.removed_triangles, &stats.filled_hole_edges);
   timer.done("extraction and holes");
+  BorderGrowthOptions borders = options.borders;
+  borders.threads = options.threads;
+  stats.border_triangles += grow_borders(mesh, borders);
+  stats.holes_filled +=
+      fill_holes(mesh, surface, options.holes, options.manifold, stats.removed_triangles, &stats.filled_hole_edges);
+  timer.done("border growth");
   untangle(mesh, surface, options.untangle, options.holes, options.manifold, stats);
   timer.done("untangle");
   relaxation_polish(mesh, surface, polish, options.untangle, options.holes, options.manifold, stats);

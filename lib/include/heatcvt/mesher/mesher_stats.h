@@ -21,6 +21,7 @@ struct MesherStats {
   bool angle_polish_undone = false;  ///< the angle polish self-intersected and was undone
   int collapsed_edges = 0;      ///< edges of slivers collapsed
   int pieces_removed = 0;       ///< small or stray pieces removed at the end (remove_small_pieces())
+  int border_triangles = 0;     ///< triangles added by growing the borders over unused sites (grow_borders())
   int trimmed_faces = 0;        ///< slivers flat along the border removed (trim_boundary_slivers())
   int split_edges = 0;          ///< long edges of slivers split
   int faces_turned_outward = 0; ///< faces of closed pieces reversed to face outward

@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 
 #include "heatcvt/mesh.h"
+#include "heatcvt/mesher/border_growth.h"
 #include "heatcvt/mesher/compaction.h"
 #include "heatcvt/mesher/dual_candidates.h"
 #include "heatcvt/mesher/edge_split.h"
@@ -30,6 +31,7 @@ struct SurfaceMesherOptions {
   HoleFillingOptions holes;
   UntangleOptions untangle;
   PolishOptions polish;  ///< polish.relaxation_iterations = 0 skips every polish stage
+  BorderGrowthOptions borders;
   SliverCollapseOptions slivers;
   BoundaryTrimOptions boundary_slivers;
   EdgeSplitOptions split;
