@@ -3,6 +3,8 @@
 
 #include "heatcvt/mesher/mesh_checks.h"
 
+#include <set>
+
 namespace heatcvt {
 
 void untangle(WorkingMesh& mesh, const SurfaceProjector& surface, const UntangleOptions& options,
@@ -24,11 +26,21 @@ void untangle(WorkingMesh& mesh, const SurfaceProjector& surface, const Untangle
     stats.border_triangles += grow_borders(mesh, options.regrow);
     stats.holes_filled += fill_holes(mesh, surface, holes, manifold, stats.removed_triangles, &stats.filled_hole_edges);
   }
-  // Whatever the last refill left crossing is removed without refilling: never an intersection out.
-  const std::vector<int> bad = self_intersecting_faces(mesh);
+  // Whatever the last refill left crossing is removed; the holes are refilled once more and the
+  // new triangles that cross are taken out again: never an intersection out.
+  std::vector<int> bad = self_intersecting_faces(mesh);
   if (bad.empty()) return;
   std::vector<char> drop(mesh.num_faces(), 0);
   for (int f : bad) drop[f] = 1;
+  stats.removed_triangles += mesh.remove_faces(drop);
+  stats.removed_triangles += make_vertices_manifold(mesh, manifold);
+  std::set<MeshFace> before;
+  for (MeshFace f : mesh.faces()) before.insert(f);
+  stats.holes_filled += fill_holes(mesh, surface, holes, manifold, stats.removed_triangles, &stats.filled_hole_edges);
+  bad = self_intersecting_faces(mesh);
+  if (bad.empty()) return;
+  drop.assign(mesh.num_faces(), 0);
+  for (int f : bad) drop[f] = before.count(mesh.face(f)) == 0;  // the old faces no longer cross each other
   stats.removed_triangles += mesh.remove_faces(drop);
   stats.removed_triangles += make_vertices_manifold(mesh, manifold);
 }
