@@ -24,8 +24,8 @@ struct BorderGrowthOptions {
   int threads = 0;  ///< kNN threads; 0 = all cores. Results do not depend on it. Default 0.
   /// Only an open surface grows: one with more than this fraction of its edges on a border
   /// (pieces of a cluttered scan). A nearly closed surface's gaps are left to the hole filling,
-  /// whose triangulations keep the dual's shape. Default 0.02.
-  double open_surface_fraction = 0.02;
+  /// whose triangulations keep the dual's shape. Default 0.05.
+  double open_surface_fraction = 0.05;
 };
 
 /// Adds, pass by pass, for each border half-edge a→b (its face on the left) the triangle (b, a, s)

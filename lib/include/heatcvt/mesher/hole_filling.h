@@ -67,8 +67,8 @@ struct HoleFillingOptions {
   /// surface) are kept and untangled after. Default true.
   bool reject_intersecting_fills = true;
   /// The surface counts as open when more than this fraction of its edges are on its boundary.
-  /// Default 0.02.
-  double open_surface_fraction = 0.02;
+  /// Default 0.05.
+  double open_surface_fraction = 0.05;
   /// Rounds of "find loops, fill, make the vertices manifold again". Default 3.
   int passes = 3;
   /// Closing holes with the unused sites inside them (hole_sites.h). A loop of at most
