@@ -15,8 +15,6 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <pcl/PolygonMesh.h>
 #include <pcl/point_types.h>
-#include <pcl/search/kdtree.h>
-#include <pcl/surface/gp3.h>
 
 #include <array>
 #include <chrono>
@@ -207,24 +205,7 @@ int main(int argc, char** argv) {
         for (Eigen::Index i = 0; i < P.rows(); ++i) spacing += (P.row(i) - P.row(nn(i, 0))).norm();
         spacing /= P.rows();
 
-        run("PCL GP3", [&]() {
-          pcl::GreedyProjectionTriangulation<pcl::PointNormal> gp3;
-          auto cloud = test::with_normals(P, N);
-          pcl::search::KdTree<pcl::PointNormal>::Ptr tree(new pcl::search::KdTree<pcl::PointNormal>);
-          tree->setInputCloud(cloud);
-          gp3.setSearchRadius(4 * spacing);
-          gp3.setMu(2.5);
-          gp3.setMaximumNearestNeighbors(100);
-          gp3.setMaximumSurfaceAngle(M_PI / 4);
-          gp3.setMinimumAngle(M_PI / 18);
-          gp3.setMaximumAngle(2 * M_PI / 3);
-          gp3.setNormalConsistency(false);
-          gp3.setInputCloud(cloud);
-          gp3.setSearchMethod(tree);
-          pcl::PolygonMesh pm;
-          gp3.reconstruct(pm);
-          return test::compact(test::from_pcl(pm));
-        }, false);
+        run("PCL GP3", [&]() { return test::pcl_greedy_projection(P, N, 4 * spacing); }, false);
         cell.back().pipeline_seconds += normal_seconds;
         run("CGAL advancing front", [&]() {
           std::vector<K::Point_3> pts;

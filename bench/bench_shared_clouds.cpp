@@ -5,10 +5,7 @@
 // downsampled to about the same number of vertices.
 //
 // Usage: bench_shared_clouds [N = 2000] [--no-peer] [--threads T]
-#include <pcl/features/normal_3d_omp.h>
 #include <pcl/filters/voxel_grid.h>
-#include <pcl/kdtree/kdtree_flann.h>
-#include <pcl/surface/gp3.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -22,6 +19,7 @@
 #include "heatcvt/mesh.h"
 #include "heatcvt/reconstruct.h"
 #include "heatcvt/validate.h"
+#include "peer_pipelines.h"
 
 namespace {
 
@@ -49,7 +47,8 @@ Row describe(const TriangleMesh& m, double seconds) {
   return r;
 }
 
-// PCL greedy projection triangulation of the cloud voxel-downsampled to about `target` points.
+// PCL greedy projection triangulation (the acceptance's peer settings, peer_pipelines.h) of the
+// cloud voxel-downsampled to about `target` points, with the peers' normals.
 Row greedy_projection(const Eigen::MatrixX3d& P, int target) {
   const double t0 = bench::now_seconds();
   pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
@@ -65,34 +64,9 @@ Row greedy_projection(const Eigen::MatrixX3d& P, int target) {
     if (std::abs(static_cast<double>(down->size()) - target) <= 0.02 * target) break;
     leaf *= std::sqrt(static_cast<double>(down->size()) / target);
   }
-  pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> ne;
-  pcl::search::KdTree<pcl::PointXYZ>::Ptr tree(new pcl::search::KdTree<pcl::PointXYZ>);
-  pcl::PointCloud<pcl::Normal>::Ptr normals(new pcl::PointCloud<pcl::Normal>);
-  ne.setInputCloud(down);
-  ne.setSearchMethod(tree);
-  ne.setKSearch(20);
-  ne.compute(*normals);
-  pcl::PointCloud<pcl::PointNormal>::Ptr with(new pcl::PointCloud<pcl::PointNormal>);
-  pcl::concatenateFields(*down, *normals, *with);
-  pcl::search::KdTree<pcl::PointNormal>::Ptr tree2(new pcl::search::KdTree<pcl::PointNormal>);
-  pcl::GreedyProjectionTriangulation<pcl::PointNormal> gp3;
-  gp3.setSearchRadius(3.0 * leaf);
-  gp3.setMu(2.5);
-  gp3.setMaximumNearestNeighbors(100);
-  gp3.setMaximumSurfaceAngle(M_PI / 4);
-  gp3.setMinimumAngle(M_PI / 18);
-  gp3.setMaximumAngle(2 * M_PI / 3);
-  gp3.setNormalConsistency(false);
-  gp3.setInputCloud(with);
-  gp3.setSearchMethod(tree2);
-  pcl::PolygonMesh pm;
-  gp3.reconstruct(pm);
-  TriangleMesh m;
-  m.V.resize(static_cast<Eigen::Index>(down->size()), 3);
-  for (size_t i = 0; i < down->size(); ++i) m.V.row(i) << (*down)[i].x, (*down)[i].y, (*down)[i].z;
-  m.F.resize(static_cast<Eigen::Index>(pm.polygons.size()), 3);
-  for (size_t f = 0; f < pm.polygons.size(); ++f)
-    for (int k = 0; k < 3; ++k) m.F(f, k) = static_cast<int>(pm.polygons[f].vertices[k]);
+  Eigen::MatrixX3d D(static_cast<Eigen::Index>(down->size()), 3);
+  for (size_t i = 0; i < down->size(); ++i) D.row(i) << (*down)[i].x, (*down)[i].y, (*down)[i].z;
+  const TriangleMesh m = test::pcl_greedy_projection(D, test::peer_normals(D), 3.0 * leaf);
   return describe(m, bench::now_seconds() - t0);
 }
 
@@ -124,7 +98,7 @@ int main(int argc, char** argv) {
   std::sort(files.begin(), files.end());
   std::printf("cloud2mesh defaults, -n %d, every shared cloud with at least %d points; phi_b = smallest angle of the "
               "triangles on a boundary. Peer: PCL GreedyProjectionTriangulation on the cloud voxel-downsampled to about "
-              "-n points (radius 3 voxels, mu 2.5, 10-120 deg).\n\n",
+              "-n points (PCA/MST normals, radius 3 voxels, mu 2.5, 10-120 deg).\n\n",
               n, 10 * n);
   std::printf("| cloud | method | V (vs -n) | components | loops | genus | phi_min | phi_b | phi_m | time s |\n");
   std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");

@@ -1,5 +1,8 @@
 #include "peer_pipelines.h"
 
+#include <pcl/search/kdtree.h>
+#include <pcl/surface/gp3.h>
+
 #define CGAL_EIGEN3_ENABLED 1  // CGAL Poisson's sparse solver (Eigen is linked through heatcvt)
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
@@ -134,6 +137,25 @@ std::vector<PeerMesh> two_step_peers(const Eigen::MatrixX3d& P, int target_verti
   const Eigen::MatrixX3d N = peer_normals(P, threads);
   return {{"PCL Poisson + CGAL remesh", remesh_to(pcl_poisson(P, N), target_vertices)},
           {"CGAL Poisson + CGAL remesh", remesh_to(cgal_poisson(P, N), target_vertices)}};
+}
+
+TriangleMesh pcl_greedy_projection(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N, double radius) {
+  pcl::GreedyProjectionTriangulation<pcl::PointNormal> gp3;
+  auto cloud = with_normals(P, N);
+  pcl::search::KdTree<pcl::PointNormal>::Ptr tree(new pcl::search::KdTree<pcl::PointNormal>);
+  tree->setInputCloud(cloud);
+  gp3.setSearchRadius(radius);
+  gp3.setMu(2.5);
+  gp3.setMaximumNearestNeighbors(100);
+  gp3.setMaximumSurfaceAngle(M_PI / 4);
+  gp3.setMinimumAngle(M_PI / 18);
+  gp3.setMaximumAngle(2 * M_PI / 3);
+  gp3.setNormalConsistency(false);
+  gp3.setInputCloud(cloud);
+  gp3.setSearchMethod(tree);
+  pcl::PolygonMesh pm;
+  gp3.reconstruct(pm);
+  return compact(from_pcl(pm));
 }
 
 }  // namespace heatcvt::test

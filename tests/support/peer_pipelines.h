@@ -40,6 +40,10 @@ TriangleMesh cgal_poisson(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N);
 /// same area.
 TriangleMesh remesh_to(const TriangleMesh& m, int target_vertices);
 
+/// PCL's GreedyProjectionTriangulation (search radius `radius`, mu 2.5, at most 100 neighbours,
+/// surface angle 45°, triangle angles 10–120°, no normal consistency), compacted.
+TriangleMesh pcl_greedy_projection(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N, double radius);
+
 /// One two-step peer result: its name and mesh.
 struct PeerMesh {
   std::string method;

@@ -122,12 +122,9 @@ std::vector<SurfacePoint> split_cells(const CvtSurface& surface, const HeatField
 std::vector<SurfacePoint> small_angle_sites(const CvtSurface& surface, const VoronoiDiagram& diagram,
                                             const DualMesh& dual, double phi_min_deg, int count) {
   std::vector<std::pair<double, int>> small;
-  for (Eigen::Index t = 0; t < dual.F.rows(); ++t) {
-    Eigen::MatrixX3d tri(3, 3);
-    for (int k = 0; k < 3; ++k) tri.row(k) = dual.V.row(dual.F(t, k));
-    const double phi = triangle_quality(tri, Eigen::RowVector3i(0, 1, 2)).min_angle_deg;
-    if (phi < phi_min_deg) small.push_back({phi, static_cast<int>(t)});
-  }
+  const Eigen::VectorXd angles = smallest_angles(dual.V, dual.F) * (180.0 / M_PI);
+  for (Eigen::Index t = 0; t < dual.F.rows(); ++t)
+    if (angles[t] < phi_min_deg) small.push_back({angles[t], static_cast<int>(t)});
   std::sort(small.begin(), small.end());
   std::vector<int> wanted;  // refined-mesh vertices of the bad Voronoi vertices
   for (size_t i = 0; i < small.size() && static_cast<int>(wanted.size()) < count; ++i)
