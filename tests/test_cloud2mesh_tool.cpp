@@ -173,7 +173,8 @@ TEST(Cloud2MeshTool, StrayPiecesDroppedUnlessKeepSmall) {
   ASSERT_GT(report[0]["pieces_removed"].get<int>(), 0) << "precondition: the scan has stray pieces";
   EXPECT_EQ(report[1]["pieces_removed"].get<int>(), 0);
   EXPECT_GT(report[1]["components"].get<int>(), report[0]["components"].get<int>());
-  EXPECT_GT(mesh[1].V.rows(), mesh[0].V.rows());
+  // Either way the vertex count asked for is shared among the pieces kept.
+  for (const TriangleMesh& m : mesh) EXPECT_NEAR(m.V.rows(), 500, 10);
   // Every piece of the default output has at least 1 % of the vertices (vertex-connected pieces).
   const Eigen::MatrixX3i& F = mesh[0].F;
   std::vector<int> parent(mesh[0].V.rows());

@@ -328,6 +328,7 @@ void copy_stats(const MesherStats& st, ReconstructionResult& res) {
   res.collapsed_edges = st.collapsed_edges;
   res.split_edges = st.split_edges;
   res.faces_turned_outward = st.faces_turned_outward;
+  res.sized = st.sized;
   res.unused_sites = st.unused_vertices;
   res.stage_seconds.insert(res.stage_seconds.end(), st.stage_seconds.begin(), st.stage_seconds.end());
 }
@@ -458,20 +459,23 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   // The long-edge splits may add vertices up to the vertex count asked for, plus the 2 % the
   // count is allowed to be off by.
   if (mopt.split.max_vertices == 0) mopt.split.max_vertices = options.sites + options.sites / 50;
+  // Every piece kept gets its share of the vertex count: sized to -n where the dual fell short.
+  if (mopt.sizing.target_vertices == 0) mopt.sizing.target_vertices = options.sites;
   MesherStats stats;
   mesh_from_candidates(mesh, candidates, fit, mopt, stats);
   stage.t = Clock::now();
   if (mesh.empty())
     throw Error("reconstruct_surface: no triangle could be extracted from the Voronoi diagram of " +
                 std::to_string(mesh.num_vertices()) + " sites on " + std::to_string(n) + " points");
-  res.mesh = finish_mesh(mesh, mopt, stats);
+  res.mesh = finish_mesh(mesh, fit, mopt, stats);
   copy_stats(stats, res);
+  stage.t = Clock::now();
   restore_frame(res.mesh.V, cloud.frame);
   const TriangleQuality tq = triangle_quality(res.mesh.V, res.mesh.F);
   res.min_angle_deg = tq.min_angle_deg;
   res.mean_min_angle_deg = tq.mean_min_angle_deg;
   res.boundary_min_angle_deg = tq.boundary_min_angle_deg;
-  stage.done("compact");
+  stage.done("quality");
 
   // 5. Validation (open scans legitimately keep boundaries).
   report("validate", 0);

@@ -144,6 +144,7 @@ void run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options
   const MeshSurfaceProjector surface(input.V, input.F);
   SurfaceMesherOptions mo = options.mesher;
   mo.threads = options.cvt.threads;
+  if (mo.sizing.target_vertices == 0) mo.sizing.target_vertices = options.cvt.sites;
   DualSurfaceResult post;
   try {
     post = mesh_dual_surface(out.cvt.dual.V, out.cvt.dual.F, surface, mo);

@@ -162,6 +162,7 @@ struct ReconstructionResult {
   /// Wall time of each stage in pipeline order (name, seconds): where the time went.
   std::vector<std::pair<std::string, double>> stage_seconds;
   int split_edges = 0;             ///< long edges of remaining slivers split at their midpoint (on the fitted surface)
+  bool sized = false;              ///< remeshed to the vertex count asked for (mesher.sizing: the dual fell short or missed the shape targets)
   int faces_turned_outward = 0;    ///< faces of closed pieces whose orientation was reversed (negative enclosed volume)
   int points_cvt = 0;              ///< points the CVT ran on (points_used unless cvt_points_per_site thins them)
 };

@@ -8,7 +8,8 @@
 
 namespace heatcvt {
 
-int flip_edges(WorkingMesh& mesh, const FlipOptions& options, const std::vector<char>* only_at) {
+int flip_edges(WorkingMesh& mesh, const FlipOptions& options, const std::vector<char>* only_at,
+               const std::vector<int>* target_valence) {
   const Eigen::MatrixX3d& V = mesh.V;
   auto normal = [&](int a, int b, int c) -> Eigen::Vector3d {
     return (V.row(b) - V.row(a)).cross(V.row(c) - V.row(a)).transpose();
@@ -36,10 +37,13 @@ int flip_edges(WorkingMesh& mesh, const FlipOptions& options, const std::vector<
         const double before = std::min(min_angle(a, b, c), min_angle(b, a, d));
         const double after = std::min(min_angle(c, a, d), min_angle(d, b, c));
         if (options.valence_mode) {
-          auto dev = [](int x) { return (x - 6) * (x - 6); };
+          auto dev = [&](int v, int x) {
+            const int t = target_valence ? (*target_valence)[v] : 6;
+            return (x - t) * (x - t);
+          };
           const int va = mesh.valence(a), vb = mesh.valence(b), vc = mesh.valence(c), vd = mesh.valence(d);
-          const int dv_before = dev(va) + dev(vb) + dev(vc) + dev(vd);
-          const int dv_after = dev(va - 1) + dev(vb - 1) + dev(vc + 1) + dev(vd + 1);
+          const int dv_before = dev(a, va) + dev(b, vb) + dev(c, vc) + dev(d, vd);
+          const int dv_after = dev(a, va - 1) + dev(b, vb - 1) + dev(c, vc + 1) + dev(d, vd + 1);
           if (dv_after >= dv_before) continue;
           // Never across creases or thin parts, where a valence flip can fold the surface
           // through itself.

@@ -65,14 +65,33 @@ void mesh_from_candidates(WorkingMesh& mesh, const DualCandidates& candidates, c
   timer.done("boundary sliver trim");
 }
 
-TriangleMesh finish_mesh(WorkingMesh& mesh, const SurfaceMesherOptions& options, MesherStats& stats) {
+TriangleMesh finish_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, const SurfaceMesherOptions& options,
+                         MesherStats& stats) {
+  StageTimer timer(stats);
   stats.removed_triangles +=
       remove_small_pieces(mesh, options.min_piece_faces, options.min_piece_vertex_fraction, &stats.pieces_removed);
+  IsotropicRemeshOptions sizing = options.sizing;
+  sizing.threads = options.threads;
+  // The hole policy decides what the sizing may open or close: no flying face is removed where a
+  // watertight mesh is asked for, no notch closed where no surface may be invented.
+  if (options.holes.policy == HolePolicy::fill) sizing.remove_flying = false;
+  if (options.holes.policy == HolePolicy::keep) sizing.fill_notches = false;
+  // Flying faces go first, with the small pieces they cut off, so that the sizing shares the
+  // vertex count among the pieces that stay.
+  if (sizing.remove_flying && needs_sizing(mesh, sizing)) {
+    stats.flying_faces += remove_flying_faces(mesh, surface, sizing);
+    stats.removed_triangles += remove_small_pieces(mesh, options.min_piece_faces, options.min_piece_vertex_fraction,
+                                                   &stats.pieces_removed);
+  }
+  stats.sized = size_to_target(mesh, surface, sizing, stats);
+  timer.done("sizing");
   stats.faces_turned_outward += orient_closed_pieces_outward(mesh);
   if (mesh.empty())
     throw Error("surface mesher: no triangle could be extracted from the dual of " +
                 std::to_string(mesh.num_vertices()) + " sites");
-  return compact_mesh(mesh, &stats.unused_vertices);
+  TriangleMesh out = compact_mesh(mesh, &stats.unused_vertices);
+  timer.done("compact");
+  return out;
 }
 
 DualSurfaceResult mesh_dual_surface(const Eigen::MatrixX3d& sites, const Eigen::MatrixX3i& dual_faces,
@@ -95,9 +114,8 @@ DualSurfaceResult mesh_dual_surface(const Eigen::MatrixX3d& sites, const Eigen::
   const DualCandidates candidates = dual_candidates_from_faces(dual_faces, mesh, candidate_options);
   timer.done("sites");
   mesh_from_candidates(mesh, candidates, surface, options, out.stats);
+  out.mesh = finish_mesh(mesh, surface, options, out.stats);
   StageTimer finish_timer(out.stats);
-  out.mesh = finish_mesh(mesh, options, out.stats);
-  finish_timer.done("compact");
   ValidationOptions vo;
   vo.require_closed = false;
   out.validation = validate_triangle_mesh(out.mesh.V, out.mesh.F, vo);

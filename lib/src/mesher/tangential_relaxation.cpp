@@ -7,7 +7,8 @@
 
 namespace heatcvt {
 
-void tangential_relaxation(WorkingMesh& mesh, const SurfaceProjector& surface, int threads) {
+void tangential_relaxation(WorkingMesh& mesh, const SurfaceProjector& surface, int threads,
+                           const RelaxationBorder& border, const std::vector<char>* fixed) {
   const int ns = mesh.num_vertices();
   Eigen::MatrixX3d& S = mesh.V;
   Eigen::MatrixX3d& SN = mesh.N;
@@ -23,12 +24,20 @@ void tangential_relaxation(WorkingMesh& mesh, const SurfaceProjector& surface, i
     }
   }
   Eigen::MatrixX3d S2 = S, SN2 = SN;
+  const BorderLinks links = border.slide ? border_links(mesh) : BorderLinks{};
+  const double corner = border.corner_turn_deg * M_PI / 180.0;
 #pragma omp parallel for num_threads(resolve_threads(threads)) schedule(static)
   for (int v = 0; v < ns; ++v) {
-    if (!(W[v] > 0)) continue;
+    if (!(W[v] > 0) || (fixed && (*fixed)[v])) continue;
     const Eigen::Vector3d x = S.row(v), nv = SN.row(v);
     Eigen::Vector3d d = C.row(v).transpose() / W[v] - x;
     d -= d.dot(nv) * nv;
+    if (border.slide && links.on(v)) {
+      if (border_turn(mesh, links, v) > corner) continue;
+      const Eigen::Vector3d p = S.row(links.prev[v]), q = S.row(links.next[v]);
+      d = 0.5 * (p + q) - x;
+      d -= d.dot(nv) * nv;
+    }
     Eigen::Vector3d pos, nrm;
     surface.project(x + d, mesh.anchor[v], pos, nrm);
     S2.row(v) = pos.transpose();

@@ -154,6 +154,27 @@ double face_min_angle(const WorkingMesh& mesh, const MeshFace& f) {
   return triangle_min_angle(mesh.V.row(f[0]).transpose(), mesh.V.row(f[1]).transpose(), mesh.V.row(f[2]).transpose());
 }
 
+BorderLinks border_links(const WorkingMesh& mesh) {
+  BorderLinks b;
+  b.next.assign(mesh.num_vertices(), -1);
+  b.prev.assign(mesh.num_vertices(), -1);
+  for (const MeshFace& f : mesh.faces())
+    for (int q = 0; q < 3; ++q) {
+      const int a = f[q], c = f[(q + 1) % 3];
+      if (mesh.has_half_edge(c, a)) continue;
+      b.next[a] = b.next[a] == -1 ? c : -2;
+      b.prev[c] = b.prev[c] == -1 ? a : -2;
+    }
+  return b;
+}
+
+double border_turn(const WorkingMesh& mesh, const BorderLinks& border, int v) {
+  if (!border.simple(v)) return M_PI;
+  const Eigen::Vector3d in = mesh.V.row(v) - mesh.V.row(border.prev[v]), out = mesh.V.row(border.next[v]) - mesh.V.row(v);
+  if (!(in.norm() > 0) || !(out.norm() > 0)) return M_PI;
+  return std::acos(std::clamp(in.normalized().dot(out.normalized()), -1.0, 1.0));
+}
+
 FaceComponents face_components(const WorkingMesh& mesh, bool by_vertex) {
   const int nf = mesh.num_faces();
   FaceComponents out;

@@ -26,7 +26,9 @@ struct FlipOptions {
 /// Flips edges (a, b) of face pairs (a, b, c), (b, a, d) into (c, d) when (c, d) is not an edge
 /// yet, a and b keep valence ≥ 3 and the rule of `options` holds; with `only_at`, only edges
 /// with an end vertex v with (*only_at)[v]. Faces are visited in order, one flip per face per
-/// pass. Returns the number of flips.
-int flip_edges(WorkingMesh& mesh, const FlipOptions& options = {}, const std::vector<char>* only_at = nullptr);
+/// pass. In valence mode the valences move towards 6, or towards (*target_valence)[v] when given
+/// (the isotropic remesh asks fewer on a border). Returns the number of flips.
+int flip_edges(WorkingMesh& mesh, const FlipOptions& options = {}, const std::vector<char>* only_at = nullptr,
+               const std::vector<int>* target_valence = nullptr);
 
 }  // namespace heatcvt

@@ -24,6 +24,8 @@ struct MesherStats {
   int border_triangles = 0;     ///< triangles added by growing the borders over unused sites (grow_borders())
   int trimmed_faces = 0;        ///< slivers flat along the border removed (trim_boundary_slivers())
   int split_edges = 0;          ///< long edges of slivers split
+  int flying_faces = 0;         ///< faces off the surface (across depth jumps) removed by the sizing
+  bool sized = false;           ///< the mesh was remeshed to the vertex count asked for (size_to_target())
   int faces_turned_outward = 0; ///< faces of closed pieces reversed to face outward
   int unused_vertices = 0;      ///< vertices in no face (dropped by compaction)
   /// Wall time of each stage in pipeline order (name, seconds).

@@ -13,6 +13,7 @@
 #include "heatcvt/mesher/dual_candidates.h"
 #include "heatcvt/mesher/edge_split.h"
 #include "heatcvt/mesher/hole_filling.h"
+#include "heatcvt/mesher/isotropic_remesh.h"
 #include "heatcvt/mesher/manifold_extraction.h"
 #include "heatcvt/mesher/mesher_stats.h"
 #include "heatcvt/mesher/orientation.h"
@@ -35,6 +36,9 @@ struct SurfaceMesherOptions {
   SliverCollapseOptions slivers;
   BoundaryTrimOptions boundary_slivers;
   EdgeSplitOptions split;
+  /// Sizing to the vertex count asked for (isotropic remeshing where the dual left sites out or
+  /// the shape targets are missed); sizing.target_vertices = 0 (the default) turns it off.
+  IsotropicRemeshOptions sizing;
   /// Vertex-connected pieces with fewer faces are removed at the end. Default 20.
   int min_piece_faces = 20;
   /// ... and so are the stray pieces with fewer vertices than this fraction of the mesh's (bits of
@@ -53,9 +57,11 @@ struct SurfaceMesherOptions {
 void mesh_from_candidates(WorkingMesh& mesh, const DualCandidates& candidates, const SurfaceProjector& surface,
                           const SurfaceMesherOptions& options, MesherStats& stats);
 
-/// Removes the small pieces, turns closed pieces outward and compacts (the final stage of the
-/// mesher, "compact"). \throw Error when no face is left.
-TriangleMesh finish_mesh(WorkingMesh& mesh, const SurfaceMesherOptions& options, MesherStats& stats);
+/// Removes the small pieces, sizes the rest to options.sizing.target_vertices (size_to_target(),
+/// stage "sizing"), turns closed pieces outward and compacts ("compact").
+/// \throw Error when no face is left.
+TriangleMesh finish_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, const SurfaceMesherOptions& options,
+                         MesherStats& stats);
 
 /// Result of mesh_dual_surface().
 struct DualSurfaceResult {

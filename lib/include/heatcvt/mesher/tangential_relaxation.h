@@ -7,9 +7,21 @@
 
 namespace heatcvt {
 
+/// How tangential_relaxation() moves the vertices on a border.
+struct RelaxationBorder {
+  /// false: like interior vertices (towards the ring's centroid, which draws the border in).
+  /// true: along the chord of their two border neighbours, to the middle of the two (the
+  /// border keeps its course and is resampled evenly); corners stay. Default false.
+  bool slide = false;
+  /// With `slide`: a border vertex where the border turns by more than this is a corner. Default 40°.
+  double corner_turn_deg = 40;
+};
+
 /// One step of tangential relaxation (Jacobi: every vertex computed from the old positions, in
 /// parallel). A vertex's move is kept only if none of its triangles then faces against its new
-/// normal. `threads`: 0 = all cores; the result does not depend on it.
-void tangential_relaxation(WorkingMesh& mesh, const SurfaceProjector& surface, int threads = 0);
+/// normal. Vertices v with (*fixed)[v] stay. `threads`: 0 = all cores; the result does not
+/// depend on it.
+void tangential_relaxation(WorkingMesh& mesh, const SurfaceProjector& surface, int threads = 0,
+                           const RelaxationBorder& border = {}, const std::vector<char>* fixed = nullptr);
 
 }  // namespace heatcvt

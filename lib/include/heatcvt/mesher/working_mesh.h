@@ -100,6 +100,22 @@ double triangle_min_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, co
 /// Smallest angle of face f of the mesh.
 double face_min_angle(const WorkingMesh& mesh, const MeshFace& f);
 
+/// The border of a mesh: along each border half-edge a→b (one without its opposite b→a),
+/// next[a] = b and prev[b] = a. −1 where a vertex has no such half-edge, −2 where it has several
+/// (a pinched vertex where two border arcs meet).
+struct BorderLinks {
+  std::vector<int> next, prev;
+  /// Whether v is on a border.
+  bool on(int v) const { return next[v] != -1 || prev[v] != -1; }
+  /// Whether v is on a single border arc (one next, one previous vertex).
+  bool simple(int v) const { return next[v] >= 0 && prev[v] >= 0; }
+};
+BorderLinks border_links(const WorkingMesh& mesh);
+
+/// Turning angle (radians) of the border at the simple border vertex v: 0 where the border goes
+/// straight on, π where it turns back; π for a vertex that is not simple.
+double border_turn(const WorkingMesh& mesh, const BorderLinks& border, int v);
+
 /// Connected components of the faces (through shared vertices when `by_vertex`, else through
 /// shared edges): component id of each face, ids numbered by first face, and the number of faces
 /// of each component.

@@ -1,0 +1,99 @@
+#pragma once
+/// \file isotropic_remesh.h
+/// Sizing to the requested vertex count: isotropic remeshing of the working mesh on its surface
+/// (Botsch & Kobbelt 2004: split long edges, collapse short ones, valence flips, tangential
+/// relaxation, all projected to the SurfaceProjector), with borders resampled along their own
+/// course. It runs where the dual left sites out (cluttered and partial scans, thin parts) or
+/// the shape targets are not met, so the output has the vertex count asked for, spread over all
+/// of the meshed surface in proportion to area (every piece gets its share), and the angle polish
+/// that follows starts from near-equilateral triangles, on the border too.
+#include "heatcvt/mesher/angle_polish.h"
+#include "heatcvt/mesher/edge_flips.h"
+#include "heatcvt/mesher/mesher_stats.h"
+#include "heatcvt/mesher/projector.h"
+#include "heatcvt/mesher/working_mesh.h"
+
+namespace heatcvt {
+
+/// Options of size_to_target().
+struct IsotropicRemeshOptions {
+  /// Vertices (in faces) asked for; 0 turns the stage off. The reconstruction and the remesher
+  /// set it to their site count. Default 0.
+  int target_vertices = 0;
+  /// The stage runs only when the vertex count is off by more than this fraction of the target,
+  /// or the shape targets below are not met. Default 0.02 (the 2 % the count may be off by).
+  double count_tolerance = 0.02;
+  /// ... or the mesh's smallest angle is below this. Default 25°.
+  double min_angle_deg = 25;
+  /// ... or the mean of the triangles' smallest angles (φm) is below this. Default 52°.
+  double mean_angle_deg = 52;
+  /// Split, collapse, flip and relax rounds; the target edge length is corrected after each
+  /// round by the ratio of the vertex count to the target. Default 8.
+  int rounds = 8;
+  /// An edge is split when longer than this times the target length. Default 4/3.
+  double long_factor = 4.0 / 3.0;
+  /// An edge is collapsed when shorter than this times the target length (and no edge of the
+  /// collapsed ring becomes long). Default 4/5.
+  double short_factor = 4.0 / 5.0;
+  /// A split is refused where the edge's midpoint projects farther than this times the edge's
+  /// length from it (the edge spans a gap or a depth jump of the surface). Default 0.25.
+  double max_split_offset = 0.25;
+  /// Faces whose centroid projects to the surface farther than this times their longest edge do
+  /// not lie on it (they span a depth jump or the gap between two sheets: flying triangles) and
+  /// are removed first. Default 0.25.
+  double max_face_offset = 0.25;
+  /// Remove the flying faces before sizing (false where a watertight result is asked for: hole
+  /// policy fill). Default true.
+  bool remove_flying = true;
+  /// A split or collapse is refused when a ring triangle would turn by more than this. Default 45°.
+  double max_normal_turn_deg = 45;
+  /// A border vertex where the border turns by more than this is a corner: relaxation leaves it
+  /// in place and collapses keep it. Default 40°.
+  double corner_turn_deg = 120;
+  /// A border vertex with several faces whose surface angle (the sum of its face angles) is
+  /// below this is a spike of the border (noise at the site spacing: each of its faces has a
+  /// smaller angle there) and is collapsed into its nearer border neighbour. Default 60°.
+  double spike_angle_deg = 60;
+  /// A border vertex whose two border edges make an angle below this, with the surface around
+  /// the rest (a notch or crack of the border at the site spacing), gets the face across the
+  /// notch (fill_notches). Default 60°.
+  double notch_angle_deg = 60;
+  /// Close the notches (false where no surface may be invented: hole policy keep). Default true.
+  bool fill_notches = true;
+  /// A face with a single border vertex of valence 2 (an ear on the border) whose angle there is
+  /// below this is cut off at the end (the border moves onto its opposite edge, by less than the
+  /// face's height). Default 25°.
+  double ear_angle_deg = 25;
+  /// Rounds of max-min-angle flips + angle polish after the sizing. Default 6.
+  int polish_cycles = 6;
+  AnglePolishOptions angle;  ///< the angle polish of the last step
+  FlipOptions flips;         ///< flip rules (max_passes and valence_mode are set per call)
+  int threads = 0;           ///< 0 = all cores; results do not depend on it. Default 0.
+};
+
+/// Whether the mesh misses the targets of `options` (count, smallest angle, φm), i.e. whether
+/// size_to_target() would work on it.
+bool needs_sizing(const WorkingMesh& mesh, const IsotropicRemeshOptions& options);
+
+/// Removes the faces that do not lie on the surface: their centroid projects farther than
+/// options.max_face_offset times their longest edge away (they span a depth jump or the gap
+/// between two sheets); then the smaller fans of the vertices that left pinched
+/// (make_vertices_manifold()). Returns the faces removed.
+int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options);
+
+/// Remeshes `mesh` on `surface` to options.target_vertices vertices when needs_sizing(): the
+/// the target edge length L comes from the mesh's area (V ≈ 2A / (√3 L²) for equilateral triangles),
+/// then `rounds` of: edges longer than long_factor·L split at their midpoint projected to the
+/// surface (border edges too), edges shorter than short_factor·L collapsed (link condition; an
+/// interior vertex into a border one; never an inner edge between two border vertices, never a
+/// border corner moved), valence flips towards 6 inside and towards 1 + (border angle / 60°) on
+/// the border, and tangential relaxation (border vertices slide along their border's chord). The
+/// count is then brought within count_tolerance / 2 of the target by splitting the longest or
+/// collapsing the shortest edges, ears are cut, and angle polish + max-min-angle flips finish.
+/// Faces keep a consistent orientation and the mesh its topology (no collapse or split changes
+/// it). When the result self-intersects, the mesh is left as it was. Returns whether the mesh
+/// was remeshed.
+bool size_to_target(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options,
+                    MesherStats& stats);
+
+}  // namespace heatcvt

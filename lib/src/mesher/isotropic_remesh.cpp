@@ -1,0 +1,506 @@
+// Sizing of the working mesh to the requested vertex count by isotropic remeshing.
+#include "heatcvt/mesher/isotropic_remesh.h"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <set>
+
+#include "heatcvt/mesher/manifold_extraction.h"
+#include "heatcvt/mesher/mesh_checks.h"
+#include "heatcvt/mesher/tangential_relaxation.h"
+
+namespace heatcvt {
+namespace {
+
+constexpr double kDegree = M_PI / 180.0;
+
+int vertices_in_faces(const WorkingMesh& mesh) {
+  std::vector<char> used(mesh.num_vertices(), 0);
+  for (const MeshFace& f : mesh.faces())
+    for (int v : f) used[v] = 1;
+  return static_cast<int>(std::count(used.begin(), used.end(), 1));
+}
+
+struct Edge {
+  double length;
+  int a, b;  // a→b is a half-edge of a face
+};
+
+// Every undirected edge once: the half-edge a→b with a < b, or the border half-edge.
+std::vector<Edge> mesh_edges(const WorkingMesh& mesh) {
+  std::vector<Edge> edges;
+  for (const MeshFace& f : mesh.faces())
+    for (int k = 0; k < 3; ++k) {
+      const int a = f[k], b = f[(k + 1) % 3];
+      if (a < b || !mesh.has_half_edge(b, a)) edges.push_back({(mesh.V.row(a) - mesh.V.row(b)).norm(), a, b});
+    }
+  return edges;
+}
+
+// Orders edges by length (longest first when `longest_first`), ties by vertex indices.
+void sort_edges(std::vector<Edge>& edges, bool longest_first) {
+  std::sort(edges.begin(), edges.end(), [&](const Edge& x, const Edge& y) {
+    if (x.length != y.length) return longest_first ? x.length > y.length : x.length < y.length;
+    return x.a != y.a ? x.a < y.a : x.b < y.b;
+  });
+}
+
+int third_vertex(const MeshFace& f, int a, int b) {
+  for (int v : f)
+    if (v != a && v != b) return v;
+  return -1;
+}
+
+// Whether the halves (a, m, c) and (m, b, c) of the face (a, b, c) with m at `pos` face within
+// max_normal_turn_deg of it.
+bool split_keeps_facing(const WorkingMesh& mesh, int a, int b, int c, const Eigen::Vector3d& pos,
+                        const IsotropicRemeshOptions& o) {
+  const Eigen::Vector3d pa = mesh.V.row(a), pb = mesh.V.row(b), pc = mesh.V.row(c);
+  const Eigen::Vector3d n = (pb - pa).cross(pc - pa);
+  const Eigen::Vector3d n1 = (pos - pa).cross(pc - pa), n2 = (pb - pos).cross(pc - pos);
+  const double min_cos = std::cos(o.max_normal_turn_deg * kDegree);
+  return n.norm() > 0 && n1.norm() > 0 && n2.norm() > 0 && n.normalized().dot(n1.normalized()) >= min_cos &&
+         n.normalized().dot(n2.normalized()) >= min_cos;
+}
+
+// Splits the edges longer than `limit`, longest first, at their midpoint projected to the
+// surface; no face is split twice in one call, no edge at a frozen vertex, at most `budget` splits
+// (< 0: no limit).
+int split_edges(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o,
+                const std::vector<char>& frozen, double limit, int budget) {
+  std::vector<Edge> edges = mesh_edges(mesh);
+  sort_edges(edges, true);
+  std::vector<char> touched(mesh.num_faces(), 0);
+  int done = 0;
+  for (const Edge& e : edges) {
+    if (!(e.length > limit) || (budget >= 0 && done >= budget)) break;
+    const int a = e.a, b = e.b, f1 = mesh.half_edge_face(a, b), f2 = mesh.half_edge_face(b, a);
+    if (f1 < 0 || touched[f1] || (f2 >= 0 && touched[f2]) || frozen[a] || frozen[b]) continue;
+    const int c = third_vertex(mesh.face(f1), a, b), d = f2 >= 0 ? third_vertex(mesh.face(f2), a, b) : -1;
+    Eigen::Vector3d pos, nrm;
+    int hint = mesh.anchor[a];
+    const Eigen::Vector3d mid = 0.5 * (mesh.V.row(a) + mesh.V.row(b)).transpose();
+    surface.project(mid, hint, pos, nrm);
+    if (!pos.allFinite() || !nrm.allFinite() || !((pos - mid).norm() <= o.max_split_offset * e.length)) continue;
+    if (!split_keeps_facing(mesh, a, b, c, pos, o) || (f2 >= 0 && !split_keeps_facing(mesh, b, a, d, pos, o)))
+      continue;
+    const int m = mesh.add_vertex(pos, nrm, hint);
+    mesh.replace_face(f1, {a, m, c});
+    mesh.add_face({m, b, c});
+    touched[f1] = 1;
+    if (f2 >= 0) {
+      mesh.replace_face(f2, {b, m, d});
+      mesh.add_face({m, a, d});
+      touched[f2] = 1;
+    }
+    touched.resize(mesh.num_faces(), 1);
+    ++done;
+  }
+  return done;
+}
+
+// One pass of edge collapses: the edges shorter than `limit`, shortest first, at most `budget`
+// (< 0: no limit), none at a frozen vertex or within the ring of an earlier one.
+class Collapser {
+ public:
+  Collapser(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o,
+            const std::vector<char>& frozen, double long_limit)
+      : mesh_(mesh), surface_(surface), o_(o), long_limit_(long_limit), vf_(mesh.vertex_faces()),
+        border_(border_links(mesh)), touched_(frozen), dead_(mesh.num_faces(), 0) {
+    touched_.resize(mesh.num_vertices(), 0);
+  }
+
+  int run(double limit, int budget) {
+    std::vector<Edge> edges = mesh_edges(mesh_);
+    sort_edges(edges, false);
+    int done = 0;
+    for (const Edge& e : edges) {
+      if (!(e.length < limit) || (budget >= 0 && done >= budget)) break;
+      if (!touched_[e.a] && !touched_[e.b] && try_collapse(e.a, e.b)) ++done;
+    }
+    if (done > 0) mesh_.remove_faces(dead_);
+    return done;
+  }
+
+  /// Collapses each spike of the border (a simple border vertex with more than one face whose
+  /// surface angle is below spike_angle_deg) into its nearer border neighbour.
+  int run_spikes(const std::vector<double>& surface_angle) {
+    int done = 0;
+    for (int v = 0; v < mesh_.num_vertices(); ++v) {
+      if (touched_[v] || !border_.simple(v) || vf_[v].size() < 2 || !(surface_angle[v] < o_.spike_angle_deg * kDegree))
+        continue;
+      const int p = border_.prev[v], n = border_.next[v];
+      const bool p_first = (mesh_.V.row(p) - mesh_.V.row(v)).norm() <= (mesh_.V.row(n) - mesh_.V.row(v)).norm();
+      for (int keep : {p_first ? p : n, p_first ? n : p})
+        if (!touched_[keep] && try_collapse(keep, v, keep)) {
+          ++done;
+          break;
+        }
+    }
+    if (done > 0) mesh_.remove_faces(dead_);
+    return done;
+  }
+
+ private:
+  bool corner(int v) const { return border_turn(mesh_, border_, v) > o_.corner_turn_deg * kDegree; }
+
+  // Which vertex stays (`keep`) and where, or false when the edge must not collapse.
+  bool choose(int a, int b, bool border_edge, int& keep, Eigen::Vector3d& pos, Eigen::Vector3d& nrm, int& hint) const {
+    if (keep >= 0) {  // forced
+      pos = mesh_.V.row(keep).transpose();
+      nrm = mesh_.N.row(keep).transpose();
+      hint = mesh_.anchor[keep];
+      return true;
+    }
+    const bool on_a = border_.on(a), on_b = border_.on(b);
+    if (!border_edge && on_a && on_b) return false;  // would pinch the surface
+    if (border_edge && ((!border_.simple(a) || corner(a)) && (!border_.simple(b) || corner(b)))) return false;
+    keep = a;
+    if (border_edge) {
+      if (!border_.simple(a) || corner(a)) keep = a;
+      else if (!border_.simple(b) || corner(b)) keep = b;
+      else keep = -1;  // both free: the midpoint
+    } else if (on_a || on_b) {
+      keep = on_a ? a : b;
+    } else {
+      keep = -1;
+    }
+    if (keep >= 0) {
+      pos = mesh_.V.row(keep).transpose();
+      nrm = mesh_.N.row(keep).transpose();
+      hint = mesh_.anchor[keep];
+      return true;
+    }
+    keep = a;
+    hint = mesh_.anchor[a];
+    surface_.project(0.5 * (mesh_.V.row(a) + mesh_.V.row(b)).transpose(), hint, pos, nrm);
+    return pos.allFinite() && nrm.allFinite();
+  }
+
+  // Link condition and valences: the opposite vertices of the edge are its only common
+  // neighbours and keep enough edges, and the merged vertex keeps a proper fan.
+  bool topology_allows(int a, int b, const std::vector<int>& shared, bool border_edge) const {
+    if (static_cast<int>(shared.size()) != (border_edge ? 1 : 2)) return false;
+    std::set<int> na, common;
+    for (int g : vf_[a])
+      for (int v : mesh_.face(g))
+        if (v != a && v != b) na.insert(v);
+    for (int g : vf_[b])
+      for (int v : mesh_.face(g))
+        if (v != a && v != b && na.count(v)) common.insert(v);
+    if (common.size() != shared.size()) return false;
+    for (int g : shared) {
+      const int c = third_vertex(mesh_.face(g), a, b);
+      if (!common.count(c) || mesh_.valence(c) <= (border_.on(c) ? 2 : 3)) return false;
+    }
+    const size_t merged = vf_[a].size() + vf_[b].size() - 2 * shared.size();
+    return merged >= (border_edge || border_.on(a) || border_.on(b) ? 1u : 3u);
+  }
+
+  // Collapses the edge (a, b) (keeping `forced_keep` in place when given); false when refused.
+  bool try_collapse(int a, int b, int forced_keep = -1) {
+    const bool border_edge = !mesh_.has_half_edge(a, b) || !mesh_.has_half_edge(b, a);
+    std::vector<int> shared, ring;
+    for (int g : vf_[a]) {
+      const MeshFace& h = mesh_.face(g);
+      (h[0] == b || h[1] == b || h[2] == b ? shared : ring).push_back(g);
+    }
+    for (int g : vf_[b]) {
+      const MeshFace& h = mesh_.face(g);
+      if (!(h[0] == a || h[1] == a || h[2] == a)) ring.push_back(g);
+    }
+    if (!topology_allows(a, b, shared, border_edge)) return false;
+    int keep = forced_keep, hint = -1;
+    Eigen::Vector3d pos, nrm;
+    if (!choose(a, b, border_edge, keep, pos, nrm, hint)) return false;
+    const int gone = keep == a ? b : a;
+    const double min_cos = std::cos(o_.max_normal_turn_deg * kDegree);
+    for (int g : ring) {
+      const MeshFace& h = mesh_.face(g);
+      Eigen::Vector3d p[3];
+      for (int q = 0; q < 3; ++q) p[q] = (h[q] == a || h[q] == b) ? pos : Eigen::Vector3d(mesh_.V.row(h[q]));
+      const Eigen::Vector3d old_n = (mesh_.V.row(h[1]) - mesh_.V.row(h[0])).cross(mesh_.V.row(h[2]) - mesh_.V.row(h[0])).transpose();
+      const Eigen::Vector3d new_n = (p[1] - p[0]).cross(p[2] - p[0]);
+      if (!(new_n.norm() > 0) || !(old_n.norm() > 0) || new_n.normalized().dot(old_n.normalized()) < min_cos) return false;
+      for (int q = 0; q < 3; ++q)
+        if ((h[q] == a || h[q] == b) && !((p[(q + 1) % 3] - pos).norm() <= long_limit_ && (p[(q + 2) % 3] - pos).norm() <= long_limit_))
+          return false;
+    }
+    mesh_.V.row(keep) = pos.transpose();
+    mesh_.N.row(keep) = nrm.transpose();
+    mesh_.anchor[keep] = hint;
+    for (int g : shared) dead_[g] = 1;
+    for (int g : ring) {
+      MeshFace h = mesh_.face(g);
+      for (int& v : h)
+        if (v == gone) v = keep;
+      mesh_.replace_face(g, h);
+      for (int v : h) touched_[v] = 1;
+    }
+    touched_[a] = touched_[b] = 1;
+    return true;
+  }
+
+  WorkingMesh& mesh_;
+  const SurfaceProjector& surface_;
+  const IsotropicRemeshOptions& o_;
+  const double long_limit_;
+  const std::vector<std::vector<int>> vf_;
+  const BorderLinks border_;
+  std::vector<char> touched_, dead_;
+};
+
+// Sum of the face angles at each vertex (2π inside a flat region, π on a straight border).
+std::vector<double> surface_angles(const WorkingMesh& mesh) {
+  std::vector<double> angle(mesh.num_vertices(), 0);
+  for (const MeshFace& f : mesh.faces())
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d e1 = mesh.V.row(f[(k + 1) % 3]) - mesh.V.row(f[k]), e2 = mesh.V.row(f[(k + 2) % 3]) - mesh.V.row(f[k]);
+      if (e1.norm() > 0 && e2.norm() > 0) angle[f[k]] += std::acos(std::clamp(e1.normalized().dot(e2.normalized()), -1.0, 1.0));
+    }
+  return angle;
+}
+
+// Valence each vertex should have: 6 inside; on a simple border 1 + the number of 60° sectors of
+// the surface's angle there (4 on a straight border); pinched vertices keep theirs.
+std::vector<int> target_valences(const WorkingMesh& mesh) {
+  const BorderLinks border = border_links(mesh);
+  const std::vector<double> angle = surface_angles(mesh);
+  std::vector<int> target(mesh.num_vertices(), 6);
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    if (!border.on(v)) continue;
+    target[v] = border.simple(v) ? 1 + std::max(1, static_cast<int>(std::lround(angle[v] / (M_PI / 3)))) : mesh.valence(v);
+  }
+  return target;
+}
+
+// Cuts the ears of the border: faces whose corner v is on the border with no other face and an
+// angle below ear_angle_deg there; the other two corners keep their faces.
+int cut_ears(WorkingMesh& mesh, const IsotropicRemeshOptions& o) {
+  const std::vector<std::vector<int>> vf = mesh.vertex_faces();
+  std::vector<char> drop(mesh.num_faces(), 0), touched(mesh.num_vertices(), 0);
+  int cut = 0;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    if (vf[v].size() != 1) continue;
+    const int g = vf[v][0];
+    const MeshFace& f = mesh.face(g);
+    int k = 0;
+    while (f[k] != v) ++k;
+    const int b = f[(k + 1) % 3], c = f[(k + 2) % 3];
+    if (touched[b] || touched[c] || vf[b].size() < 2 || vf[c].size() < 2 || mesh.edge_face_count(b, c) != 2) continue;
+    const Eigen::Vector3d e1 = mesh.V.row(b) - mesh.V.row(v), e2 = mesh.V.row(c) - mesh.V.row(v);
+    if (!(e1.norm() > 0 && e2.norm() > 0)) continue;
+    if (std::acos(std::clamp(e1.normalized().dot(e2.normalized()), -1.0, 1.0)) >= o.ear_angle_deg * kDegree) continue;
+    drop[g] = 1;
+    touched[v] = touched[b] = touched[c] = 1;
+    ++cut;
+  }
+  if (cut > 0) mesh.remove_faces(drop);
+  return cut;
+}
+
+// Closes the notches of the border: a simple border vertex v whose two border edges v→prev and
+// v→next make an angle below notch_angle_deg, with the surface on the far side (surface angle
+// above π), gets the face (v, prev, next) when it faces like v's normal. Returns the faces added.
+int fill_notches(WorkingMesh& mesh, const IsotropicRemeshOptions& o) {
+  const BorderLinks border = border_links(mesh);
+  const std::vector<double> angle = surface_angles(mesh);
+  std::vector<char> touched(mesh.num_vertices(), 0);
+  int added = 0;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    if (!border.simple(v) || !(angle[v] > M_PI)) continue;
+    const int p = border.prev[v], n = border.next[v];
+    if (p == n || touched[v] || touched[p] || touched[n]) continue;
+    const Eigen::Vector3d x = mesh.V.row(v), a = mesh.V.row(p), b = mesh.V.row(n);
+    if (!((a - x).norm() > 0 && (b - x).norm() > 0)) continue;
+    if (std::acos(std::clamp((a - x).normalized().dot((b - x).normalized()), -1.0, 1.0)) >= o.notch_angle_deg * kDegree)
+      continue;
+    // (v, p, n) holds v→p, p→n, n→v: the first and last pair with the border half-edges p→v, v→n.
+    if (mesh.has_half_edge(p, n) || mesh.edge_face_count(p, n) > 1) continue;
+    const Eigen::Vector3d fn = (a - x).cross(b - x);
+    if (!(fn.norm() > 0) || !(fn.normalized().dot(mesh.N.row(v).transpose()) > 0.5)) continue;
+    mesh.add_face({v, p, n});
+    touched[v] = touched[p] = touched[n] = 1;
+    ++added;
+  }
+  return added;
+}
+
+// The sizing's steps on one mesh, each tried and, where it makes faces cross, redone from the same
+// start with the vertices around the crossing faces frozen (the way the mesher's other stages
+// treat the intersections they make).
+class Sizer {
+ public:
+  Sizer(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o, MesherStats& stats)
+      : mesh_(mesh), surface_(surface), o_(o), stats_(stats), frozen_(mesh.num_vertices(), 0) {
+    crossings_ = self_intersecting_faces(mesh);  // faces crossing already are left alone
+    freeze_around(crossings_);
+  }
+
+  void run() {
+    clean_border();
+    double length = std::sqrt(2.0 * area() / (std::sqrt(3.0) * o_.target_vertices));
+    for (int round = 0; round < o_.rounds && length > 0; ++round) {
+      attempt([&] {
+        split_edges(mesh_, surface_, o_, frozen(), o_.long_factor * length, -1);
+        Collapser(mesh_, surface_, o_, frozen(), o_.long_factor * length).run(o_.short_factor * length, -1);
+        flip_and_relax();
+      });
+      // Borders and pieces make the equilateral estimate off: correct it by the count reached.
+      length *= std::sqrt(static_cast<double>(vertices_in_faces(mesh_)) / o_.target_vertices);
+    }
+    clean_border();
+    adjust_count(o_.long_factor * length);
+    attempt([&] { final_polish(); });
+  }
+
+ private:
+  // Notches closed, spikes collapsed, ears cut: the border's noise at the site spacing.
+  void clean_border() {
+    for (int pass = 0; pass < 3; ++pass) {
+      int changed = 0;
+      if (o_.fill_notches) attempt([&] { changed += fill_notches(mesh_, o_); });
+      attempt([&] {
+        changed += Collapser(mesh_, surface_, o_, frozen(), std::numeric_limits<double>::infinity()).run_spikes(surface_angles(mesh_));
+      });
+      attempt([&] { changed += cut_ears(mesh_, o_); });
+      if (changed == 0) break;
+    }
+  }
+
+  double area() const {
+    double a = 0;
+    for (const MeshFace& f : mesh_.faces())
+      a += 0.5 * (mesh_.V.row(f[1]) - mesh_.V.row(f[0])).cross(mesh_.V.row(f[2]) - mesh_.V.row(f[0])).norm();
+    return a;
+  }
+
+  const std::vector<char>& frozen() {
+    frozen_.resize(mesh_.num_vertices(), 0);
+    return frozen_;
+  }
+
+  // Freezes the vertices of `faces` and of every face touching them.
+  void freeze_around(const std::vector<int>& faces) {
+    std::vector<char> in(mesh_.num_vertices(), 0);
+    for (int f : faces)
+      for (int v : mesh_.face(f)) in[v] = 1;
+    frozen_.resize(mesh_.num_vertices(), 0);
+    for (const MeshFace& f : mesh_.faces())
+      if (in[f[0]] || in[f[1]] || in[f[2]])
+        for (int v : f) frozen_[v] = 1;
+  }
+
+  // Runs `step`; where it makes more faces cross than crossed before, undoes it, freezes the
+  // region and runs it again (at most three times, then leaves the step out).
+  template <class Step>
+  void attempt(Step step) {
+    for (int tries = 0; tries < 3; ++tries) {
+      const WorkingMesh::Checkpoint before = mesh_.checkpoint();
+      const int flips = stats_.flipped_edges;
+      step();
+      const std::vector<int> bad = self_intersecting_faces(mesh_);
+      if (bad.size() <= crossings_.size()) return;
+      freeze_around(bad);
+      frozen_.resize(before.V.rows());  // vertices added by the step are gone again
+      mesh_.rollback(before);
+      stats_.flipped_edges = flips;
+    }
+  }
+
+  // Valence flips towards target_valences(), then a relaxation step with the border sliding.
+  void flip_and_relax() {
+    FlipOptions f = o_.flips;
+    f.valence_mode = true;
+    f.max_passes = 3;
+    const std::vector<int> target = target_valences(mesh_);
+    std::vector<char> movable(mesh_.num_vertices());
+    for (int v = 0; v < mesh_.num_vertices(); ++v) movable[v] = !frozen()[v];
+    stats_.flipped_edges += flip_edges(mesh_, f, &movable, &target);
+    RelaxationBorder border;
+    border.slide = true;
+    border.corner_turn_deg = o_.corner_turn_deg;
+    tangential_relaxation(mesh_, surface_, o_.threads, border, &frozen());
+  }
+
+  // Splits the longest or collapses the shortest edges until the count is within half the
+  // tolerance of the target (or nothing more can be done).
+  void adjust_count(double long_limit) {
+    const int target = o_.target_vertices;
+    const int slack = std::max(0, static_cast<int>(std::floor(0.5 * o_.count_tolerance * target)));
+    for (int round = 0; round < 12; ++round) {
+      const int diff = target - vertices_in_faces(mesh_);
+      if (std::abs(diff) <= slack) break;
+      int changed = 0;
+      attempt([&] {
+        changed = diff > 0 ? split_edges(mesh_, surface_, o_, frozen(), 0.0, diff)
+                           : Collapser(mesh_, surface_, o_, frozen(), long_limit).run(std::numeric_limits<double>::infinity(), -diff);
+        flip_and_relax();
+      });
+      if (changed == 0) break;
+    }
+  }
+
+  // Max-min-angle flips and angle polish, as the mesher's polish does.
+  void final_polish() {
+    FlipOptions f = o_.flips;
+    f.valence_mode = false;
+    f.max_passes = 5;
+    stats_.flipped_edges += flip_edges(mesh_, f);
+    for (int cycle = 0; cycle < o_.polish_cycles; ++cycle) {
+      angle_polish(mesh_, surface_, 2, frozen(), o_.angle, o_.threads);
+      stats_.flipped_edges += flip_edges(mesh_, f);
+    }
+  }
+
+  WorkingMesh& mesh_;
+  const SurfaceProjector& surface_;
+  const IsotropicRemeshOptions& o_;
+  MesherStats& stats_;
+  std::vector<char> frozen_;
+  std::vector<int> crossings_;
+};
+
+}  // namespace
+
+int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o) {
+  std::vector<char> flying(mesh.num_faces(), 0);
+  for (int id = 0; id < mesh.num_faces(); ++id) {
+    const MeshFace& f = mesh.face(id);
+    const Eigen::Vector3d a = mesh.V.row(f[0]), b = mesh.V.row(f[1]), c = mesh.V.row(f[2]);
+    const double longest = std::max({(a - b).norm(), (b - c).norm(), (c - a).norm()});
+    Eigen::Vector3d pos, nrm;
+    int hint = mesh.anchor[f[0]];
+    const Eigen::Vector3d g = (a + b + c) / 3.0;
+    surface.project(g, hint, pos, nrm);
+    flying[id] = !(pos.allFinite() && (pos - g).norm() <= o.max_face_offset * longest);
+  }
+  // Vertices left with several fans keep their largest (make_vertices_manifold()).
+  const int removed = mesh.remove_faces(flying);
+  return removed > 0 ? removed + make_vertices_manifold(mesh) : 0;
+}
+
+bool needs_sizing(const WorkingMesh& mesh, const IsotropicRemeshOptions& options) {
+  if (options.target_vertices <= 0 || mesh.empty()) return false;
+  const int nv = vertices_in_faces(mesh);
+  if (std::abs(nv - options.target_vertices) > options.count_tolerance * options.target_vertices) return true;
+  double min_angle = M_PI, sum = 0;
+  for (const MeshFace& f : mesh.faces()) {
+    const double a = face_min_angle(mesh, f);
+    min_angle = std::min(min_angle, a);
+    sum += a;
+  }
+  return min_angle < options.min_angle_deg * kDegree || sum / mesh.num_faces() < options.mean_angle_deg * kDegree;
+}
+
+bool size_to_target(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options,
+                    MesherStats& stats) {
+  if (!needs_sizing(mesh, options)) return false;
+  Sizer(mesh, surface, options, stats).run();
+  return true;
+}
+
+}  // namespace heatcvt

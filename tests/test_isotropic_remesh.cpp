@@ -1,0 +1,214 @@
+// Tests of the mesher's sizing stage (mesher/isotropic_remesh.h): the vertex count asked for,
+// topology and borders kept, shape targets reached, flying faces removed, the border's noise
+// cleaned, the same result for any thread count. Shapes built in code.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "heatcvt/dual_mesh.h"
+#include "heatcvt/mesh.h"
+#include "heatcvt/mesher/compaction.h"
+#include "heatcvt/mesher/isotropic_remesh.h"
+#include "heatcvt/mesher/projector.h"
+#include "heatcvt/validate.h"
+#include "test_support.h"
+
+namespace heatcvt {
+namespace {
+
+// The working mesh of a triangle mesh, its vertices projected onto `surface`.
+WorkingMesh working(const TriangleMesh& m, const SurfaceProjector& surface) {
+  WorkingMesh w(m.V, Eigen::MatrixX3d::Zero(m.V.rows(), 3), std::vector<int>(m.V.rows(), -1));
+  for (Eigen::Index v = 0; v < m.V.rows(); ++v) {
+    Eigen::Vector3d p, n;
+    surface.project(m.V.row(v).transpose(), w.anchor[v], p, n);
+    w.V.row(v) = p.transpose();
+    w.N.row(v) = n.transpose();
+  }
+  std::vector<MeshFace> faces;
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f) faces.push_back({m.F(f, 0), m.F(f, 1), m.F(f, 2)});
+  w.set_faces(faces);
+  return w;
+}
+
+ValidationReport validate_open(const TriangleMesh& m) {
+  ValidationOptions o;
+  o.require_closed = false;
+  return validate_triangle_mesh(m.V, m.F, o);
+}
+
+IsotropicRemeshOptions sized_to(int target) {
+  IsotropicRemeshOptions o;
+  o.target_vertices = target;
+  return o;
+}
+
+// Grid of n×n quads on [0,1]² with faces of the border cells removed at random, each only where
+// the rest stays a manifold with one border loop: a ragged border at the grid spacing.
+TriangleMesh ragged_square(int n, unsigned seed) {
+  TriangleMesh m = test::grid(n);
+  std::mt19937 rng(seed);
+  ValidationOptions topology_only;
+  topology_only.require_closed = false;
+  topology_only.check_self_intersections = false;
+  for (Eigen::Index f = m.F.rows() - 1; f >= 0; --f) {
+    const Eigen::Vector3d c = (m.V.row(m.F(f, 0)) + m.V.row(m.F(f, 1)) + m.V.row(m.F(f, 2))).transpose() / 3.0;
+    if (std::min({c.x(), 1 - c.x(), c.y(), 1 - c.y()}) > 1.0 / n || rng() % 3 != 0) continue;
+    Eigen::MatrixX3i rest(m.F.rows() - 1, 3);
+    rest << m.F.topRows(f), m.F.bottomRows(m.F.rows() - f - 1);
+    const ValidationReport v = validate_triangle_mesh(m.V, rest, topology_only);
+    if (v.ok() && v.boundary_loops == 1 && v.vertices == m.V.rows()) m.F = rest;
+  }
+  return m;
+}
+
+TEST(IsotropicRemesh, CoarseSphereIsRefinedToTheCountWithTheShapeTargets) {
+  const TriangleMesh fine = test::icosphere(5);
+  const MeshSurfaceProjector surface(fine.V, fine.F);
+  WorkingMesh w = working(test::icosphere(2), surface);  // 162 vertices
+  MesherStats stats;
+  ASSERT_TRUE(needs_sizing(w, sized_to(1000)));
+  ASSERT_TRUE(size_to_target(w, surface, sized_to(1000), stats));
+  const TriangleMesh m = compact_mesh(w);
+  const ValidationReport v = validate_open(m);
+  EXPECT_TRUE(v.ok()) << v.summary();
+  EXPECT_EQ(v.genus, 0);
+  EXPECT_EQ(v.boundary_loops, 0);
+  EXPECT_NEAR(m.V.rows(), 1000, 10);  // within half the 2 % tolerance
+  const TriangleQuality q = triangle_quality(m.V, m.F);
+  EXPECT_GE(q.min_angle_deg, 25.0);
+  EXPECT_GE(q.mean_min_angle_deg, 52.0);
+  for (Eigen::Index i = 0; i < m.V.rows(); ++i) EXPECT_NEAR(m.V.row(i).norm(), 1.0, 2e-3);  // on icosphere(5)
+}
+
+TEST(IsotropicRemesh, TorusIsCoarsenedToTheCountAndKeepsItsHandle) {
+  const TriangleMesh torus = test::torus(60, 30);
+  const MeshSurfaceProjector surface(torus.V, torus.F);
+  WorkingMesh w = working(torus, surface);  // 1,800 vertices
+  MesherStats stats;
+  ASSERT_TRUE(size_to_target(w, surface, sized_to(500), stats));
+  const TriangleMesh m = compact_mesh(w);
+  const ValidationReport v = validate_open(m);
+  EXPECT_TRUE(v.ok()) << v.summary();
+  EXPECT_EQ(v.genus, 1);
+  EXPECT_EQ(v.components, 1);
+  EXPECT_EQ(v.boundary_loops, 0);
+  EXPECT_NEAR(m.V.rows(), 500, 5);
+  EXPECT_GE(triangle_quality(m.V, m.F).mean_min_angle_deg, 52.0);
+}
+
+TEST(IsotropicRemesh, RaggedBorderIsResampledAndKeepsItsLoop) {
+  const TriangleMesh plane = test::grid(40);
+  const MeshSurfaceProjector surface(plane.V, plane.F);
+  const TriangleMesh ragged = ragged_square(16, 7);
+  ASSERT_TRUE(validate_open(ragged).ok());
+  ASSERT_EQ(validate_open(ragged).boundary_loops, 1);
+  ASSERT_LT(triangle_quality(ragged.V, ragged.F).boundary_min_angle_deg, 46.0);  // right triangles and notches
+  WorkingMesh w = working(ragged, surface);
+  MesherStats stats;
+  ASSERT_TRUE(size_to_target(w, surface, sized_to(400), stats));
+  const TriangleMesh m = compact_mesh(w);
+  const ValidationReport v = validate_open(m);
+  EXPECT_TRUE(v.ok()) << v.summary();
+  EXPECT_EQ(v.boundary_loops, 1);
+  EXPECT_EQ(v.components, 1);
+  EXPECT_NEAR(m.V.rows(), 400, 4);
+  const TriangleQuality q = triangle_quality(m.V, m.F);
+  EXPECT_GE(q.boundary_min_angle_deg, 25.0);
+  EXPECT_GE(q.min_angle_deg, 25.0);
+  EXPECT_GE(q.mean_min_angle_deg, 52.0);
+  // The border stays within one target edge length of the input's border (not drawn in).
+  const double spacing = std::sqrt(2.0 / (std::sqrt(3.0) * 400));
+  const WorkingMesh input = working(ragged, surface);
+  const BorderLinks in_border = border_links(input), out_border = border_links(w);
+  for (int i = 0; i < w.num_vertices(); ++i) {
+    if (!out_border.on(i)) continue;
+    double nearest = 1e9;
+    for (int j = 0; j < input.num_vertices(); ++j)
+      if (in_border.on(j)) nearest = std::min(nearest, (w.V.row(i) - input.V.row(j)).norm());
+    EXPECT_LE(nearest, spacing) << "border vertex " << i;
+  }
+  for (Eigen::Index i = 0; i < m.V.rows(); ++i) EXPECT_NEAR(m.V(i, 2), 0.0, 1e-12);
+}
+
+TEST(IsotropicRemesh, FlyingFacesAcrossADepthJumpAreRemoved) {
+  // Two parallel sheets (z = 0 and z = 0.5) as the surface; the mesh is both grids plus a strip
+  // of faces bridging their facing edges (what a hole fill across a depth jump makes).
+  const TriangleMesh lower = test::grid(10, 0, 1, 0, 1), upper = test::grid(10, 1, 2, 0, 1);
+  TriangleMesh both;
+  both.V.resize(lower.V.rows() + upper.V.rows(), 3);
+  both.V << lower.V, upper.V;
+  both.V.bottomRows(upper.V.rows()).col(2).setConstant(0.5);
+  const int off = static_cast<int>(lower.V.rows());
+  std::vector<Eigen::Vector3i> faces;
+  for (Eigen::Index f = 0; f < lower.F.rows(); ++f) faces.push_back(lower.F.row(f).transpose());
+  for (Eigen::Index f = 0; f < upper.F.rows(); ++f) faces.push_back(upper.F.row(f).transpose() + Eigen::Vector3i::Constant(off));
+  const TriangleMesh surface_mesh = [&] {
+    TriangleMesh s;
+    s.V = both.V;
+    s.F.resize(static_cast<Eigen::Index>(faces.size()), 3);
+    for (size_t f = 0; f < faces.size(); ++f) s.F.row(static_cast<Eigen::Index>(f)) = faces[f].transpose();
+    return s;
+  }();
+  // Bridge: the lower grid's column x = 1 (vertex 11 j + 10) to the upper grid's x = 1 (11 j).
+  for (int j = 0; j < 10; ++j) {
+    const int a = 11 * j + 10, b = 11 * (j + 1) + 10, c = off + 11 * j, d = off + 11 * (j + 1);
+    faces.push_back({a, c, b});
+    faces.push_back({b, c, d});
+  }
+  both.F.resize(static_cast<Eigen::Index>(faces.size()), 3);
+  for (size_t f = 0; f < faces.size(); ++f) both.F.row(static_cast<Eigen::Index>(f)) = faces[f].transpose();
+  const MeshSurfaceProjector surface(surface_mesh.V, surface_mesh.F);
+  WorkingMesh w = working(both, surface);
+  MesherStats stats;
+  EXPECT_EQ(remove_flying_faces(w, surface, sized_to(242)), 20);
+  ASSERT_TRUE(size_to_target(w, surface, sized_to(242), stats));
+  for (const MeshFace& f : w.faces()) {
+    const double zmin = std::min({w.V(f[0], 2), w.V(f[1], 2), w.V(f[2], 2)});
+    const double zmax = std::max({w.V(f[0], 2), w.V(f[1], 2), w.V(f[2], 2)});
+    EXPECT_LT(zmax - zmin, 1e-9) << "a face still spans the jump";
+  }
+  const TriangleMesh m = compact_mesh(w);
+  EXPECT_EQ(validate_open(m).components, 2);
+  EXPECT_NEAR(m.V.rows(), 242, 3);
+}
+
+TEST(IsotropicRemesh, MeshesMeetingTheTargetsAreLeftAlone) {
+  const TriangleMesh fine = test::icosphere(5);
+  const MeshSurfaceProjector surface(fine.V, fine.F);
+  WorkingMesh w = working(test::icosphere(3), surface);  // 642 vertices, φmin 50°+
+  const WorkingMesh::Checkpoint before = w.checkpoint();
+  MesherStats stats;
+  EXPECT_FALSE(needs_sizing(w, sized_to(645)));
+  EXPECT_FALSE(size_to_target(w, surface, sized_to(645), stats));
+  EXPECT_EQ(w.V, before.V);
+  EXPECT_EQ(w.faces(), before.faces);
+  IsotropicRemeshOptions off;  // target 0: the stage is off
+  EXPECT_FALSE(size_to_target(w, surface, off, stats));
+}
+
+TEST(IsotropicRemesh, SameResultForAnyThreadCount) {
+  const TriangleMesh plane = test::grid(40);
+  const MeshSurfaceProjector surface(plane.V, plane.F);
+  const TriangleMesh ragged = ragged_square(12, 3);
+  std::vector<WorkingMesh> results;
+  for (int threads : test::kThreadCounts) {
+    WorkingMesh w = working(ragged, surface);
+    IsotropicRemeshOptions o = sized_to(300);
+    o.threads = threads;
+    MesherStats stats;
+    ASSERT_TRUE(size_to_target(w, surface, o, stats));
+    results.push_back(w);
+  }
+  for (size_t i = 1; i < results.size(); ++i) {
+    EXPECT_EQ(results[i].V, results[0].V);
+    EXPECT_EQ(results[i].faces(), results[0].faces());
+  }
+}
+
+}  // namespace
+}  // namespace heatcvt
