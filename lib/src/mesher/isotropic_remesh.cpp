@@ -10,6 +10,8 @@
 
 #include "heatcvt/mesher/manifold_extraction.h"
 #include "heatcvt/mesher/mesh_checks.h"
+#include "heatcvt/mesher/orientation.h"
+#include "heatcvt/mesher/sliver_collapse.h"
 #include "heatcvt/mesher/tangential_relaxation.h"
 
 namespace heatcvt {
@@ -340,24 +342,46 @@ class Sizer {
     freeze_around(crossings_);
   }
 
-  void run() {
-    clean_border();
+  // With `reshape`, the border cleaning and the remeshing rounds; then the count adjusted and
+  // the polish (all that a mesh of the right shape but the wrong count gets).
+  void run(bool reshape) {
     double length = std::sqrt(2.0 * area() / (std::sqrt(3.0) * o_.target_vertices));
-    for (int round = 0; round < o_.rounds && length > 0; ++round) {
-      attempt([&] {
-        split_edges(mesh_, surface_, o_, frozen(), o_.long_factor * length, -1);
-        Collapser(mesh_, surface_, o_, frozen(), o_.long_factor * length).run(o_.short_factor * length, -1);
-        flip_and_relax();
-      });
-      // Borders and pieces make the equilateral estimate off: correct it by the count reached.
-      length *= std::sqrt(static_cast<double>(vertices_in_faces(mesh_)) / o_.target_vertices);
+    if (reshape) {
+      clean_border();
+      for (int round = 0; round < o_.rounds && length > 0; ++round) {
+        attempt([&] {
+          split_edges(mesh_, surface_, o_, frozen(), o_.long_factor * length, -1);
+          Collapser(mesh_, surface_, o_, frozen(), o_.long_factor * length).run(o_.short_factor * length, -1);
+          flip_and_relax();
+        });
+        // Borders and pieces make the equilateral estimate off: correct it by the count reached.
+        length *= std::sqrt(static_cast<double>(vertices_in_faces(mesh_)) / o_.target_vertices);
+      }
+      clean_border();
     }
-    clean_border();
     adjust_count(o_.long_factor * length);
     attempt([&] { final_polish(); });
+    // Slivers the polish could not open: flat ones along the border trimmed, the others'
+    // shortest edges collapsed; the count is restored and polished once more.
+    if (figures_below_target()) {
+      attempt([&] {
+        trim_boundary_slivers(mesh_, o_.border_slivers);
+        stats_.collapsed_edges += collapse_slivers(mesh_, surface_, o_.slivers, stats_);
+      });
+      stats_.removed_triangles += remove_small_pieces(mesh_, o_.min_piece_faces, o_.min_piece_vertex_fraction,
+                                                      &stats_.pieces_removed);  // cut off by the collapses
+      adjust_count(o_.long_factor * length);
+      attempt([&] { final_polish(); });
+    }
   }
 
  private:
+  bool figures_below_target() const {
+    for (const MeshFace& f : mesh_.faces())
+      if (face_min_angle(mesh_, f) < o_.min_angle_deg * kDegree) return true;
+    return false;
+  }
+
   // Notches closed, spikes collapsed, ears cut: the border's noise at the site spacing.
   void clean_border() {
     for (int pass = 0; pass < 3; ++pass) {
@@ -467,9 +491,18 @@ class Sizer {
 }  // namespace
 
 int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o) {
+  // Only pieces with a border: a closed piece encloses a volume and spans no depth jump (its
+  // steep faces are caps of thin parts, which stay).
+  const FaceComponents pieces = face_components(mesh, true);
+  const BorderLinks border = border_links(mesh);
+  std::vector<char> open(pieces.size.size(), 0);
+  for (int id = 0; id < mesh.num_faces(); ++id)
+    for (int v : mesh.face(id))
+      if (border.on(v)) open[pieces.of_face[id]] = 1;
   std::vector<char> flying(mesh.num_faces(), 0);
   for (int id = 0; id < mesh.num_faces(); ++id) {
     const MeshFace& f = mesh.face(id);
+    if (!open[pieces.of_face[id]]) continue;
     const Eigen::Vector3d a = mesh.V.row(f[0]), b = mesh.V.row(f[1]), c = mesh.V.row(f[2]);
     const double longest = std::max({(a - b).norm(), (b - c).norm(), (c - a).norm()});
     Eigen::Vector3d pos, nrm;
@@ -483,24 +516,63 @@ int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, cons
   return removed > 0 ? removed + make_vertices_manifold(mesh) : 0;
 }
 
-bool needs_sizing(const WorkingMesh& mesh, const IsotropicRemeshOptions& options) {
-  if (options.target_vertices <= 0 || mesh.empty()) return false;
-  const int nv = vertices_in_faces(mesh);
-  if (std::abs(nv - options.target_vertices) > options.count_tolerance * options.target_vertices) return true;
-  double min_angle = M_PI, sum = 0;
+namespace {
+
+// Vertex count and shape of a mesh, as the sizing's targets measure them.
+struct SizingFigures {
+  int vertices = 0;
+  double min_angle = M_PI, mean_angle = 0;
+  double below = 0;  ///< fraction of the faces with a smallest angle below the min_angle_deg target
+};
+
+SizingFigures figures(const WorkingMesh& mesh, const IsotropicRemeshOptions& o) {
+  SizingFigures q;
+  q.vertices = vertices_in_faces(mesh);
   for (const MeshFace& f : mesh.faces()) {
     const double a = face_min_angle(mesh, f);
-    min_angle = std::min(min_angle, a);
-    sum += a;
+    q.min_angle = std::min(q.min_angle, a);
+    q.mean_angle += a;
+    q.below += a < o.min_angle_deg * kDegree;
   }
-  return min_angle < options.min_angle_deg * kDegree || sum / mesh.num_faces() < options.mean_angle_deg * kDegree;
+  if (!mesh.empty()) q.mean_angle /= mesh.num_faces(), q.below /= mesh.num_faces();
+  return q;
+}
+
+// Whether `after` is no worse than `before` on any target: the count is within the tolerance or
+// nearer; φmin meets its target if it did, else the share of faces below it is no larger; φm
+// meets its target or is no lower than before.
+bool no_worse(const SizingFigures& after, const SizingFigures& before, const IsotropicRemeshOptions& o) {
+  const double slack = o.count_tolerance * o.target_vertices;
+  const int err_after = std::abs(after.vertices - o.target_vertices), err_before = std::abs(before.vertices - o.target_vertices);
+  const bool count = err_after <= slack || err_after <= err_before;
+  const double target = o.min_angle_deg * kDegree;
+  const bool min_angle = before.min_angle >= target ? after.min_angle >= target : after.below <= before.below;
+  const bool mean_angle = after.mean_angle >= std::min(before.mean_angle, o.mean_angle_deg * kDegree) - 1e-12;
+  return count && min_angle && mean_angle;
+}
+
+}  // namespace
+
+bool needs_sizing(const WorkingMesh& mesh, const IsotropicRemeshOptions& options) {
+  if (options.target_vertices <= 0 || mesh.empty()) return false;
+  const SizingFigures q = figures(mesh, options);
+  return std::abs(q.vertices - options.target_vertices) > options.count_tolerance * options.target_vertices ||
+         q.min_angle < options.min_angle_deg * kDegree || q.mean_angle < options.mean_angle_deg * kDegree;
 }
 
 bool size_to_target(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options,
                     MesherStats& stats) {
   if (!needs_sizing(mesh, options)) return false;
-  Sizer(mesh, surface, options, stats).run();
-  return true;
+  const WorkingMesh::Checkpoint before = mesh.checkpoint();
+  const SizingFigures figures_before = figures(mesh, options);
+  const int flips_before = stats.flipped_edges;
+  const bool shape_met = figures_before.min_angle >= options.min_angle_deg * kDegree &&
+                         figures_before.mean_angle >= options.mean_angle_deg * kDegree;
+  Sizer(mesh, surface, options, stats).run(!shape_met);
+  if (no_worse(figures(mesh, options), figures_before, options)) return true;
+  mesh.rollback(before);
+  stats.flipped_edges = flips_before;
+  return false;
 }
 
 }  // namespace heatcvt

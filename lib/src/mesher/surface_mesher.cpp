@@ -72,6 +72,8 @@ TriangleMesh finish_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, con
       remove_small_pieces(mesh, options.min_piece_faces, options.min_piece_vertex_fraction, &stats.pieces_removed);
   IsotropicRemeshOptions sizing = options.sizing;
   sizing.threads = options.threads;
+  sizing.min_piece_faces = options.min_piece_faces;
+  sizing.min_piece_vertex_fraction = options.min_piece_vertex_fraction;
   // The hole policy decides what the sizing may open or close: no flying face is removed where a
   // watertight mesh is asked for, no notch closed where no surface may be invented.
   if (options.holes.policy == HolePolicy::fill) sizing.remove_flying = false;

@@ -11,6 +11,7 @@
 #include "heatcvt/mesher/edge_flips.h"
 #include "heatcvt/mesher/mesher_stats.h"
 #include "heatcvt/mesher/projector.h"
+#include "heatcvt/mesher/sliver_collapse.h"
 #include "heatcvt/mesher/working_mesh.h"
 
 namespace heatcvt {
@@ -67,6 +68,15 @@ struct IsotropicRemeshOptions {
   /// Rounds of max-min-angle flips + angle polish after the sizing. Default 6.
   int polish_cycles = 6;
   AnglePolishOptions angle;  ///< the angle polish of the last step
+  /// Slivers left after the polish: flat ones along the border trimmed, the others collapsed;
+  /// then the count is restored and the polish repeated.
+  BoundaryTrimOptions border_slivers;
+  SliverCollapseOptions slivers;
+  /// Pieces the collapses cut off are removed as remove_small_pieces() does with these (the
+  /// surface mesher sets them to its own min_piece_faces and min_piece_vertex_fraction).
+  /// Defaults 20 and 0.01.
+  int min_piece_faces = 20;
+  double min_piece_vertex_fraction = 0.01;
   FlipOptions flips;         ///< flip rules (max_passes and valence_mode are set per call)
   int threads = 0;           ///< 0 = all cores; results do not depend on it. Default 0.
 };
@@ -75,24 +85,29 @@ struct IsotropicRemeshOptions {
 /// size_to_target() would work on it.
 bool needs_sizing(const WorkingMesh& mesh, const IsotropicRemeshOptions& options);
 
-/// Removes the faces that do not lie on the surface: their centroid projects farther than
+/// Removes the faces of open pieces (pieces with a border) that do not lie on the surface: their centroid projects farther than
 /// options.max_face_offset times their longest edge away (they span a depth jump or the gap
 /// between two sheets); then the smaller fans of the vertices that left pinched
 /// (make_vertices_manifold()). Returns the faces removed.
 int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options);
 
-/// Remeshes `mesh` on `surface` to options.target_vertices vertices when needs_sizing(): the
-/// the target edge length L comes from the mesh's area (V ≈ 2A / (√3 L²) for equilateral triangles),
-/// then `rounds` of: edges longer than long_factor·L split at their midpoint projected to the
-/// surface (border edges too), edges shorter than short_factor·L collapsed (link condition; an
-/// interior vertex into a border one; never an inner edge between two border vertices, never a
-/// border corner moved), valence flips towards 6 inside and towards 1 + (border angle / 60°) on
-/// the border, and tangential relaxation (border vertices slide along their border's chord). The
-/// count is then brought within count_tolerance / 2 of the target by splitting the longest or
-/// collapsing the shortest edges, ears are cut, and angle polish + max-min-angle flips finish.
+/// Remeshes `mesh` on `surface` to options.target_vertices vertices when needs_sizing().
+/// Where the shape targets are missed, the border is cleaned (notches closed, spikes collapsed,
+/// ears cut) and the target edge length L comes from the mesh's area (V ≈ 2A / (√3 L²) for
+/// equilateral triangles) for `rounds` of: edges longer than long_factor·L split at their midpoint
+/// projected to the surface (border edges too), edges shorter than short_factor·L collapsed (link
+/// condition; an interior vertex into a border one; never an inner edge between two border
+/// vertices; border corners stay), valence flips towards 6 inside and towards 1 + (surface angle
+/// / 60°) on the border, and tangential relaxation (border vertices towards the middle of their
+/// border neighbours); the border is cleaned again. Then, and alone where only the count is off,
+/// the count is brought within count_tolerance / 2 of the target by splitting the longest or
+/// collapsing the shortest edges, and angle polish + max-min-angle flips finish.
 /// Faces keep a consistent orientation and the mesh its topology (no collapse or split changes
-/// it). When the result self-intersects, the mesh is left as it was. Returns whether the mesh
-/// was remeshed.
+/// it); a step that makes faces cross is redone with the region around them frozen. The result
+/// is kept only when it is no worse on any target (the count within the tolerance or nearer to
+/// it; φmin at its target if it was, else no larger a share of faces below the target; φm at its
+/// target or no lower than before); otherwise the mesh is left as it was.
+/// Returns whether the mesh was remeshed.
 bool size_to_target(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options,
                     MesherStats& stats);
 
