@@ -83,11 +83,13 @@ struct RemeshOptions {
   /// Options of those stages (threads: cvt.threads is used). Default SurfaceMesherOptions{} with
   /// holes.policy = keep: the boundary loops of an input mesh are real, so only holes inside the
   /// input surface (missing dual triangles) are closed; and min_piece_vertex_fraction = 0: every
-  /// component of an input mesh is real, however small.
+  /// component of an input mesh is real, however small; and sizing.remove_flying = false: no face
+  /// of the dual is taken for one across a depth jump.
   SurfaceMesherOptions mesher = [] {
     SurfaceMesherOptions m;
     m.holes.policy = HolePolicy::keep;
     m.min_piece_vertex_fraction = 0;
+    m.sizing.remove_flying = false;  // an input mesh's faces are its surface
     return m;
   }();
 };

@@ -279,14 +279,14 @@ std::vector<int> target_valences(const WorkingMesh& mesh) {
   return target;
 }
 
-// Cuts the ears of the border: faces whose corner v is on the border with no other face and an
+// Cuts the ears of the border (none at a frozen vertex): faces whose corner v is on the border with no other face and an
 // angle below ear_angle_deg there; the other two corners keep their faces.
-int cut_ears(WorkingMesh& mesh, const IsotropicRemeshOptions& o) {
+int cut_ears(WorkingMesh& mesh, const IsotropicRemeshOptions& o, const std::vector<char>& frozen) {
   const std::vector<std::vector<int>> vf = mesh.vertex_faces();
-  std::vector<char> drop(mesh.num_faces(), 0), touched(mesh.num_vertices(), 0);
+  std::vector<char> drop(mesh.num_faces(), 0), touched = frozen;
   int cut = 0;
   for (int v = 0; v < mesh.num_vertices(); ++v) {
-    if (vf[v].size() != 1) continue;
+    if (vf[v].size() != 1 || touched[v]) continue;
     const int g = vf[v][0];
     const MeshFace& f = mesh.face(g);
     int k = 0;
@@ -304,13 +304,13 @@ int cut_ears(WorkingMesh& mesh, const IsotropicRemeshOptions& o) {
   return cut;
 }
 
-// Closes the notches of the border: a simple border vertex v whose two border edges v→prev and
+// Closes the notches of the border (none at a frozen vertex): a simple border vertex v whose two border edges v→prev and
 // v→next make an angle below notch_angle_deg, with the surface on the far side (surface angle
 // above π), gets the face (v, prev, next) when it faces like v's normal. Returns the faces added.
-int fill_notches(WorkingMesh& mesh, const IsotropicRemeshOptions& o) {
+int fill_notches(WorkingMesh& mesh, const IsotropicRemeshOptions& o, const std::vector<char>& frozen) {
   const BorderLinks border = border_links(mesh);
   const std::vector<double> angle = surface_angles(mesh);
-  std::vector<char> touched(mesh.num_vertices(), 0);
+  std::vector<char> touched = frozen;
   int added = 0;
   for (int v = 0; v < mesh.num_vertices(); ++v) {
     if (!border.simple(v) || !(angle[v] > M_PI)) continue;
@@ -386,11 +386,11 @@ class Sizer {
   void clean_border() {
     for (int pass = 0; pass < 3; ++pass) {
       int changed = 0;
-      if (o_.fill_notches) attempt([&] { changed += fill_notches(mesh_, o_); });
+      if (o_.fill_notches) attempt([&] { changed += fill_notches(mesh_, o_, frozen()); });
       attempt([&] {
         changed += Collapser(mesh_, surface_, o_, frozen(), std::numeric_limits<double>::infinity()).run_spikes(surface_angles(mesh_));
       });
-      attempt([&] { changed += cut_ears(mesh_, o_); });
+      attempt([&] { changed += cut_ears(mesh_, o_, frozen()); });
       if (changed == 0) break;
     }
   }
@@ -405,6 +405,16 @@ class Sizer {
   const std::vector<char>& frozen() {
     frozen_.resize(mesh_.num_vertices(), 0);
     return frozen_;
+  }
+
+  // Vertices with no frozen vertex in their one-ring: a flip of an edge at one of them changes
+  // only faces of unfrozen vertices.
+  std::vector<char> flippable() {
+    std::vector<char> ok(mesh_.num_vertices(), 1);
+    const std::vector<char>& fz = frozen();
+    for (const MeshFace& f : mesh_.faces())
+      if (fz[f[0]] || fz[f[1]] || fz[f[2]]) ok[f[0]] = ok[f[1]] = ok[f[2]] = 0;
+    return ok;
   }
 
   // Freezes the vertices of `faces` and of every face touching them.
@@ -441,8 +451,7 @@ class Sizer {
     f.valence_mode = true;
     f.max_passes = 3;
     const std::vector<int> target = target_valences(mesh_);
-    std::vector<char> movable(mesh_.num_vertices());
-    for (int v = 0; v < mesh_.num_vertices(); ++v) movable[v] = !frozen()[v];
+    const std::vector<char> movable = flippable();
     stats_.flipped_edges += flip_edges(mesh_, f, &movable, &target);
     RelaxationBorder border;
     border.slide = true;
@@ -473,10 +482,11 @@ class Sizer {
     FlipOptions f = o_.flips;
     f.valence_mode = false;
     f.max_passes = 5;
-    stats_.flipped_edges += flip_edges(mesh_, f);
+    const std::vector<char> movable = flippable();
+    stats_.flipped_edges += flip_edges(mesh_, f, &movable);
     for (int cycle = 0; cycle < o_.polish_cycles; ++cycle) {
       angle_polish(mesh_, surface_, 2, frozen(), o_.angle, o_.threads);
-      stats_.flipped_edges += flip_edges(mesh_, f);
+      stats_.flipped_edges += flip_edges(mesh_, f, &movable);
     }
   }
 
@@ -509,7 +519,13 @@ int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, cons
     int hint = mesh.anchor[f[0]];
     const Eigen::Vector3d g = (a + b + c) / 3.0;
     surface.project(g, hint, pos, nrm);
-    flying[id] = !(pos.allFinite() && (pos - g).norm() <= o.max_face_offset * longest);
+    if (pos.allFinite() && (pos - g).norm() <= o.max_face_offset * longest) continue;
+    // ... and stands across the surface: tilted from its corners' normals by more than
+    // min_flying_tilt_deg (a coarse face over a curved part is off the surface but not across it).
+    const Eigen::Vector3d fn = (b - a).cross(c - a);
+    double facing = 0;
+    for (int v : f) facing += std::abs(fn.normalized().dot(mesh.N.row(v).transpose())) / 3.0;
+    flying[id] = !(fn.norm() > 0) || facing < std::cos(o.min_flying_tilt_deg * kDegree);
   }
   // Vertices left with several fans keep their largest (make_vertices_manifold()).
   const int removed = mesh.remove_faces(flying);
@@ -566,9 +582,12 @@ bool size_to_target(WorkingMesh& mesh, const SurfaceProjector& surface, const Is
   const WorkingMesh::Checkpoint before = mesh.checkpoint();
   const SizingFigures figures_before = figures(mesh, options);
   const int flips_before = stats.flipped_edges;
+  // A mesh of the right shape whose count is off by little only gets the count adjusted.
   const bool shape_met = figures_before.min_angle >= options.min_angle_deg * kDegree &&
                          figures_before.mean_angle >= options.mean_angle_deg * kDegree;
-  Sizer(mesh, surface, options, stats).run(!shape_met);
+  const bool count_near = std::abs(figures_before.vertices - options.target_vertices) <=
+                          options.reshape_count_error * options.target_vertices;
+  Sizer(mesh, surface, options, stats).run(!(shape_met && count_near));
   if (no_worse(figures(mesh, options), figures_before, options)) return true;
   mesh.rollback(before);
   stats.flipped_edges = flips_before;

@@ -65,11 +65,13 @@ void mesh_from_candidates(WorkingMesh& mesh, const DualCandidates& candidates, c
   timer.done("boundary sliver trim");
 }
 
-TriangleMesh finish_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, const SurfaceMesherOptions& options,
-                         MesherStats& stats) {
-  StageTimer timer(stats);
-  stats.removed_triangles +=
-      remove_small_pieces(mesh, options.min_piece_faces, options.min_piece_vertex_fraction, &stats.pieces_removed);
+namespace {
+
+// The sizing stage: flying faces removed with the small pieces they cut off (so that the count is
+// shared among the pieces that stay), then size_to_target(). Where the sizing is then needed but
+// refused (it would be worse on a target), the mesh is left as it came, flying faces and all.
+bool size_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, const SurfaceMesherOptions& options,
+               MesherStats& stats) {
   IsotropicRemeshOptions sizing = options.sizing;
   sizing.threads = options.threads;
   sizing.min_piece_faces = options.min_piece_faces;
@@ -78,14 +80,30 @@ TriangleMesh finish_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, con
   // watertight mesh is asked for, no notch closed where no surface may be invented.
   if (options.holes.policy == HolePolicy::fill) sizing.remove_flying = false;
   if (options.holes.policy == HolePolicy::keep) sizing.fill_notches = false;
-  // Flying faces go first, with the small pieces they cut off, so that the sizing shares the
-  // vertex count among the pieces that stay.
-  if (sizing.remove_flying && needs_sizing(mesh, sizing)) {
+  if (!needs_sizing(mesh, sizing)) return false;
+  const WorkingMesh::Checkpoint unsized = mesh.checkpoint();
+  const MesherStats stats_unsized = stats;
+  if (sizing.remove_flying) {
     stats.flying_faces += remove_flying_faces(mesh, surface, sizing);
     stats.removed_triangles += remove_small_pieces(mesh, options.min_piece_faces, options.min_piece_vertex_fraction,
                                                    &stats.pieces_removed);
   }
-  stats.sized = size_to_target(mesh, surface, sizing, stats);
+  if (size_to_target(mesh, surface, sizing, stats)) return true;
+  if (needs_sizing(mesh, sizing) && stats.flying_faces > stats_unsized.flying_faces) {
+    mesh.rollback(unsized);
+    stats = stats_unsized;
+  }
+  return false;
+}
+
+}  // namespace
+
+TriangleMesh finish_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, const SurfaceMesherOptions& options,
+                         MesherStats& stats) {
+  StageTimer timer(stats);
+  stats.removed_triangles +=
+      remove_small_pieces(mesh, options.min_piece_faces, options.min_piece_vertex_fraction, &stats.pieces_removed);
+  stats.sized = size_mesh(mesh, surface, options, stats);
   timer.done("sizing");
   stats.faces_turned_outward += orient_closed_pieces_outward(mesh);
   if (mesh.empty())

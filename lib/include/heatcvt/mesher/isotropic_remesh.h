@@ -28,6 +28,9 @@ struct IsotropicRemeshOptions {
   double min_angle_deg = 25;
   /// ... or the mean of the triangles' smallest angles (φm) is below this. Default 52°.
   double mean_angle_deg = 52;
+  /// A mesh that meets the shape targets and whose count is off by at most this fraction of the
+  /// target only has its count adjusted (no remeshing rounds). Default 0.05.
+  double reshape_count_error = 0.05;
   /// Split, collapse, flip and relax rounds; the target edge length is corrected after each
   /// round by the ratio of the vertex count to the target. Default 8.
   int rounds = 8;
@@ -43,6 +46,9 @@ struct IsotropicRemeshOptions {
   /// not lie on it (they span a depth jump or the gap between two sheets: flying triangles) and
   /// are removed first. Default 0.25.
   double max_face_offset = 0.25;
+  /// ... and whose normal is tilted from its corners' surface normals by more than this on
+  /// average (it stands across the surface rather than along it). Default 60°.
+  double min_flying_tilt_deg = 60;
   /// Remove the flying faces before sizing (false where a watertight result is asked for: hole
   /// policy fill). Default true.
   bool remove_flying = true;
@@ -85,10 +91,11 @@ struct IsotropicRemeshOptions {
 /// size_to_target() would work on it.
 bool needs_sizing(const WorkingMesh& mesh, const IsotropicRemeshOptions& options);
 
-/// Removes the faces of open pieces (pieces with a border) that do not lie on the surface: their centroid projects farther than
-/// options.max_face_offset times their longest edge away (they span a depth jump or the gap
-/// between two sheets); then the smaller fans of the vertices that left pinched
-/// (make_vertices_manifold()). Returns the faces removed.
+/// Removes the faces of open pieces (pieces with a border) that do not lie on the surface: their
+/// centroid projects farther than options.max_face_offset times their longest edge away and they
+/// are tilted from their corners' normals by more than options.min_flying_tilt_deg (they span a
+/// depth jump or the gap between two sheets); then the smaller fans of the vertices that left
+/// pinched (make_vertices_manifold()). Returns the faces removed.
 int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options);
 
 /// Remeshes `mesh` on `surface` to options.target_vertices vertices when needs_sizing().
@@ -99,9 +106,11 @@ int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, cons
 /// condition; an interior vertex into a border one; never an inner edge between two border
 /// vertices; border corners stay), valence flips towards 6 inside and towards 1 + (surface angle
 /// / 60°) on the border, and tangential relaxation (border vertices towards the middle of their
-/// border neighbours); the border is cleaned again. Then, and alone where only the count is off,
-/// the count is brought within count_tolerance / 2 of the target by splitting the longest or
-/// collapsing the shortest edges, and angle polish + max-min-angle flips finish.
+/// border neighbours); the border is cleaned again. Then (and alone where the shape targets are
+/// met and the count is off by at most reshape_count_error) the count is brought within
+/// count_tolerance / 2 of the target by splitting the longest or collapsing the shortest edges,
+/// angle polish + max-min-angle flips follow, and the slivers left are trimmed (flat along the
+/// border) or collapsed before the count is restored and polished once more.
 /// Faces keep a consistent orientation and the mesh its topology (no collapse or split changes
 /// it); a step that makes faces cross is redone with the region around them frozen. The result
 /// is kept only when it is no worse on any target (the count within the tolerance or nearer to
