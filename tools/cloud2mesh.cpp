@@ -112,6 +112,8 @@ cli::Json make_report(const std::string& cloud_path, const std::vector<std::stri
   j["star_triangles"] = res.star_triangles;
   j["trimmed_faces"] = res.trimmed_faces;
   j["pieces_removed"] = res.pieces_removed;
+  j["sized"] = res.sized;
+  j["flying_faces_removed"] = res.flying_faces;
   j["boundary_loops"] = res.validation.boundary_loops;
   j["components"] = res.validation.components;
   j["genus"] = res.validation.genus;
@@ -352,9 +354,10 @@ int main(int argc, char** argv) {
       for (const auto& [name, seconds] : res.stage_seconds) std::printf(" %s %.2f s;", name.c_str(), seconds);
       std::printf("\n");
       std::printf("  mesh: %ld vertices, %ld faces, %d components, %d boundary loops, genus %d; %d holes filled, "
-                  "%d unused sites, %d small pieces dropped\n",
+                  "%d unused sites, %d small pieces dropped, %d flying faces removed%s\n",
                   static_cast<long>(res.mesh.V.rows()), static_cast<long>(res.mesh.F.rows()), val.components,
-                  val.boundary_loops, val.genus, res.holes_filled, res.unused_sites, res.pieces_removed);
+                  val.boundary_loops, val.genus, res.holes_filled, res.unused_sites, res.pieces_removed,
+                  res.flying_faces, res.sized ? ", sized to -n" : "");
       std::printf("  quality: phi_min %.2f deg (boundary triangles %.2f deg), phi_m %.2f deg\n", res.min_angle_deg,
                   res.boundary_min_angle_deg, res.mean_min_angle_deg);
       if (stream)

@@ -163,6 +163,7 @@ struct ReconstructionResult {
   std::vector<std::pair<std::string, double>> stage_seconds;
   int split_edges = 0;             ///< long edges of remaining slivers split at their midpoint (on the fitted surface)
   bool sized = false;              ///< remeshed to the vertex count asked for (mesher.sizing: the dual fell short or missed the shape targets)
+  int flying_faces = 0;            ///< faces across depth jumps removed before the sizing (remove_flying_faces())
   int faces_turned_outward = 0;    ///< faces of closed pieces whose orientation was reversed (negative enclosed volume)
   int points_cvt = 0;              ///< points the CVT ran on (points_used unless cvt_points_per_site thins them)
 };
@@ -194,8 +195,11 @@ struct ReconstructionResult {
 ///     extraction ordered by witness count then smallest angle, non-manifold vertices resolved,
 ///     a second pass, hole filling (see max_hole_edges), untangling, valence-3 removal,
 ///     max-min-angle flips, the polish of `relaxation_iterations` (tangential relaxation +
-///     flips, angle polish), sliver collapse, long-edge split, small pieces removed, closed
-///     pieces outward, unused sites removed;
+///     flips, angle polish), sliver collapse, long-edge split, small pieces removed, then the
+///     sizing where the dual fell short of `sites` or missed φmin ≥ 25° or φm ≥ 52°
+///     (mesher/isotropic_remesh.h: flying faces across depth jumps removed, isotropic remeshing
+///     on the fitted surface to `sites` vertices shared among the pieces by area, kept only when
+///     no worse on any target), closed pieces outward, unused sites removed;
 ///  6. validate_triangle_mesh() (require_closed = false: open scans legitimately keep boundaries).
 /// Deterministic for a given input, options and seed, independent of `threads`.
 /// \throw InvalidInputError for empty / too small clouds, sites < 4 or > usable points, bad options.
