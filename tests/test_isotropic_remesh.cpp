@@ -13,7 +13,9 @@
 #include "heatcvt/mesh.h"
 #include "heatcvt/mesher/compaction.h"
 #include "heatcvt/mesher/isotropic_remesh.h"
+#include "heatcvt/mesher/mesh_checks.h"
 #include "heatcvt/mesher/projector.h"
+#include "heatcvt/shapes.h"
 #include "heatcvt/validate.h"
 #include "test_support.h"
 
@@ -189,6 +191,30 @@ TEST(IsotropicRemesh, MeshesMeetingTheTargetsAreLeftAlone) {
   EXPECT_EQ(w.faces(), before.faces);
   IsotropicRemeshOptions off;  // target 0: the stage is off
   EXPECT_FALSE(size_to_target(w, surface, off, stats));
+}
+
+TEST(IsotropicRemesh, FacesCrossingAtTheStartAreLeftAloneAndNoCrossingIsAdded) {
+  // Two sheets through each other (coarse, so that the sizing refines them): their crossing is
+  // frozen, every step that would make another crossing is redone around it.
+  const TriangleMesh sheets = interpenetrating_sheets_mesh(8);
+  const TriangleMesh fine = interpenetrating_sheets_mesh(40);
+  const MeshSurfaceProjector surface(fine.V, fine.F);
+  WorkingMesh w = working(sheets, surface);
+  const long crossing_before = self_intersecting_pairs(w);
+  ASSERT_GT(crossing_before, 0) << "precondition: the sheets cross";
+  const int target = 3 * static_cast<int>(sheets.V.rows());
+  MesherStats stats;
+  ASSERT_TRUE(size_to_target(w, surface, sized_to(target), stats));
+  EXPECT_LE(self_intersecting_pairs(w), crossing_before);
+  const TriangleMesh m = compact_mesh(w);
+  ValidationOptions topology_only;
+  topology_only.require_closed = false;
+  topology_only.check_self_intersections = false;
+  const ValidationReport v = validate_triangle_mesh(m.V, m.F, topology_only);
+  EXPECT_TRUE(v.ok()) << v.summary();
+  EXPECT_EQ(v.components, 2);
+  EXPECT_EQ(v.boundary_loops, 2);
+  EXPECT_NEAR(m.V.rows(), target, 0.01 * target);
 }
 
 TEST(IsotropicRemesh, SameResultForAnyThreadCount) {

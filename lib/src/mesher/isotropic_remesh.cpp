@@ -75,33 +75,51 @@ int split_edges(WorkingMesh& mesh, const SurfaceProjector& surface, const Isotro
                 const std::vector<char>& frozen, double limit, int budget) {
   std::vector<Edge> edges = mesh_edges(mesh);
   sort_edges(edges, true);
+  // The splits are chosen on the mesh as it is, then the new vertices added at once (no copy of
+  // the vertex arrays per split) and the faces edited.
+  struct Split {
+    int a, b, c, d, f1, f2, hint;
+    Eigen::Vector3d pos, nrm;
+  };
+  std::vector<Split> splits;
   std::vector<char> touched(mesh.num_faces(), 0);
-  int done = 0;
   for (const Edge& e : edges) {
-    if (!(e.length > limit) || (budget >= 0 && done >= budget)) break;
+    if (!(e.length > limit) || (budget >= 0 && static_cast<int>(splits.size()) >= budget)) break;
     const int a = e.a, b = e.b, f1 = mesh.half_edge_face(a, b), f2 = mesh.half_edge_face(b, a);
     if (f1 < 0 || touched[f1] || (f2 >= 0 && touched[f2]) || frozen[a] || frozen[b]) continue;
-    const int c = third_vertex(mesh.face(f1), a, b), d = f2 >= 0 ? third_vertex(mesh.face(f2), a, b) : -1;
-    Eigen::Vector3d pos, nrm;
-    int hint = mesh.anchor[a];
+    Split s{a, b, third_vertex(mesh.face(f1), a, b), f2 >= 0 ? third_vertex(mesh.face(f2), a, b) : -1, f1, f2,
+            mesh.anchor[a], {}, {}};
     const Eigen::Vector3d mid = 0.5 * (mesh.V.row(a) + mesh.V.row(b)).transpose();
-    surface.project(mid, hint, pos, nrm);
-    if (!pos.allFinite() || !nrm.allFinite() || !((pos - mid).norm() <= o.max_split_offset * e.length)) continue;
-    if (!split_keeps_facing(mesh, a, b, c, pos, o) || (f2 >= 0 && !split_keeps_facing(mesh, b, a, d, pos, o)))
+    surface.project(mid, s.hint, s.pos, s.nrm);
+    if (!s.pos.allFinite() || !s.nrm.allFinite() || !((s.pos - mid).norm() <= o.max_split_offset * e.length)) continue;
+    if (!split_keeps_facing(mesh, a, b, s.c, s.pos, o) || (f2 >= 0 && !split_keeps_facing(mesh, b, a, s.d, s.pos, o)))
       continue;
-    const int m = mesh.add_vertex(pos, nrm, hint);
-    mesh.replace_face(f1, {a, m, c});
-    mesh.add_face({m, b, c});
     touched[f1] = 1;
-    if (f2 >= 0) {
-      mesh.replace_face(f2, {b, m, d});
-      mesh.add_face({m, a, d});
-      touched[f2] = 1;
-    }
-    touched.resize(mesh.num_faces(), 1);
-    ++done;
+    if (f2 >= 0) touched[f2] = 1;
+    splits.push_back(s);
   }
-  return done;
+  const int first = mesh.num_vertices();
+  {
+    Eigen::MatrixX3d P(splits.size(), 3), N(splits.size(), 3);
+    std::vector<int> hints(splits.size());
+    for (size_t k = 0; k < splits.size(); ++k) {
+      P.row(k) = splits[k].pos.transpose();
+      N.row(k) = splits[k].nrm.transpose();
+      hints[k] = splits[k].hint;
+    }
+    mesh.add_vertices(P, N, hints);
+  }
+  for (size_t k = 0; k < splits.size(); ++k) {
+    const Split& s = splits[k];
+    const int m = first + static_cast<int>(k);
+    mesh.replace_face(s.f1, {s.a, m, s.c});
+    mesh.add_face({m, s.b, s.c});
+    if (s.f2 >= 0) {
+      mesh.replace_face(s.f2, {s.b, m, s.d});
+      mesh.add_face({m, s.a, s.d});
+    }
+  }
+  return static_cast<int>(splits.size());
 }
 
 // One pass of edge collapses: the edges shorter than `limit`, shortest first, at most `budget`
@@ -234,7 +252,10 @@ class Collapser {
     mesh_.V.row(keep) = pos.transpose();
     mesh_.N.row(keep) = nrm.transpose();
     mesh_.anchor[keep] = hint;
-    for (int g : shared) dead_[g] = 1;
+    for (int g : shared) {
+      dead_[g] = 1;
+      touched_[third_vertex(mesh_.face(g), a, b)] = 1;
+    }
     for (int g : ring) {
       MeshFace h = mesh_.face(g);
       for (int& v : h)
@@ -350,9 +371,11 @@ class Sizer {
       clean_border();
       for (int round = 0; round < o_.rounds && length > 0; ++round) {
         attempt([&] {
-          split_edges(mesh_, surface_, o_, frozen(), o_.long_factor * length, -1);
-          Collapser(mesh_, surface_, o_, frozen(), o_.long_factor * length).run(o_.short_factor * length, -1);
+          const int splits = split_edges(mesh_, surface_, o_, frozen(), o_.long_factor * length, -1);
+          const int collapses =
+              Collapser(mesh_, surface_, o_, frozen(), o_.long_factor * length).run(o_.short_factor * length, -1);
           flip_and_relax();
+          return splits + collapses;
         });
         // Borders and pieces make the equilateral estimate off: correct it by the count reached.
         length *= std::sqrt(static_cast<double>(vertices_in_faces(mesh_)) / o_.target_vertices);
@@ -360,18 +383,22 @@ class Sizer {
       clean_border();
     }
     adjust_count(o_.long_factor * length);
-    attempt([&] { final_polish(); });
+    attempt([&] { return final_polish(); });
     // Slivers the polish could not open: flat ones along the border trimmed, the others'
-    // shortest edges collapsed; the count is restored and polished once more.
+    // shortest edges collapsed; the pieces they cut off removed, the count restored and
+    // polished once more.
     if (figures_below_target()) {
       attempt([&] {
-        trim_boundary_slivers(mesh_, o_.border_slivers);
-        stats_.collapsed_edges += collapse_slivers(mesh_, surface_, o_.slivers, stats_);
+        const int trimmed = trim_boundary_slivers(mesh_, o_.border_slivers);
+        stats_.trimmed_faces += trimmed;
+        const int collapsed = collapse_slivers(mesh_, surface_, o_.slivers, stats_);
+        stats_.collapsed_edges += collapsed;
+        stats_.removed_triangles +=
+            remove_small_pieces(mesh_, o_.min_piece_faces, o_.min_piece_vertex_fraction, &stats_.pieces_removed);
+        return trimmed + collapsed;
       });
-      stats_.removed_triangles += remove_small_pieces(mesh_, o_.min_piece_faces, o_.min_piece_vertex_fraction,
-                                                      &stats_.pieces_removed);  // cut off by the collapses
       adjust_count(o_.long_factor * length);
-      attempt([&] { final_polish(); });
+      attempt([&] { return final_polish(); });
     }
   }
 
@@ -386,11 +413,12 @@ class Sizer {
   void clean_border() {
     for (int pass = 0; pass < 3; ++pass) {
       int changed = 0;
-      if (o_.fill_notches) attempt([&] { changed += fill_notches(mesh_, o_, frozen()); });
-      attempt([&] {
-        changed += Collapser(mesh_, surface_, o_, frozen(), std::numeric_limits<double>::infinity()).run_spikes(surface_angles(mesh_));
+      if (o_.fill_notches) changed += attempt([&] { return fill_notches(mesh_, o_, frozen()); });
+      changed += attempt([&] {
+        return Collapser(mesh_, surface_, o_, frozen(), std::numeric_limits<double>::infinity())
+            .run_spikes(surface_angles(mesh_));
       });
-      attempt([&] { changed += cut_ears(mesh_, o_, frozen()); });
+      changed += attempt([&] { return cut_ears(mesh_, o_, frozen()); });
       if (changed == 0) break;
     }
   }
@@ -428,21 +456,26 @@ class Sizer {
         for (int v : f) frozen_[v] = 1;
   }
 
-  // Runs `step`; where it makes more faces cross than crossed before, undoes it, freezes the
-  // region and runs it again (at most three times, then leaves the step out).
+  // Runs `step` (which returns how much it changed); where it makes more faces cross than
+  // crossed before, undoes it (counters too), freezes the region and runs it again, at most
+  // three times, then leaves the step out. Returns what the kept run changed (0 if none).
   template <class Step>
-  void attempt(Step step) {
+  int attempt(Step step) {
     for (int tries = 0; tries < 3; ++tries) {
       const WorkingMesh::Checkpoint before = mesh_.checkpoint();
-      const int flips = stats_.flipped_edges;
-      step();
-      const std::vector<int> bad = self_intersecting_faces(mesh_);
-      if (bad.size() <= crossings_.size()) return;
+      const MesherStats stats_before = stats_;
+      const int changed = step();
+      std::vector<int> bad = self_intersecting_faces(mesh_);
+      if (bad.size() <= crossings_.size()) {
+        crossings_ = std::move(bad);  // what the next step is measured against
+        return changed;
+      }
       freeze_around(bad);
       frozen_.resize(before.V.rows());  // vertices added by the step are gone again
       mesh_.rollback(before);
-      stats_.flipped_edges = flips;
+      stats_ = stats_before;
     }
+    return 0;
   }
 
   // Valence flips towards target_valences(), then a relaxation step with the border sliding.
@@ -467,27 +500,30 @@ class Sizer {
     for (int round = 0; round < 12; ++round) {
       const int diff = target - vertices_in_faces(mesh_);
       if (std::abs(diff) <= slack) break;
-      int changed = 0;
-      attempt([&] {
-        changed = diff > 0 ? split_edges(mesh_, surface_, o_, frozen(), 0.0, diff)
-                           : Collapser(mesh_, surface_, o_, frozen(), long_limit).run(std::numeric_limits<double>::infinity(), -diff);
+      const int changed = attempt([&] {
+        const int n = diff > 0 ? split_edges(mesh_, surface_, o_, frozen(), 0.0, diff)
+                               : Collapser(mesh_, surface_, o_, frozen(), long_limit)
+                                     .run(std::numeric_limits<double>::infinity(), -diff);
         flip_and_relax();
+        return n;
       });
       if (changed == 0) break;
     }
   }
 
-  // Max-min-angle flips and angle polish, as the mesher's polish does.
-  void final_polish() {
+  // Max-min-angle flips and angle polish, as the mesher's polish does; returns the moves and flips.
+  int final_polish() {
     FlipOptions f = o_.flips;
     f.valence_mode = false;
     f.max_passes = 5;
     const std::vector<char> movable = flippable();
-    stats_.flipped_edges += flip_edges(mesh_, f, &movable);
+    int flips = flip_edges(mesh_, f, &movable), moves = 0;
     for (int cycle = 0; cycle < o_.polish_cycles; ++cycle) {
-      angle_polish(mesh_, surface_, 2, frozen(), o_.angle, o_.threads);
-      stats_.flipped_edges += flip_edges(mesh_, f, &movable);
+      moves += angle_polish(mesh_, surface_, 2, frozen(), o_.angle, o_.threads);
+      flips += flip_edges(mesh_, f, &movable);
     }
+    stats_.flipped_edges += flips;
+    return flips + moves;
   }
 
   WorkingMesh& mesh_;
@@ -581,7 +617,7 @@ bool size_to_target(WorkingMesh& mesh, const SurfaceProjector& surface, const Is
   if (!needs_sizing(mesh, options)) return false;
   const WorkingMesh::Checkpoint before = mesh.checkpoint();
   const SizingFigures figures_before = figures(mesh, options);
-  const int flips_before = stats.flipped_edges;
+  const MesherStats stats_before = stats;
   // A mesh of the right shape whose count is off by little only gets the count adjusted.
   const bool shape_met = figures_before.min_angle >= options.min_angle_deg * kDegree &&
                          figures_before.mean_angle >= options.mean_angle_deg * kDegree;
@@ -590,7 +626,7 @@ bool size_to_target(WorkingMesh& mesh, const SurfaceProjector& surface, const Is
   Sizer(mesh, surface, options, stats).run(!(shape_met && count_near));
   if (no_worse(figures(mesh, options), figures_before, options)) return true;
   mesh.rollback(before);
-  stats.flipped_edges = flips_before;
+  stats = stats_before;
   return false;
 }
 

@@ -33,7 +33,7 @@ void tangential_relaxation(WorkingMesh& mesh, const SurfaceProjector& surface, i
     Eigen::Vector3d d = C.row(v).transpose() / W[v] - x;
     d -= d.dot(nv) * nv;
     if (border.slide && links.on(v)) {
-      if (border_turn(mesh, links, v) > corner) continue;
+      if (!links.simple(v) || border_turn(mesh, links, v) > corner) continue;
       const Eigen::Vector3d p = S.row(links.prev[v]), q = S.row(links.next[v]);
       d = 0.5 * (p + q) - x;
       d -= d.dot(nv) * nv;

@@ -25,6 +25,17 @@ int WorkingMesh::add_vertex(const Eigen::Vector3d& position, const Eigen::Vector
   return m;
 }
 
+void WorkingMesh::add_vertices(const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& normals,
+                               const std::vector<int>& anchor_hints) {
+  const Eigen::Index m = V.rows(), k = positions.rows();
+  V.conservativeResize(m + k, 3);
+  N.conservativeResize(m + k, 3);
+  V.bottomRows(k) = positions;
+  N.bottomRows(k) = normals;
+  anchor.insert(anchor.end(), anchor_hints.begin(), anchor_hints.end());
+  valence_.resize(V.rows(), 0);
+}
+
 void WorkingMesh::index_face(int f) {
   if (valence_.size() < static_cast<size_t>(V.rows())) valence_.resize(V.rows(), 0);
   const MeshFace& t = faces_[f];

@@ -42,20 +42,23 @@ struct IsotropicRemeshOptions {
   /// A split is refused where the edge's midpoint projects farther than this times the edge's
   /// length from it (the edge spans a gap or a depth jump of the surface). Default 0.25.
   double max_split_offset = 0.25;
-  /// Faces whose centroid projects to the surface farther than this times their longest edge do
-  /// not lie on it (they span a depth jump or the gap between two sheets: flying triangles) and
-  /// are removed first. Default 0.25.
+  /// remove_flying_faces(): faces whose centroid projects to the surface farther than this times
+  /// their longest edge do not lie on it (they span a depth jump or the gap between two sheets:
+  /// flying triangles). Default 0.25.
   double max_face_offset = 0.25;
   /// ... and whose normal is tilted from its corners' surface normals by more than this on
   /// average (it stands across the surface rather than along it). Default 60°.
   double min_flying_tilt_deg = 60;
-  /// Remove the flying faces before sizing (false where a watertight result is asked for: hole
-  /// policy fill). Default true.
+  /// Whether the surface mesher calls remove_flying_faces() before size_to_target() (false where
+  /// a watertight result is asked for: hole policy fill; and for an input mesh, whose faces are
+  /// its surface). size_to_target() itself never removes them. Default true.
   bool remove_flying = true;
   /// A split or collapse is refused when a ring triangle would turn by more than this. Default 45°.
   double max_normal_turn_deg = 45;
-  /// A border vertex where the border turns by more than this is a corner: relaxation leaves it
-  /// in place and collapses keep it. Default 40°.
+  /// A border vertex where the border turns by more than this (it nearly turns back) is a corner:
+  /// relaxation leaves it in place and collapses keep it; below it, border vertices move towards
+  /// the middle of their border neighbours, which smooths a ragged border at the site spacing.
+  /// Default 120°.
   double corner_turn_deg = 120;
   /// A border vertex with several faces whose surface angle (the sum of its face angles) is
   /// below this is a spike of the border (noise at the site spacing: each of its faces has a
@@ -63,13 +66,14 @@ struct IsotropicRemeshOptions {
   double spike_angle_deg = 60;
   /// A border vertex whose two border edges make an angle below this, with the surface around
   /// the rest (a notch or crack of the border at the site spacing), gets the face across the
-  /// notch (fill_notches). Default 60°.
+  /// notch (a face on p–n where that edge is on the border already closes a three-edge hole).
+  /// Default 60°.
   double notch_angle_deg = 60;
   /// Close the notches (false where no surface may be invented: hole policy keep). Default true.
   bool fill_notches = true;
   /// A face with a single border vertex of valence 2 (an ear on the border) whose angle there is
-  /// below this is cut off at the end (the border moves onto its opposite edge, by less than the
-  /// face's height). Default 25°.
+  /// below this is cut off when the border is cleaned (the border moves onto its opposite edge,
+  /// by less than the face's height). Default 25°.
   double ear_angle_deg = 25;
   /// Rounds of max-min-angle flips + angle polish after the sizing. Default 6.
   int polish_cycles = 6;
@@ -94,8 +98,9 @@ bool needs_sizing(const WorkingMesh& mesh, const IsotropicRemeshOptions& options
 /// Removes the faces of open pieces (pieces with a border) that do not lie on the surface: their
 /// centroid projects farther than options.max_face_offset times their longest edge away and they
 /// are tilted from their corners' normals by more than options.min_flying_tilt_deg (they span a
-/// depth jump or the gap between two sheets); then the smaller fans of the vertices that left
-/// pinched (make_vertices_manifold()). Returns the faces removed.
+/// depth jump or the gap between two sheets); then, as make_vertices_manifold() does, the smaller
+/// fans of the vertices left pinched and the edge-connected pieces of at most 4 faces. Returns
+/// the faces removed.
 int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options);
 
 /// Remeshes `mesh` on `surface` to options.target_vertices vertices when needs_sizing().
@@ -111,8 +116,10 @@ int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, cons
 /// count_tolerance / 2 of the target by splitting the longest or collapsing the shortest edges,
 /// angle polish + max-min-angle flips follow, and the slivers left are trimmed (flat along the
 /// border) or collapsed before the count is restored and polished once more.
-/// Faces keep a consistent orientation and the mesh its topology (no collapse or split changes
-/// it); a step that makes faces cross is redone with the region around them frozen. The result
+/// Faces keep a consistent orientation and the genus of each piece is kept (splits, collapses
+/// with the link condition and flips do not change it; the border cleaning moves borders by less
+/// than a face and may close a three-edge hole; pieces cut off by the sliver collapses are removed
+/// as min_piece_faces and min_piece_vertex_fraction say); a step that makes faces cross is redone with the region around them frozen. The result
 /// is kept only when it is no worse on any target (the count within the tolerance or nearer to
 /// it; φmin at its target if it was, else no larger a share of faces below the target; φm at its
 /// target or no lower than before); otherwise the mesh is left as it was.

@@ -42,6 +42,9 @@ class WorkingMesh {
 
   /// Appends a vertex; returns its index.
   int add_vertex(const Eigen::Vector3d& position, const Eigen::Vector3d& normal, int anchor_hint);
+  /// Appends the rows of `positions` with their normals and anchor hints (one copy of the vertex
+  /// arrays for all of them); the first gets index num_vertices() before the call.
+  void add_vertices(const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& normals, const std::vector<int>& anchor_hints);
   /// Appends a face; returns its index.
   int add_face(const MeshFace& f);
   /// Removes the last face (undoes add_face).
