@@ -382,8 +382,12 @@ class Sizer {
       }
       clean_border();
     }
+    // A mesh of the right shape keeps it away from the vertices the count adjustment adds: only
+    // their two rings are flipped, relaxed and polished.
+    local_ = !reshape;
     adjust_count(o_.long_factor * length);
     attempt([&] { return final_polish(); });
+    local_ = false;
     // Slivers the polish could not open: flat ones along the border trimmed, the others'
     // shortest edges collapsed; the pieces they cut off removed, the count restored and
     // polished once more.
@@ -435,11 +439,36 @@ class Sizer {
     return frozen_;
   }
 
-  // Vertices with no frozen vertex in their one-ring: a flip of an edge at one of them changes
-  // only faces of unfrozen vertices.
+  // The vertices the flips, the relaxation and the polish leave alone: the frozen ones and, in
+  // the local count adjustment, those outside the two rings of the vertices it added.
+  std::vector<char> held() {
+    std::vector<char> h = frozen();
+    if (local_) {
+      active_.resize(mesh_.num_vertices(), 0);
+      for (int v = 0; v < mesh_.num_vertices(); ++v) h[v] = h[v] || !active_[v];
+    }
+    return h;
+  }
+
+  // Marks the two rings of the vertices from index `first` on as active.
+  void activate_from(int first) {
+    std::vector<char> ring(mesh_.num_vertices(), 0);
+    for (int v = first; v < mesh_.num_vertices(); ++v) ring[v] = 1;
+    for (int r = 0; r < 2; ++r) {
+      std::vector<char> next = ring;
+      for (const MeshFace& f : mesh_.faces())
+        if (ring[f[0]] || ring[f[1]] || ring[f[2]]) next[f[0]] = next[f[1]] = next[f[2]] = 1;
+      ring.swap(next);
+    }
+    active_.resize(mesh_.num_vertices(), 0);
+    for (int v = 0; v < mesh_.num_vertices(); ++v) active_[v] = active_[v] || ring[v];
+  }
+
+  // Vertices with no held vertex in their one-ring: a flip of an edge at one of them changes
+  // only faces of vertices that may change.
   std::vector<char> flippable() {
     std::vector<char> ok(mesh_.num_vertices(), 1);
-    const std::vector<char>& fz = frozen();
+    const std::vector<char> fz = held();
     for (const MeshFace& f : mesh_.faces())
       if (fz[f[0]] || fz[f[1]] || fz[f[2]]) ok[f[0]] = ok[f[1]] = ok[f[2]] = 0;
     return ok;
@@ -489,7 +518,8 @@ class Sizer {
     RelaxationBorder border;
     border.slide = true;
     border.corner_turn_deg = o_.corner_turn_deg;
-    tangential_relaxation(mesh_, surface_, o_.threads, border, &frozen());
+    const std::vector<char> fixed = held();
+    tangential_relaxation(mesh_, surface_, o_.threads, border, &fixed);
   }
 
   // Splits the longest or collapses the shortest edges until the count is within half the
@@ -501,9 +531,12 @@ class Sizer {
       const int diff = target - vertices_in_faces(mesh_);
       if (std::abs(diff) <= slack) break;
       const int changed = attempt([&] {
+        const int first = mesh_.num_vertices();
         const int n = diff > 0 ? split_edges(mesh_, surface_, o_, frozen(), 0.0, diff)
                                : Collapser(mesh_, surface_, o_, frozen(), long_limit)
                                      .run(std::numeric_limits<double>::infinity(), -diff);
+        if (diff > 0) activate_from(first);
+        else local_ = false;  // a collapse leaves no new vertex to mark: polish everywhere
         flip_and_relax();
         return n;
       });
@@ -518,8 +551,9 @@ class Sizer {
     f.max_passes = 5;
     const std::vector<char> movable = flippable();
     int flips = flip_edges(mesh_, f, &movable), moves = 0;
+    const std::vector<char> fixed = held();
     for (int cycle = 0; cycle < o_.polish_cycles; ++cycle) {
-      moves += angle_polish(mesh_, surface_, 2, frozen(), o_.angle, o_.threads);
+      moves += angle_polish(mesh_, surface_, 2, fixed, o_.angle, o_.threads);
       flips += flip_edges(mesh_, f, &movable);
     }
     stats_.flipped_edges += flips;
@@ -532,6 +566,8 @@ class Sizer {
   MesherStats& stats_;
   std::vector<char> frozen_;
   std::vector<int> crossings_;
+  bool local_ = false;         // count adjustment on a mesh of the right shape: see held()
+  std::vector<char> active_;   // vertices near those the local count adjustment added
 };
 
 }  // namespace
