@@ -82,10 +82,7 @@ int split_long_edges(WorkingMesh& mesh, const SurfaceProjector& surface, const E
       std::vector<char> near_new;
       int budget = -1;  // splits left before the mesh has options.max_vertices vertices in faces
       if (options.max_vertices > 0) {
-        std::vector<char> used(mesh.num_vertices(), 0);
-        for (const MeshFace& f : mesh.faces())
-          for (int v : f) used[v] = 1;
-        budget = std::max(0, options.max_vertices - static_cast<int>(std::count(used.begin(), used.end(), 1)));
+        budget = std::max(0, options.max_vertices - vertices_in_faces(mesh));
       }
       const std::vector<Split> pass_made = split_pass(mesh, surface, options, excluded, near_new, budget);
       if (pass_made.empty()) break;

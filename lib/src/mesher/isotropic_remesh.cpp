@@ -19,13 +19,6 @@ namespace {
 
 constexpr double kDegree = M_PI / 180.0;
 
-int vertices_in_faces(const WorkingMesh& mesh) {
-  std::vector<char> used(mesh.num_vertices(), 0);
-  for (const MeshFace& f : mesh.faces())
-    for (int v : f) used[v] = 1;
-  return static_cast<int>(std::count(used.begin(), used.end(), 1));
-}
-
 struct Edge {
   double length;
   int a, b;  // a→b is a half-edge of a face

@@ -165,6 +165,13 @@ double face_min_angle(const WorkingMesh& mesh, const MeshFace& f) {
   return triangle_min_angle(mesh.V.row(f[0]).transpose(), mesh.V.row(f[1]).transpose(), mesh.V.row(f[2]).transpose());
 }
 
+int vertices_in_faces(const WorkingMesh& mesh) {
+  std::vector<char> used(mesh.num_vertices(), 0);
+  for (const MeshFace& f : mesh.faces())
+    for (int v : f) used[v] = 1;
+  return static_cast<int>(std::count(used.begin(), used.end(), 1));
+}
+
 BorderLinks border_links(const WorkingMesh& mesh) {
   BorderLinks b;
   b.next.assign(mesh.num_vertices(), -1);

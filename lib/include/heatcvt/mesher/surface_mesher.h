@@ -4,7 +4,9 @@
 /// (the cloud's fitted surface as projector) and the remeshing of a triangle mesh (the input
 /// mesh as projector). From dual candidate triangles to a valid, polished mesh:
 /// manifold extraction → hole filling → untangling → relaxation polish → angle polish → sliver
-/// collapse → long-edge split → small pieces removed, closed pieces outward → compaction.
+/// collapse → long-edge split → small pieces removed → sizing to the vertex count asked for
+/// (flying faces removed, isotropic remeshing; isotropic_remesh.h) → closed pieces outward →
+/// compaction.
 #include <Eigen/Core>
 
 #include "heatcvt/mesh.h"

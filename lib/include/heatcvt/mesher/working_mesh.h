@@ -97,6 +97,9 @@ class WorkingMesh {
   std::vector<int> valence_;
 };
 
+/// Number of vertices referenced by the mesh's faces.
+int vertices_in_faces(const WorkingMesh& mesh);
+
 /// Smallest interior angle (radians) of the triangle (a, b, c): the one opposite its shortest
 /// edge; 0 for a degenerate triangle.
 double triangle_min_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c);
