@@ -87,6 +87,100 @@ TEST(BoundaryTrim, KeepsWellShapedTrianglesAndLoneSlivers) {
   EXPECT_EQ(trim_boundary_slivers(pointed, o), 0);
 }
 
+// a = (0,0), b = (1,0), d = (0.5, 0.8) above; the ear (a, c, b) below with its lone corner c at
+// (0.5, -h): both of its edges at c are on the border.
+WorkingMesh ear(double h) {
+  Eigen::MatrixX3d V(4, 3);
+  V << 0, 0, 0, 1, 0, 0, 0.5, -h, 0, 0.5, 0.8, 0;
+  return working(V, {{0, 2, 1}, {0, 1, 3}});
+}
+
+TEST(BoundaryTrim, CutsSliverEarsAndKeepsAWellShapedOne) {
+  // Height 0.02 over an edge of 1: a flat sliver ear (1.3° at a and b); height 3: a spike (18.9°
+  // at c). Both are cut: the border moves onto (a, b) and c leaves the mesh.
+  for (double h : {0.02, 3.0}) {
+    WorkingMesh sliver = ear(h);
+    EXPECT_EQ(trim_boundary_slivers(sliver, {}), 1) << h;
+    EXPECT_EQ(sliver.num_faces(), 1) << h;
+    EXPECT_EQ(used_vertices(sliver), 3) << h;
+  }
+  // Height 0.3: 31° at a and b, 118° at c, no sliver: kept.
+  WorkingMesh fine = ear(0.3);
+  EXPECT_EQ(trim_boundary_slivers(fine, {}), 0);
+  EXPECT_EQ(fine.num_faces(), 2);
+}
+
+// A fan around the border vertex 0 of a grid, with the interior vertex next to it pulled within
+// 2 % of an edge of it: its faces are slivers that no move of vertex 0 (on the border) opens.
+TEST(SliverCollapse, AnInteriorVertexGoesIntoTheBorderVertexNextToIt) {
+  const TriangleMesh g = test::grid(6, 0, 1, 0, 1, true);
+  const MeshSurfaceProjector plane(g.V, g.F);
+  std::vector<MeshFace> faces;
+  for (Eigen::Index f = 0; f < g.F.rows(); ++f) faces.push_back({g.F(f, 0), g.F(f, 1), g.F(f, 2)});
+  WorkingMesh w = working(g.V, faces);
+  const std::vector<char> border = w.boundary_vertices();
+  // Vertex 3 of the bottom row is on the border; the one above it (index 3 + 7) is interior.
+  const int b = 3, inner = 3 + 7;
+  ASSERT_TRUE(border[b]);
+  ASSERT_FALSE(border[inner]);
+  w.V.row(inner) = w.V.row(b) + Eigen::RowVector3d(0.0, 0.02 / 6, 0.0);
+  ASSERT_LT(triangle_quality(w.V, face_matrix(w)).min_angle_deg, 5);
+  const Eigen::MatrixX3d before = w.V;
+  MesherStats stats;
+  EXPECT_GE(collapse_slivers(w, plane, {}, stats), 1);
+  EXPECT_EQ(used_vertices(w), static_cast<int>(g.V.rows()) - 1);
+  const std::vector<char> after = w.boundary_vertices();
+  for (int v = 0; v < w.num_vertices(); ++v)
+    if (border[v]) {
+      EXPECT_TRUE(after[v]) << v;
+      EXPECT_EQ((w.V.row(v) - before.row(v)).norm(), 0.0) << "border vertex " << v << " keeps its place";
+    }
+  EXPECT_GT(triangle_quality(w.V, face_matrix(w)).min_angle_deg, 25);
+}
+
+// The sliver pair (a, b, c), (b, a, d) with a = (0,0), b = (1,0), c = (0.5, 0.1), d = (0.5, -0.1)
+// (11.3° at a and b), fanned out to e = (-1, 0) and f = (2, 0) so that a and b have valence 4; on
+// the roof z = -lift·|y|, with a, b, e, f on its ridge and the normals of the roof.
+WorkingMesh sliver_pair(double lift) {
+  Eigen::MatrixX3d V(6, 3), N(6, 3);
+  V << 0, 0, 0, 1, 0, 0, 0.5, 0.1, -0.1 * lift, 0.5, -0.1, -0.1 * lift, -1, 0, 0, 2, 0, 0;
+  N << 0, 0, 1, 0, 0, 1, 0, lift, 1, 0, -lift, 1, 0, 0, 1, 0, 0, 1;
+  N.rowwise().normalize();
+  WorkingMesh w(V, N, std::vector<int>(6, -1));
+  w.set_faces({{0, 1, 2}, {1, 0, 3}, {0, 2, 4}, {0, 4, 3}, {1, 5, 2}, {1, 3, 5}});
+  return w;
+}
+
+// The roof z = -lift·|y| over [-2, 3] x [-1, 1], finely tessellated, ridge along y = 0.
+TriangleMesh roof(double lift) {
+  TriangleMesh g = test::grid(40, -2, 3, -1, 1, false);
+  for (Eigen::Index v = 0; v < g.V.rows(); ++v) g.V(v, 2) = -lift * std::abs(g.V(v, 1));
+  return g;
+}
+
+TEST(SliverFlip, FlipsWhereTheNewEdgeLiesOnTheSurfaceOnly) {
+  // On a plane the flip to (c, d) lifts the smallest angle from 11.3° to 22.6°.
+  const TriangleMesh flat = roof(0.0);
+  const MeshSurfaceProjector plane(flat.V, flat.F);
+  WorkingMesh w = sliver_pair(0.0);
+  EXPECT_EQ(flip_sliver_edges(w, plane, {}, std::vector<char>(6, 0)), 1);
+  EXPECT_GT(w.edge_face_count(2, 3), 0);
+  EXPECT_EQ(w.edge_face_count(0, 1), 0);
+  // Frozen corners are left alone.
+  WorkingMesh held = sliver_pair(0.0);
+  EXPECT_EQ(flip_sliver_edges(held, plane, {}, std::vector<char>{0, 0, 1, 0, 0, 0}), 0);
+  // On a roof (slopes at 45°) the edge (a, b) runs along the ridge; (c, d) would pass 0.07
+  // below it (0.35 of its length): refused.
+  const TriangleMesh ridge = roof(1.0);
+  const MeshSurfaceProjector roof_surface(ridge.V, ridge.F);
+  WorkingMesh r = sliver_pair(1.0);
+  EXPECT_EQ(flip_sliver_edges(r, roof_surface, {}, std::vector<char>(6, 0)), 0);
+  EXPECT_GT(r.edge_face_count(0, 1), 0);
+  SliverFlipOptions loose;
+  loose.max_offset = 0.5;  // the offset is what refused it
+  EXPECT_EQ(flip_sliver_edges(r, roof_surface, loose, std::vector<char>(6, 0)), 1);
+}
+
 TEST(BoundaryPolish, ABorderVertexSlidesAlongItsBorder) {
   // A grid whose bottom-border vertex 3 is pushed along the border next to vertex 2.
   const TriangleMesh g = test::grid(6, 0, 1, 0, 1, true);

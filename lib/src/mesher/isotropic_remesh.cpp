@@ -381,19 +381,24 @@ class Sizer {
     adjust_count(o_.long_factor * length);
     attempt([&] { return final_polish(); });
     local_ = false;
-    // Slivers the polish could not open: flat ones along the border trimmed, the others'
-    // shortest edges collapsed; the pieces they cut off removed, the count restored and
-    // polished once more.
-    if (figures_below_target()) {
-      attempt([&] {
+    // Slivers the polish could not open: flipped over creases and folds, those flat along the
+    // border and the sliver ears trimmed,
+    // the others' shortest edges collapsed (border edges and interior vertices into border ones
+    // too); the pieces they cut off removed, the count restored and polished once more; repeated
+    // while slivers are left, as each polish can expose new ones.
+    for (int pass = 0; pass < o_.sliver_passes && figures_below_target(); ++pass) {
+      const int changed = attempt([&] {
+        const int flipped = flip_sliver_edges(mesh_, surface_, o_.sliver_flips, frozen());
+        stats_.flipped_edges += flipped;
         const int trimmed = trim_boundary_slivers(mesh_, o_.border_slivers);
         stats_.trimmed_faces += trimmed;
         const int collapsed = collapse_slivers(mesh_, surface_, o_.slivers, stats_);
         stats_.collapsed_edges += collapsed;
         stats_.removed_triangles +=
             remove_small_pieces(mesh_, o_.min_piece_faces, o_.min_piece_vertex_fraction, &stats_.pieces_removed);
-        return trimmed + collapsed;
+        return flipped + trimmed + collapsed;
       });
+      if (changed == 0) break;
       adjust_count(o_.long_factor * length);
       attempt([&] { return final_polish(); });
     }

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
 
 #include "heatcvt/mesher/manifold_extraction.h"
@@ -18,10 +19,18 @@ struct CollapsePass {
   const SurfaceProjector& surface;
   const SliverCollapseOptions& o;
   std::vector<std::vector<int>> vf;
-  std::vector<char> dead, touched;
+  std::vector<char> dead, touched, border;
+  BorderLinks links;
 
-  // Tries to collapse edge (a, b) (b into a); returns whether it did.
+  // Tries to collapse edge (a, b) (b into a); returns whether it did. An inner edge between two
+  // border vertices is never collapsed (it would pinch the surface); a border edge between two
+  // simple border vertices may be (the border loses a vertex and keeps its course); a border
+  // vertex takes in an interior one and keeps its place.
   bool try_collapse(int a, int b) {
+    const bool border_edge = mesh.edge_face_count(a, b) == 1;
+    if (border_edge ? !(links.simple(a) && links.simple(b)) : (border[a] && border[b])) return false;
+    if (border[b] && !border_edge) std::swap(a, b);
+    const size_t sides = border_edge ? 1 : 2;
     const Eigen::MatrixX3d& S = mesh.V;
     std::vector<int> shared, others;
     std::set<int> na, nb;
@@ -37,12 +46,14 @@ struct CollapsePass {
       for (int v : h)
         if (v != b) nb.insert(v);
     }
-    if (shared.size() != 2) return false;
+    if (shared.size() != sides) return false;
     std::vector<int> common;
     for (int v : na)
       if (v != b && nb.count(v)) common.push_back(v);
-    if (common.size() != 2) return false;  // link condition
-    if (vf[common[0]].size() < 4 || vf[common[1]].size() < 4 || vf[a].size() + vf[b].size() < 7) return false;
+    if (common.size() != sides) return false;  // link condition
+    for (int v : common)
+      if (vf[v].size() < 4 - (border[v] ? 1 : 0)) return false;  // the opposite vertices keep faces enough
+    if (vf[a].size() + vf[b].size() < (border_edge ? 4 : 7)) return false;
     // The ring after the collapse: faces of a and b except the two shared ones, b -> a.
     std::vector<int> ring;
     for (int g : vf[a])
@@ -58,7 +69,8 @@ struct CollapsePass {
     const double min_cos = std::cos(o.max_normal_turn_deg * M_PI / 180.0);
     double best_min = old_min;
     int best = -1;
-    for (int c = 0; c < 3; ++c) {
+    const bool keep_a = border[a] && !border_edge;  // an interior vertex goes into a border one
+    for (int c = keep_a ? 1 : 0; c < (keep_a ? 2 : 3); ++c) {
       if (!cand_pos[c].allFinite() || !cand_nrm[c].allFinite()) continue;
       double m = M_PI;
       bool ok = true;
@@ -98,9 +110,9 @@ struct CollapsePass {
     const Eigen::MatrixX3d& S = mesh.V;
     vf = mesh.vertex_faces();
     dead.assign(mesh.num_faces(), 0);
-    // Vertices on a boundary are left alone (collapsing an inner edge between two of them would
-    // pinch the surface into a non-manifold vertex).
-    touched = mesh.boundary_vertices();
+    border = mesh.boundary_vertices();
+    links = border_links(mesh);
+    touched.assign(mesh.num_vertices(), 0);
     int done = 0;
     for (int id = 0; id < mesh.num_faces(); ++id) {
       const MeshFace f = mesh.face(id);
@@ -142,6 +154,21 @@ void remove_sliver_valence3(WorkingMesh& mesh, const SliverCollapseOptions& o, M
   }
 }
 
+// Whether face f, with two border edges, is an ear that can be cut: its lone corner c (on both
+// border edges, in no other face) goes, the border moves onto the opposite edge (a, b), which
+// needs a and b to keep other faces. Marks the corners touched when it is.
+bool removable_ear(const WorkingMesh& mesh, const std::vector<std::vector<int>>& vf, const MeshFace& f,
+                   std::vector<char>& touched) {
+  int k = 0;
+  while (k < 3 && vf[f[k]].size() != 1) ++k;
+  if (k == 3) return false;
+  const int c = f[k], a = f[(k + 1) % 3], b = f[(k + 2) % 3];
+  if (touched[a] || touched[b] || touched[c] || vf[a].size() < 2 || vf[b].size() < 2 || mesh.edge_face_count(a, b) != 2)
+    return false;
+  touched[a] = touched[b] = touched[c] = 1;
+  return true;
+}
+
 }  // namespace
 
 int collapse_slivers(WorkingMesh& mesh, const SurfaceProjector& surface, const SliverCollapseOptions& options,
@@ -151,7 +178,7 @@ int collapse_slivers(WorkingMesh& mesh, const SurfaceProjector& surface, const S
   fo.valence_mode = false;
   int collapsed = 0;
   for (int pass = 0; pass < options.passes; ++pass) {
-    CollapsePass p{mesh, surface, options, {}, {}, {}};
+    CollapsePass p{mesh, surface, options, {}, {}, {}, {}, {}};
     const int done = p.run();
     if (done == 0) break;
     collapsed += done;
@@ -163,6 +190,58 @@ int collapse_slivers(WorkingMesh& mesh, const SurfaceProjector& surface, const S
   }
   remove_sliver_valence3(mesh, options, stats);
   return collapsed;
+}
+
+namespace {
+
+// Distance from the midpoint of (a, b) to its projection on the surface (infinite where it has none).
+double midpoint_offset(const WorkingMesh& mesh, const SurfaceProjector& surface, int a, int b) {
+  const Eigen::Vector3d mid = 0.5 * (mesh.V.row(a) + mesh.V.row(b)).transpose();
+  Eigen::Vector3d pos, nrm;
+  int hint = mesh.anchor[a];
+  surface.project(mid, hint, pos, nrm);
+  return pos.allFinite() ? (pos - mid).norm() : std::numeric_limits<double>::infinity();
+}
+
+// Whether triangle (a, b, c) faces like the normals of its corners.
+bool faces_like_corners(const WorkingMesh& mesh, int a, int b, int c) {
+  const Eigen::Vector3d n = (mesh.V.row(b) - mesh.V.row(a)).cross(mesh.V.row(c) - mesh.V.row(a)).transpose();
+  if (!(n.norm() > 0)) return false;
+  for (int v : {a, b, c})
+    if (!(n.normalized().dot(mesh.N.row(v).transpose()) > 0)) return false;
+  return true;
+}
+
+}  // namespace
+
+int flip_sliver_edges(WorkingMesh& mesh, const SurfaceProjector& surface, const SliverFlipOptions& o,
+                      const std::vector<char>& frozen) {
+  const double thr = o.sliver_angle_deg * M_PI / 180.0;
+  int flips = 0;
+  for (int f1 = 0; f1 < mesh.num_faces(); ++f1) {
+    if (face_min_angle(mesh, mesh.face(f1)) >= thr) continue;
+    for (int k = 0; k < 3; ++k) {
+      const MeshFace& t = mesh.face(f1);
+      const int a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
+      const int f2 = mesh.half_edge_face(b, a);
+      if (f2 < 0 || frozen[a] || frozen[b] || frozen[c]) continue;
+      int d = -1;
+      for (int v : mesh.face(f2))
+        if (v != a && v != b) d = v;
+      if (d < 0 || d == c || frozen[d] || mesh.edge_face_count(c, d) > 0 || mesh.valence(a) <= 3 || mesh.valence(b) <= 3)
+        continue;
+      const double before = std::min(face_min_angle(mesh, {a, b, c}), face_min_angle(mesh, {b, a, d}));
+      const double after = std::min(face_min_angle(mesh, {c, a, d}), face_min_angle(mesh, {d, b, c}));
+      if (!(after > before + 1e-9) || !faces_like_corners(mesh, c, a, d) || !faces_like_corners(mesh, d, b, c)) continue;
+      const double length = (mesh.V.row(c) - mesh.V.row(d)).norm();
+      if (!(midpoint_offset(mesh, surface, c, d) <= std::max(midpoint_offset(mesh, surface, a, b), o.max_offset * length)))
+        continue;
+      mesh.flip(f1, k, f2);
+      ++flips;
+      break;  // face f1 changed: move on to the next face
+    }
+  }
+  return flips;
 }
 
 int trim_boundary_slivers(WorkingMesh& mesh, const BoundaryTrimOptions& options) {
@@ -178,7 +257,11 @@ int trim_boundary_slivers(WorkingMesh& mesh, const BoundaryTrimOptions& options)
       int boundary = 0, k_edge = -1;
       for (int k = 0; k < 3; ++k)
         if (mesh.edge_face_count(f[k], f[(k + 1) % 3]) == 1) ++boundary, k_edge = k;
-      if (boundary != 1 || face_min_angle(mesh, f) >= sliver) continue;
+      if (boundary == 0 || boundary == 3 || face_min_angle(mesh, f) >= sliver) continue;
+      if (boundary == 2) {
+        if (removable_ear(mesh, vf, f, touched)) drop[id] = 1, ++dropped;
+        continue;
+      }
       const int a = f[k_edge], b = f[(k_edge + 1) % 3], c = f[(k_edge + 2) % 3];
       const Eigen::Vector3d ca = mesh.V.row(a) - mesh.V.row(c), cb = mesh.V.row(b) - mesh.V.row(c);
       if (!(ca.norm() > 0) || !(cb.norm() > 0) || std::acos(std::clamp(ca.normalized().dot(cb.normalized()), -1.0, 1.0)) < apex_min)

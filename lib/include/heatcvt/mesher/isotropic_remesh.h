@@ -78,10 +78,14 @@ struct IsotropicRemeshOptions {
   /// Rounds of max-min-angle flips + angle polish after the sizing. Default 6.
   int polish_cycles = 6;
   AnglePolishOptions angle;  ///< the angle polish of the last step
-  /// Slivers left after the polish: flat ones along the border trimmed, the others collapsed;
-  /// then the count is restored and the polish repeated.
+  /// Slivers left after the polish: flipped over creases and folds, flat ones along the border
+  /// and ears trimmed, the others collapsed; then the count is restored and the polish repeated.
+  SliverFlipOptions sliver_flips;
   BoundaryTrimOptions border_slivers;
   SliverCollapseOptions slivers;
+  /// Times the trim, collapse, count restoration and polish are repeated while slivers are left
+  /// (each polish can expose new flat border triangles). Default 3.
+  int sliver_passes = 3;
   /// Pieces the collapses cut off are removed as remove_small_pieces() does with these (the
   /// surface mesher sets them to its own min_piece_faces and min_piece_vertex_fraction).
   /// Defaults 20 and 0.01.
@@ -114,8 +118,9 @@ int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, cons
 /// border neighbours); the border is cleaned again. Then (and alone where the shape targets are
 /// met and the count is off by at most reshape_count_error) the count is brought within
 /// count_tolerance / 2 of the target by splitting the longest or collapsing the shortest edges,
-/// angle polish + max-min-angle flips follow, and the slivers left are trimmed (flat along the
-/// border) or collapsed before the count is restored and polished once more.
+/// angle polish + max-min-angle flips follow, and the slivers left are flipped over creases,
+/// trimmed (flat along the border, or ears) or collapsed before the count is restored and polished once more, up to
+/// sliver_passes times.
 /// Faces keep a consistent orientation and the genus of each piece is kept (splits, collapses
 /// with the link condition and flips do not change it; the border cleaning moves borders by less
 /// than a face and may close a three-edge hole; pieces cut off by the sliver collapses are removed

@@ -29,16 +29,38 @@ struct BoundaryTrimOptions {
   int passes = 1;                ///< Default 1 (each pass exposes new border triangles: more passes eat into the surface).
 };
 
-/// Removes the slivers that lie flat along the border (exactly one boundary edge, obtuse apex
-/// opposite it) when every corner keeps a face and the apex keeps a single fan: the border moves
-/// onto the apex, by less than the sliver's height, and no vertex is lost. Such slivers are where
-/// the border of a scan turns between sites; no vertex move can open them. Returns the faces
-/// removed.
+/// Options of flip_sliver_edges().
+struct SliverFlipOptions {
+  double sliver_angle_deg = 25;  ///< a sliver has a smallest angle below this. Default 25°.
+  /// The new edge's midpoint may lie this far from the surface, times the edge's length (or as
+  /// far as the old edge's midpoint). Default 0.25.
+  double max_offset = 0.25;
+};
+
+/// Flips the inner edges (a, b) of slivers into (c, d) where the pair bends over a crease or a
+/// fold, so that the flat-pair rules of flip_edges() refuse it: the pair's smallest angle grows,
+/// the new edge's midpoint lies on the surface (within max_offset of its length, or no farther
+/// than the old edge's), each new triangle faces like its corners' normals, a and b keep valence
+/// above 3, and no corner is `frozen`. Returns the flips.
+int flip_sliver_edges(WorkingMesh& mesh, const SurfaceProjector& surface, const SliverFlipOptions& options,
+                      const std::vector<char>& frozen);
+
+/// Removes the slivers that lie flat along the border, where the border of a scan turns between
+/// sites and no vertex move can open them:
+/// - one boundary edge, obtuse apex (at least min_apex_angle_deg) opposite it, every corner
+///   keeping a face and the apex a single fan: the border moves onto the apex, by less than the
+///   sliver's height, and no vertex is lost;
+/// - two boundary edges (an ear, whose lone corner is on both) where the other two corners keep
+///   faces: the border moves onto the third edge, by less than the ear's longest edge, and the
+///   lone corner leaves the mesh (a sliver ear is a spike or a notch of the border at the site
+///   spacing: no vertex move opens it).
+/// Returns the faces removed.
 int trim_boundary_slivers(WorkingMesh& mesh, const BoundaryTrimOptions& options);
 
-/// In each pass, every sliver away from the boundary (faces visited in order, none sharing a
-/// vertex with an edited ring) has its edges tried shortest first: an edge (a, b) is collapsed
-/// when the link condition holds, the two opposite vertices keep valence ≥ 3, no ring triangle
+/// In each pass, every sliver (faces visited in order, none sharing a vertex with an edited ring)
+/// has its edges tried shortest first: an edge (a, b) is collapsed when it is a border edge
+/// between two simple border vertices or an inner edge with at most one end on the border (an
+/// interior vertex goes into a border one, which keeps its place), the link condition holds, the two opposite vertices keep valence ≥ 3, no ring triangle
 /// turns more than max_normal_turn_deg and the ring's smallest angle improves; the merged vertex
 /// goes to the best of the midpoint projected to the surface, a, or b. Undone as a whole when
 /// the result self-intersects. Then the valence-3 vertices of remaining slivers are removed
