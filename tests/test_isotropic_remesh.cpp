@@ -73,7 +73,7 @@ TEST(IsotropicRemesh, CoarseSphereIsRefinedToTheCountWithTheShapeTargets) {
   const MeshSurfaceProjector surface(fine.V, fine.F);
   WorkingMesh w = working(test::icosphere(2), surface);  // 162 vertices
   MesherStats stats;
-  ASSERT_TRUE(needs_sizing(w, sized_to(1000)));
+  ASSERT_TRUE(needs_sizing(w, surface, sized_to(1000)));
   ASSERT_TRUE(size_to_target(w, surface, sized_to(1000), stats));
   const TriangleMesh m = compact_mesh(w);
   const ValidationReport v = validate_open(m);
@@ -104,7 +104,9 @@ TEST(IsotropicRemesh, TorusIsCoarsenedToTheCountAndKeepsItsHandle) {
 }
 
 TEST(IsotropicRemesh, RaggedBorderIsResampledAndKeepsItsLoop) {
-  const TriangleMesh plane = test::grid(40);
+  // The surface reaches well beyond the square (as a scan's fitted surface has no border of its
+  // own): the border is resampled along its own course.
+  const TriangleMesh plane = test::grid(80, -0.5, 1.5, -0.5, 1.5);
   const MeshSurfaceProjector surface(plane.V, plane.F);
   const TriangleMesh ragged = ragged_square(16, 7);
   ASSERT_TRUE(validate_open(ragged).ok());
@@ -135,6 +137,50 @@ TEST(IsotropicRemesh, RaggedBorderIsResampledAndKeepsItsLoop) {
     EXPECT_LE(nearest, spacing) << "border vertex " << i;
   }
   for (Eigen::Index i = 0; i < m.V.rows(); ++i) EXPECT_NEAR(m.V(i, 2), 0.0, 1e-12);
+}
+
+// An input mesh's border is the output's: a mesh whose border is inset by 1.5 target edge
+// lengths from the surface's (the dual of a CVT on an open mesh) gets its border moved onto it.
+TEST(IsotropicRemesh, InsetBorderIsMovedOntoTheSurfacesBorder) {
+  const TriangleMesh plane = test::grid(40);  // the unit square: its border is known
+  const MeshSurfaceProjector surface(plane.V, plane.F);
+  ASSERT_TRUE(surface.has_border());
+  const int target = 400;
+  const double spacing = std::sqrt(2.0 / (std::sqrt(3.0) * target));
+  const double inset = 1.5 * spacing;
+  WorkingMesh w = working(test::grid(10, inset, 1 - inset, inset, 1 - inset), surface);
+  MesherStats stats;
+  ASSERT_TRUE(needs_sizing(w, surface, sized_to(target)));
+  ASSERT_TRUE(size_to_target(w, surface, sized_to(target), stats));
+  const TriangleMesh m = compact_mesh(w);
+  const ValidationReport v = validate_open(m);
+  EXPECT_TRUE(v.ok()) << v.summary();
+  EXPECT_EQ(v.boundary_loops, 1);
+  EXPECT_NEAR(m.V.rows(), target, 0.02 * target);
+  const TriangleQuality q = triangle_quality(m.V, m.F);
+  EXPECT_GE(q.min_angle_deg, 25.0);
+  EXPECT_GE(q.mean_min_angle_deg, 52.0);
+  // Every border vertex on the square's border; every point of it within one spacing of one.
+  const BorderLinks border = border_links(w);
+  std::vector<Eigen::Vector3d> on_border;
+  for (int i = 0; i < w.num_vertices(); ++i)
+    if (border.on(i)) {
+      const Eigen::Vector3d x = w.V.row(i);
+      EXPECT_NEAR(std::min({x.x(), 1 - x.x(), x.y(), 1 - x.y()}), 0.0, 1e-9) << "border vertex " << i;
+      on_border.push_back(x);
+    }
+  for (int k = 0; k < 400; ++k) {
+    const double t = k / 100.0;  // around the square, 100 samples a side
+    const int side = k / 100;
+    const double u = t - side;
+    const Eigen::Vector3d p = side == 0 ? Eigen::Vector3d(u, 0, 0)
+                              : side == 1 ? Eigen::Vector3d(1, u, 0)
+                              : side == 2 ? Eigen::Vector3d(1 - u, 1, 0)
+                                          : Eigen::Vector3d(0, 1 - u, 0);
+    double nearest = 1e9;
+    for (const Eigen::Vector3d& x : on_border) nearest = std::min(nearest, (x - p).norm());
+    EXPECT_LE(nearest, spacing) << "border point " << p.transpose();
+  }
 }
 
 TEST(IsotropicRemesh, FlyingFacesAcrossADepthJumpAreRemoved) {
@@ -185,7 +231,7 @@ TEST(IsotropicRemesh, MeshesMeetingTheTargetsAreLeftAlone) {
   WorkingMesh w = working(test::icosphere(3), surface);  // 642 vertices, φmin 50°+
   const WorkingMesh::Checkpoint before = w.checkpoint();
   MesherStats stats;
-  EXPECT_FALSE(needs_sizing(w, sized_to(645)));
+  EXPECT_FALSE(needs_sizing(w, surface, sized_to(645)));
   EXPECT_FALSE(size_to_target(w, surface, sized_to(645), stats));
   EXPECT_EQ(w.V, before.V);
   EXPECT_EQ(w.faces(), before.faces);

@@ -372,6 +372,38 @@ TEST(HoleFilling, KeepsTheBorderOfAnOpenSheet) {
   EXPECT_EQ(w.num_faces(), g.F.rows());
 }
 
+// The projector of an input mesh knows its border: a loop away from it is a hole inside the
+// surface, filled under every policy; the border itself stays.
+TEST(HoleFilling, HolesInsideAnInputMeshAreFilledAndItsBorderKept) {
+  const TriangleMesh g = test::grid(8);
+  const MeshSurfaceProjector surface(g.V, g.F);
+  ASSERT_TRUE(surface.has_border());
+  auto with_hole = [&] {
+    WorkingMesh w = working(g);
+    std::vector<char> drop(w.num_faces(), 0);  // the two triangles of the cell [3/8, 4/8]²
+    for (int f = 0; f < w.num_faces(); ++f) {
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      for (int v : w.face(f)) c += w.V.row(v).transpose() / 3.0;
+      drop[f] = c.x() > 3.0 / 8 && c.x() < 4.0 / 8 && c.y() > 3.0 / 8 && c.y() < 4.0 / 8;
+    }
+    EXPECT_EQ(w.remove_faces(drop), 2);
+    return w;
+  };
+  HoleFillingOptions o;
+  o.policy = HolePolicy::keep;
+  o.clearance = 10;  // the sampled-hole test never selects a loop
+  WorkingMesh w = with_hole();
+  int removed = 0;
+  EXPECT_EQ(fill_holes(w, surface, o, {}, removed), 1);
+  EXPECT_EQ(w.num_faces(), g.F.rows());
+  EXPECT_EQ(validate(w, false).boundary_loops, 1);
+  // The hole's corners are 3 cells (h) from the border: with a clearance of 4h it is not inside.
+  o.interior_hole_clearance = 4;
+  WorkingMesh near = with_hole();
+  EXPECT_EQ(fill_holes(near, surface, o, {}, removed), 0);
+  EXPECT_EQ(validate(near, false).boundary_loops, 2);
+}
+
 TEST(HoleFilling, ShortLoopsOfTheSurfaceItselfAreKeptOnRequest) {
   // An annulus (radii 1 and 2, 8 vertices per ring) as both the mesh and the surface: two
   // boundary loops of 8 edges with no surface across them.

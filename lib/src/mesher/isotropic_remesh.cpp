@@ -345,6 +345,33 @@ int fill_notches(WorkingMesh& mesh, const IsotropicRemeshOptions& o, const std::
   return added;
 }
 
+// Edge length of equilateral triangles that give the target count on the mesh's area
+// (V ≈ 2A / (√3 L²)).
+double target_length(const WorkingMesh& mesh, const IsotropicRemeshOptions& o) {
+  double area = 0;
+  for (const MeshFace& f : mesh.faces())
+    area += 0.5 * (mesh.V.row(f[1]) - mesh.V.row(f[0])).cross(mesh.V.row(f[2]) - mesh.V.row(f[0])).norm();
+  return o.target_vertices > 0 ? std::sqrt(2.0 * area / (std::sqrt(3.0) * o.target_vertices)) : 0.0;
+}
+
+// Largest distance, in target edge lengths, from a border vertex to the surface's own border,
+// among the border vertices within max_border_gap target lengths of it (the others are on
+// holes of the mesh, not of the surface); 0 where the surface has no known border.
+double border_gap(const WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o) {
+  if (!surface.has_border() || mesh.empty()) return 0;
+  const double length = target_length(mesh, o);
+  const BorderLinks border = border_links(mesh);
+  double gap = 0;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    Eigen::Vector3d pos, nrm;
+    const Eigen::Vector3d x = mesh.V.row(v);
+    if (!border.on(v) || !surface.project_to_border(x, pos, nrm)) continue;
+    const double d = (pos - x).norm() / length;
+    if (d <= o.max_border_gap) gap = std::max(gap, d);
+  }
+  return gap;
+}
+
 // The sizing's steps on one mesh, each tried and, where it makes faces cross, redone from the same
 // start with the vertices around the crossing faces frozen (the way the mesher's other stages
 // treat the intersections they make).
@@ -359,8 +386,10 @@ class Sizer {
   // With `reshape`, the border cleaning and the remeshing rounds; then the count adjusted and
   // the polish (all that a mesh of the right shape but the wrong count gets).
   void run(bool reshape) {
-    double length = std::sqrt(2.0 * area() / (std::sqrt(3.0) * o_.target_vertices));
+    double& length = length_;
+    length = target_length(mesh_, o_);
     if (reshape) {
+      attempt([&] { return snap_border(); });
       clean_border();
       for (int round = 0; round < o_.rounds && length > 0; ++round) {
         attempt([&] {
@@ -423,13 +452,6 @@ class Sizer {
       changed += attempt([&] { return cut_ears(mesh_, o_, frozen()); });
       if (changed == 0) break;
     }
-  }
-
-  double area() const {
-    double a = 0;
-    for (const MeshFace& f : mesh_.faces())
-      a += 0.5 * (mesh_.V.row(f[1]) - mesh_.V.row(f[0])).cross(mesh_.V.row(f[2]) - mesh_.V.row(f[0])).norm();
-    return a;
   }
 
   const std::vector<char>& frozen() {
@@ -518,6 +540,26 @@ class Sizer {
     border.corner_turn_deg = o_.corner_turn_deg;
     const std::vector<char> fixed = held();
     tangential_relaxation(mesh_, surface_, o_.threads, border, &fixed);
+    snap_border();
+  }
+
+  // Border vertices within max_border_gap target lengths of the surface's own border (an input
+  // mesh's boundary) are moved onto it: the output's border loops run on the input's.
+  int snap_border() {
+    if (!surface_.has_border()) return 0;
+    const BorderLinks border = border_links(mesh_);
+    const std::vector<char> fixed = held();
+    int moved = 0;
+    for (int v = 0; v < mesh_.num_vertices(); ++v) {
+      if (!border.on(v) || fixed[v]) continue;
+      Eigen::Vector3d pos, nrm;
+      const Eigen::Vector3d x = mesh_.V.row(v);
+      if (!surface_.project_to_border(x, pos, nrm) || !((pos - x).norm() <= o_.max_border_gap * length_)) continue;
+      mesh_.V.row(v) = pos.transpose();
+      mesh_.N.row(v) = nrm.transpose();
+      ++moved;
+    }
+    return moved;
   }
 
   // Splits the longest or collapses the shortest edges until the count is within half the
@@ -554,6 +596,7 @@ class Sizer {
       moves += angle_polish(mesh_, surface_, 2, fixed, o_.angle, o_.threads);
       flips += flip_edges(mesh_, f, &movable);
     }
+    moves += snap_border();
     stats_.flipped_edges += flips;
     return flips + moves;
   }
@@ -564,6 +607,7 @@ class Sizer {
   MesherStats& stats_;
   std::vector<char> frozen_;
   std::vector<int> crossings_;
+  double length_ = 0;          // the target edge length, corrected by the count each round
   bool local_ = false;         // count adjustment on a mesh of the right shape: see held()
   std::vector<char> active_;   // vertices near those the local count adjustment added
 };
@@ -606,13 +650,15 @@ namespace {
 
 // Vertex count and shape of a mesh, as the sizing's targets measure them.
 struct SizingFigures {
+  double border_gap = 0;  ///< border_gap(): how far the border is off the surface's own
   int vertices = 0;
   double min_angle = M_PI, mean_angle = 0;
   double below = 0;  ///< fraction of the faces with a smallest angle below the min_angle_deg target
 };
 
-SizingFigures figures(const WorkingMesh& mesh, const IsotropicRemeshOptions& o) {
+SizingFigures figures(const WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o) {
   SizingFigures q;
+  q.border_gap = border_gap(mesh, surface, o);
   q.vertices = vertices_in_faces(mesh);
   for (const MeshFace& f : mesh.faces()) {
     const double a = face_min_angle(mesh, f);
@@ -626,39 +672,48 @@ SizingFigures figures(const WorkingMesh& mesh, const IsotropicRemeshOptions& o) 
 
 // Whether `after` is no worse than `before` on any target: the count is within the tolerance or
 // nearer; φmin meets its target if it did, else the share of faces below it is no larger; φm
-// meets its target or is no lower than before.
+// meets its target or is no lower than before (both less border_fit_angle_slack_deg where the
+// border was brought onto the surface's own); the border is on the surface's border within the
+// tolerance or no farther off than before.
 bool no_worse(const SizingFigures& after, const SizingFigures& before, const IsotropicRemeshOptions& o) {
-  const double slack = o.count_tolerance * o.target_vertices;
+  const double count_slack = o.count_tolerance * o.target_vertices;
   const int err_after = std::abs(after.vertices - o.target_vertices), err_before = std::abs(before.vertices - o.target_vertices);
-  const bool count = err_after <= slack || err_after <= err_before;
+  const bool count = err_after <= count_slack || err_after <= err_before;
+  // A border brought onto the surface's own border may cost up to border_fit_angle_slack_deg of
+  // the angle figures: the inset border's triangles were shaped for a border that was not there.
+  const bool border_fitted = before.border_gap > o.border_tolerance && after.border_gap <= o.border_tolerance;
+  const double slack = border_fitted ? o.border_fit_angle_slack_deg * kDegree : 0.0;
   const double target = o.min_angle_deg * kDegree;
-  const bool min_angle = before.min_angle >= target ? after.min_angle >= target : after.below <= before.below;
-  const bool mean_angle = after.mean_angle >= std::min(before.mean_angle, o.mean_angle_deg * kDegree) - 1e-12;
-  return count && min_angle && mean_angle;
+  const bool min_angle = before.min_angle >= target ? after.min_angle >= target - slack : after.below <= before.below;
+  const bool mean_angle = after.mean_angle >= std::min(before.mean_angle, o.mean_angle_deg * kDegree) - slack - 1e-12;
+  const bool border = after.border_gap <= std::max(before.border_gap, o.border_tolerance);
+  return count && min_angle && mean_angle && border;
 }
 
 }  // namespace
 
-bool needs_sizing(const WorkingMesh& mesh, const IsotropicRemeshOptions& options) {
+bool needs_sizing(const WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options) {
   if (options.target_vertices <= 0 || mesh.empty()) return false;
-  const SizingFigures q = figures(mesh, options);
+  const SizingFigures q = figures(mesh, surface, options);
   return std::abs(q.vertices - options.target_vertices) > options.count_tolerance * options.target_vertices ||
-         q.min_angle < options.min_angle_deg * kDegree || q.mean_angle < options.mean_angle_deg * kDegree;
+         q.min_angle < options.min_angle_deg * kDegree || q.mean_angle < options.mean_angle_deg * kDegree ||
+         q.border_gap > options.border_tolerance;
 }
 
 bool size_to_target(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options,
                     MesherStats& stats) {
-  if (!needs_sizing(mesh, options)) return false;
+  if (!needs_sizing(mesh, surface, options)) return false;
   const WorkingMesh::Checkpoint before = mesh.checkpoint();
-  const SizingFigures figures_before = figures(mesh, options);
+  const SizingFigures figures_before = figures(mesh, surface, options);
   const MesherStats stats_before = stats;
   // A mesh of the right shape whose count is off by little only gets the count adjusted.
   const bool shape_met = figures_before.min_angle >= options.min_angle_deg * kDegree &&
-                         figures_before.mean_angle >= options.mean_angle_deg * kDegree;
+                         figures_before.mean_angle >= options.mean_angle_deg * kDegree &&
+                         figures_before.border_gap <= options.border_tolerance;
   const bool count_near = std::abs(figures_before.vertices - options.target_vertices) <=
                           options.reshape_count_error * options.target_vertices;
   Sizer(mesh, surface, options, stats).run(!(shape_met && count_near));
-  if (no_worse(figures(mesh, options), figures_before, options)) return true;
+  if (no_worse(figures(mesh, surface, options), figures_before, options)) return true;
   mesh.rollback(before);
   stats = stats_before;
   return false;

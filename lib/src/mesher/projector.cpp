@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <utility>
 
 #include "heatcvt/closest_point.h"
@@ -145,6 +146,32 @@ double CloudSurfaceProjector::distance_to_samples(const Eigen::Vector3d& x) cons
 MeshSurfaceProjector::MeshSurfaceProjector(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F)
     : V_(V), F_(F), tree_(std::make_unique<ClosestPointTree>(V, F)) {
   VN_ = vertex_normals(V, F);
+  std::map<std::pair<int, int>, int> faces_of_edge;
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = F(f, k), b = F(f, (k + 1) % 3);
+      ++faces_of_edge[{std::min(a, b), std::max(a, b)}];
+    }
+  for (const auto& [edge, faces] : faces_of_edge)
+    if (faces == 1) border_.push_back(edge);
+}
+
+bool MeshSurfaceProjector::project_to_border(const Eigen::Vector3d& x, Eigen::Vector3d& position,
+                                             Eigen::Vector3d& normal) const {
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& [a, b] : border_) {
+    const Eigen::Vector3d p = V_.row(a), q = V_.row(b), e = q - p;
+    const double len2 = e.squaredNorm();
+    const double t = len2 > 0 ? std::clamp((x - p).dot(e) / len2, 0.0, 1.0) : 0.0;
+    const Eigen::Vector3d c = p + t * e;
+    const double d = (c - x).squaredNorm();
+    if (!(d < best)) continue;
+    best = d;
+    position = c;
+    const Eigen::Vector3d n = (1 - t) * VN_.row(a).transpose() + t * VN_.row(b).transpose();
+    normal = n.norm() > 0 ? n.normalized() : Eigen::Vector3d(VN_.row(a).transpose());
+  }
+  return std::isfinite(best);
 }
 
 MeshSurfaceProjector::~MeshSurfaceProjector() = default;

@@ -80,7 +80,7 @@ bool size_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, const Surface
   // watertight mesh is asked for, no notch closed where no surface may be invented.
   if (options.holes.policy == HolePolicy::fill) sizing.remove_flying = false;
   if (options.holes.policy == HolePolicy::keep) sizing.fill_notches = false;
-  if (!needs_sizing(mesh, sizing)) return false;
+  if (!needs_sizing(mesh, surface, sizing)) return false;
   const WorkingMesh::Checkpoint unsized = mesh.checkpoint();
   const MesherStats stats_unsized = stats;
   if (sizing.remove_flying) {
@@ -89,7 +89,7 @@ bool size_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, const Surface
                                                    &stats.pieces_removed);
   }
   if (size_to_target(mesh, surface, sizing, stats)) return true;
-  if (needs_sizing(mesh, sizing) && stats.flying_faces > stats_unsized.flying_faces) {
+  if (needs_sizing(mesh, surface, sizing) && stats.flying_faces > stats_unsized.flying_faces) {
     mesh.rollback(unsized);
     stats = stats_unsized;
   }

@@ -28,6 +28,18 @@ struct IsotropicRemeshOptions {
   double min_angle_deg = 25;
   /// ... or the mean of the triangles' smallest angles (φm) is below this. Default 52°.
   double mean_angle_deg = 52;
+  /// Where the surface's own border is known (SurfaceProjector::has_border(): an input mesh's
+  /// boundary), border vertices within this many target edge lengths of it are moved onto it
+  /// after each relaxation and polish, so the output's border runs on the input's (farther
+  /// ones border holes of the mesh itself). Default 3.
+  double max_border_gap = 3.0;
+  /// ... and the stage runs when such a vertex is farther than this many target edge lengths
+  /// from it. Default 0.02.
+  double border_tolerance = 0.02;
+  /// A result that brings the border onto the surface's own is kept even where φmin or φm end
+  /// up to this much lower than before (or than their targets): the inset border's triangles
+  /// were shaped for a border that is not the surface's. Default 1°.
+  double border_fit_angle_slack_deg = 1.0;
   /// A mesh that meets the shape targets and whose count is off by at most this fraction of the
   /// target only has its count adjusted (no remeshing rounds). Default 0.05.
   double reshape_count_error = 0.05;
@@ -97,7 +109,7 @@ struct IsotropicRemeshOptions {
 
 /// Whether the mesh misses the targets of `options` (count, smallest angle, φm), i.e. whether
 /// size_to_target() would work on it.
-bool needs_sizing(const WorkingMesh& mesh, const IsotropicRemeshOptions& options);
+bool needs_sizing(const WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options);
 
 /// Removes the faces of open pieces (pieces with a border) that do not lie on the surface: their
 /// centroid projects farther than options.max_face_offset times their longest edge away and they

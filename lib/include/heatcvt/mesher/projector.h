@@ -6,6 +6,7 @@
 /// triangle mesh.
 #include <Eigen/Core>
 #include <memory>
+#include <utility>
 #include <vector>
 
 namespace heatcvt {
@@ -22,6 +23,14 @@ class SurfaceProjector {
   /// Distance from `x` to the sampled surface (nearest sample point, or nearest surface point):
   /// hole filling asks whether the surface continues beyond a boundary.
   virtual double distance_to_samples(const Eigen::Vector3d& x) const = 0;
+  /// Whether the surface's border is known (an input mesh's boundary edges); a cloud's is not.
+  virtual bool has_border() const { return false; }
+  /// Where has_border(): the point of the border nearest `x` and the surface's unit normal there.
+  /// Returns false (and leaves the outputs alone) where the surface has no border.
+  virtual bool project_to_border(const Eigen::Vector3d& x, Eigen::Vector3d& position, Eigen::Vector3d& normal) const {
+    (void)x, (void)position, (void)normal;
+    return false;
+  }
 };
 
 /// Options of the cloud's local surface fit.
@@ -94,10 +103,14 @@ class MeshSurfaceProjector final : public SurfaceProjector {
   ~MeshSurfaceProjector() override;
   void project(const Eigen::Vector3d& x, int& hint, Eigen::Vector3d& position, Eigen::Vector3d& normal) const override;
   double distance_to_samples(const Eigen::Vector3d& x) const override;
+  /// The mesh's boundary edges (edges of one face), searched exhaustively: borders are short.
+  bool has_border() const override { return !border_.empty(); }
+  bool project_to_border(const Eigen::Vector3d& x, Eigen::Vector3d& position, Eigen::Vector3d& normal) const override;
 
  private:
   Eigen::MatrixX3d V_, VN_;
   Eigen::MatrixX3i F_;
+  std::vector<std::pair<int, int>> border_;
   std::unique_ptr<ClosestPointTree> tree_;
 };
 
