@@ -3,12 +3,15 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "heatcvt/closest_point.h"
 #include "heatcvt/errors.h"
 #include "heatcvt/laplacian.h"
+#include "heatcvt/mesh.h"
 #include "heatcvt/mesher/projector.h"
 #include "heatcvt/normalize.h"
 #include "heatcvt/subdivision.h"
@@ -136,6 +139,19 @@ ValidationReport check_result(const TriangleMesh& result, const SurfaceDescripti
   return rep;
 }
 
+// Distance from `mesh` to the input vertex (of a face) farthest from it: how well it covers the input.
+double farthest_input_vertex(const TriangleMesh& input, const TriangleMesh& mesh) {
+  if (mesh.F.rows() == 0) return std::numeric_limits<double>::infinity();
+  std::vector<char> used(static_cast<std::size_t>(input.V.rows()), 0);
+  for (Eigen::Index k = 0; k < input.F.size(); ++k) used[static_cast<std::size_t>(input.F.data()[k])] = 1;
+  const std::vector<SurfacePoint> nearest = closest_surface_points(mesh.V, mesh.F, input.V);
+  double farthest = 0;
+  for (Eigen::Index v = 0; v < input.V.rows(); ++v)
+    if (used[static_cast<std::size_t>(v)])
+      farthest = std::max(farthest, (position(mesh.V, mesh.F, nearest[static_cast<std::size_t>(v)]) - input.V.row(v).transpose()).norm());
+  return farthest;
+}
+
 // The shared post-CVT stages on out.cvt.dual with the input mesh as the projector (the refined
 // mesh is the same surface). Their result replaces out.mesh unless it fails a check that the dual
 // passed (the stages, made for clouds, may open or fill a thin handle): then the dual is kept and
@@ -168,6 +184,11 @@ void run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options
   for (const MeshCheck& c : out.checks.checks) {
     const MeshCheck* after = checks.find(c.name);
     if (c.ran && c.passed && !(after && after->ran && after->passed)) out.post_cvt_kept = false;
+  }
+  if (out.post_cvt_kept) {
+    const double spacing = std::sqrt(surface_area(input.V, input.F) / std::max(1, options.cvt.sites));
+    out.post_cvt_kept = farthest_input_vertex(input, post.mesh) <=
+                        options.max_coverage_ratio * farthest_input_vertex(input, out.mesh) + 0.1 * spacing;
   }
   if (out.post_cvt_kept) {
     out.mesh = std::move(post.mesh);

@@ -73,6 +73,10 @@ struct RemeshOptions {
   int repair_iterations = 4;
   /// Sites added by the repair rounds, at most this fraction of cvt.sites in total. Default 0.1.
   double max_repair_fraction = 0.1;
+  /// The post-CVT stages' result is kept only where it covers the input as well as the dual:
+  /// the input vertex farthest from it is at most this times farther than from the dual, plus a
+  /// tenth of the site spacing sqrt(area / sites) (a cavity capped by a hole fill is not). Default 1.5.
+  double max_coverage_ratio = 1.5;
   /// Run the shared post-CVT stages (mesh_dual_surface(), mesher/surface_mesher.h) on the dual with
   /// the input mesh as the projector: the vertices are then projected onto the input and may be
   /// fewer or more than the sites (unused sites dropped, slivers collapsed, long edges split).
@@ -114,8 +118,9 @@ struct RemeshResult {
   int repair_sites = 0;              ///< sites added by them
   int repair_dropped_sites = 0;      ///< sites in no dual triangle dropped by them (a cell enclosed by another)
   MesherStats mesher;                ///< counts of the post-CVT stages (empty when not run)
-  /// The post-CVT stages ran and their result is `mesh`; false when they did not run or their
-  /// result failed a check that the dual passed (then `mesh` is the dual).
+  /// The post-CVT stages ran and their result is `mesh`; false when they did not run, their
+  /// result failed a check that the dual passed or covers the input less well than the dual
+  /// (RemeshOptions::max_coverage_ratio; then `mesh` is the dual).
   bool post_cvt_kept = false;
   /// The last CVT: its heat Voronoi diagram lives on the refined mesh (cvt_vertices vertices),
   /// its sites on the refined mesh's faces; statistics of every iteration.

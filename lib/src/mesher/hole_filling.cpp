@@ -87,7 +87,7 @@ bool is_back_of_face(const WorkingMesh& mesh, const std::vector<int>& loop) {
 bool selected(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop,
               const HoleFillingOptions& o) {
   const int L = static_cast<int>(loop.size());
-  if (L <= o.max_fill_edges && is_inside_surface(mesh, surface, loop, o)) return true;
+  if (L <= o.max_hole_edges && is_inside_surface(mesh, surface, loop, o)) return true;
   switch (o.policy) {
     case HolePolicy::fill: return true;
     case HolePolicy::keep: return L <= o.sampled_hole_factor * o.max_hole_edges && is_sampled_hole(mesh, surface, loop, o);
