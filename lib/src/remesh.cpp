@@ -185,7 +185,14 @@ void run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options
     const MeshCheck* after = checks.find(c.name);
     if (c.ran && c.passed && !(after && after->ran && after->passed)) out.post_cvt_kept = false;
   }
-  if (out.post_cvt_kept) {
+  const auto manifold = [](const ValidationReport& r) {
+    for (const char* name : {"manifold_edges", "manifold_vertices"}) {
+      const MeshCheck* c = r.find(name);
+      if (!(c && c->ran && c->passed)) return false;
+    }
+    return true;
+  };
+  if (out.post_cvt_kept && manifold(out.checks)) {  // a dual that is no manifold is no alternative
     const double spacing = std::sqrt(surface_area(input.V, input.F) / std::max(1, options.cvt.sites));
     out.post_cvt_kept = farthest_input_vertex(input, post.mesh) <=
                         options.max_coverage_ratio * farthest_input_vertex(input, out.mesh) + 0.1 * spacing;

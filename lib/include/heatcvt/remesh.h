@@ -73,7 +73,8 @@ struct RemeshOptions {
   int repair_iterations = 4;
   /// Sites added by the repair rounds, at most this fraction of cvt.sites in total. Default 0.1.
   double max_repair_fraction = 0.1;
-  /// The post-CVT stages' result is kept only where it covers the input as well as the dual:
+  /// The post-CVT stages' result is kept only where it covers the input as well as a dual that
+  /// is a manifold:
   /// the input vertex farthest from it is at most this times farther than from the dual, plus a
   /// tenth of the site spacing sqrt(area / sites) (a cavity capped by a hole fill is not). Default 1.5.
   double max_coverage_ratio = 1.5;
