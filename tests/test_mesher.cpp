@@ -404,6 +404,24 @@ TEST(HoleFilling, HolesInsideAnInputMeshAreFilledAndItsBorderKept) {
   EXPECT_EQ(validate(near, false).boundary_loops, 2);
 }
 
+// The projector of a closed input mesh knows it has no border: every loop is a hole inside it.
+TEST(HoleFilling, EveryHoleOfAClosedInputMeshIsFilled) {
+  const TriangleMesh s = test::icosphere(3);
+  const MeshSurfaceProjector surface(s.V, s.F);
+  ASSERT_TRUE(surface.border_known());
+  ASSERT_FALSE(surface.has_border());
+  WorkingMesh w = working(s);
+  cut_cap(w, 0.8);
+  HoleFillingOptions o;
+  o.policy = HolePolicy::keep;
+  o.clearance = 10;  // the sampled-hole test never selects a loop
+  int removed = 0;
+  EXPECT_EQ(fill_holes(w, surface, o, {}, removed), 1);
+  const ValidationReport r = validate(w, true);
+  EXPECT_TRUE(r.ok()) << r.summary();
+  EXPECT_EQ(r.genus, 0);
+}
+
 TEST(HoleFilling, ShortLoopsOfTheSurfaceItselfAreKeptOnRequest) {
   // An annulus (radii 1 and 2, 8 vertices per ring) as both the mesh and the surface: two
   // boundary loops of 8 edges with no surface across them.

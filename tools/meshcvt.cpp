@@ -240,6 +240,7 @@ int main(int argc, char** argv) {
     rep["unused_sites"] = r.dual.unused_sites.size();
     rep["output_vertices"] = res.mesh.V.rows();
     rep["post_cvt_kept"] = res.post_cvt_kept;
+    if (!res.post_cvt_refusal.empty()) rep["post_cvt_refusal"] = res.post_cvt_refusal;
     rep["refinement_levels"] = res.refinement_levels;
     rep["cvt_vertices"] = res.cvt_vertices;
     rep["repair_rounds"] = res.repair_rounds;
@@ -275,7 +276,7 @@ int main(int argc, char** argv) {
       for (const auto& [name, seconds] : res.stage_seconds) std::printf(" %s %.2f s;", name.c_str(), seconds);
       std::printf("\n");
       if (!no_post && !res.post_cvt_kept)
-        std::printf("  the post-CVT stages' result failed checks the dual passed or covered the input less well: the dual is written\n");
+        std::printf("  the post-CVT stages' result is not kept (%s): the dual is written\n", res.post_cvt_refusal.c_str());
       if (res.repair_rounds)
         std::printf("  %d sites added, %d dropped in %d closed-ball repair rounds\n", res.repair_sites,
                     res.repair_dropped_sites, res.repair_rounds);

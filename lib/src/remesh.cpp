@@ -152,6 +152,43 @@ double farthest_input_vertex(const TriangleMesh& input, const TriangleMesh& mesh
   return farthest;
 }
 
+bool is_manifold(const ValidationReport& r) {
+  for (const char* name : {"manifold_edges", "manifold_vertices"}) {
+    const MeshCheck* c = r.find(name);
+    if (!(c && c->ran && c->passed)) return false;
+  }
+  return true;
+}
+
+// Why the post-CVT stages' result `post` (its checks `after`) does not replace the dual
+// (out.mesh, out.checks), or "" where it does: it must pass every check the dual passed, keep
+// the input's topology (components, Euler characteristic) where the dual has it (the stages must
+// not open, close or cut the surface), and cover the input as well as a dual that is a manifold
+// (RemeshOptions::max_coverage_ratio).
+std::string post_cvt_refusal(const TriangleMesh& input, const TriangleMesh& post, const ValidationReport& after,
+                             const RemeshOptions& options, const RemeshResult& out) {
+  const auto input_topology = [&](const ValidationReport& r) {
+    return r.components == out.input.topology.components &&
+           r.euler_characteristic == out.input.topology.euler_characteristic();
+  };
+  if (input_topology(out.checks) && !input_topology(after))
+    return "it has " + std::to_string(after.components) + " components and Euler characteristic " +
+           std::to_string(after.euler_characteristic) + ", the input " + std::to_string(out.input.topology.components) +
+           " and " + std::to_string(out.input.topology.euler_characteristic());
+  for (const MeshCheck& c : out.checks.checks) {
+    const MeshCheck* now = after.find(c.name);
+    if (c.ran && c.passed && !(now && now->ran && now->passed))
+      return "it fails " + c.name + (now ? " (" + now->detail + ")" : std::string()) + ", which the dual passed";
+  }
+  if (!is_manifold(out.checks)) return "";  // a dual that is no manifold is no alternative
+  const double spacing = std::sqrt(surface_area(input.V, input.F) / std::max(1, options.cvt.sites));
+  const double post_gap = farthest_input_vertex(input, post), dual_gap = farthest_input_vertex(input, out.mesh);
+  if (post_gap > options.max_coverage_ratio * dual_gap + options.coverage_slack * spacing)
+    return "it covers the input less well: an input vertex is " + std::to_string(post_gap / spacing) +
+           " site spacings from it, " + std::to_string(dual_gap / spacing) + " from the dual";
+  return "";
+}
+
 // The shared post-CVT stages on out.cvt.dual with the input mesh as the projector (the refined
 // mesh is the same surface). Their result replaces out.mesh unless it fails a check that the dual
 // passed (the stages, made for clouds, may open or fill a thin handle): then the dual is kept and
@@ -164,8 +201,9 @@ void run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options
   DualSurfaceResult post;
   try {
     post = mesh_dual_surface(out.cvt.dual.V, out.cvt.dual.F, surface, mo);
-  } catch (const Error&) {  // nothing extracted (a dual of very few sites): the dual stays
+  } catch (const Error& e) {  // nothing extracted (a dual of very few sites): the dual stays
     out.post_cvt_kept = false;
+    out.post_cvt_refusal = e.what();
     return;
   }
   out.mesher = std::move(post.stats);
@@ -174,29 +212,8 @@ void run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options
     if (stage.first != "validate") out.stage_seconds.push_back(stage);
   const auto t = Clock::now();
   ValidationReport checks = check_result(post.mesh, out.input, true);
-  // Kept when it passes every check the dual passed and, where the dual has the input's topology
-  // (components, Euler characteristic), keeps it: the stages must not open, close or cut the surface.
-  const auto input_topology = [&](const ValidationReport& r) {
-    return r.components == out.input.topology.components &&
-           r.euler_characteristic == out.input.topology.euler_characteristic();
-  };
-  out.post_cvt_kept = !input_topology(out.checks) || input_topology(checks);
-  for (const MeshCheck& c : out.checks.checks) {
-    const MeshCheck* after = checks.find(c.name);
-    if (c.ran && c.passed && !(after && after->ran && after->passed)) out.post_cvt_kept = false;
-  }
-  const auto manifold = [](const ValidationReport& r) {
-    for (const char* name : {"manifold_edges", "manifold_vertices"}) {
-      const MeshCheck* c = r.find(name);
-      if (!(c && c->ran && c->passed)) return false;
-    }
-    return true;
-  };
-  if (out.post_cvt_kept && manifold(out.checks)) {  // a dual that is no manifold is no alternative
-    const double spacing = std::sqrt(surface_area(input.V, input.F) / std::max(1, options.cvt.sites));
-    out.post_cvt_kept = farthest_input_vertex(input, post.mesh) <=
-                        options.max_coverage_ratio * farthest_input_vertex(input, out.mesh) + 0.1 * spacing;
-  }
+  out.post_cvt_refusal = post_cvt_refusal(input, post.mesh, checks, options, out);
+  out.post_cvt_kept = out.post_cvt_refusal.empty();
   if (out.post_cvt_kept) {
     out.mesh = std::move(post.mesh);
     out.checks = std::move(checks);

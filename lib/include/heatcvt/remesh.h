@@ -73,11 +73,12 @@ struct RemeshOptions {
   int repair_iterations = 4;
   /// Sites added by the repair rounds, at most this fraction of cvt.sites in total. Default 0.1.
   double max_repair_fraction = 0.1;
-  /// The post-CVT stages' result is kept only where it covers the input as well as a dual that
-  /// is a manifold:
-  /// the input vertex farthest from it is at most this times farther than from the dual, plus a
-  /// tenth of the site spacing sqrt(area / sites) (a cavity capped by a hole fill is not). Default 1.5.
+  /// The post-CVT stages' result is kept only where it covers the input about as well as a dual
+  /// that is a manifold: the input vertex farthest from it is at most max_coverage_ratio times
+  /// farther than from the dual, plus coverage_slack site spacings sqrt(area / sites) (a lost
+  /// ear or a cavity capped by a hole fill is not). Defaults 1.5 and 1.
   double max_coverage_ratio = 1.5;
+  double coverage_slack = 1.0;
   /// Run the shared post-CVT stages (mesh_dual_surface(), mesher/surface_mesher.h) on the dual with
   /// the input mesh as the projector: the vertices are then projected onto the input and may be
   /// fewer or more than the sites (unused sites dropped, slivers collapsed, long edges split).
@@ -123,6 +124,8 @@ struct RemeshResult {
   /// result failed a check that the dual passed or covers the input less well than the dual
   /// (RemeshOptions::max_coverage_ratio; then `mesh` is the dual).
   bool post_cvt_kept = false;
+  /// Why the post-CVT stages' result was not kept, in words (empty when it was or they did not run).
+  std::string post_cvt_refusal;
   /// The last CVT: its heat Voronoi diagram lives on the refined mesh (cvt_vertices vertices),
   /// its sites on the refined mesh's faces; statistics of every iteration.
   CvtResult cvt;

@@ -38,10 +38,12 @@ bool is_sampled_hole(const WorkingMesh& mesh, const SurfaceProjector& surface, c
 }
 
 // Where the surface's own border is known (an input mesh): whether every vertex of the loop is
-// farther than interior_hole_clearance·h from it, i.e. the loop is a hole inside the surface.
+// farther than interior_hole_clearance·h from it (always, on a closed surface), i.e. the loop is
+// a hole inside the surface.
 bool is_inside_surface(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop,
                        const HoleFillingOptions& o) {
-  if (!surface.has_border()) return false;
+  if (!surface.border_known()) return false;
+  if (!surface.has_border()) return true;
   double h = 0;
   for (size_t i = 0; i < loop.size(); ++i) h += (mesh.V.row(loop[i]) - mesh.V.row(loop[(i + 1) % loop.size()])).norm();
   h /= static_cast<double>(loop.size());
@@ -87,7 +89,7 @@ bool is_back_of_face(const WorkingMesh& mesh, const std::vector<int>& loop) {
 bool selected(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop,
               const HoleFillingOptions& o) {
   const int L = static_cast<int>(loop.size());
-  if (L <= o.max_hole_edges && is_inside_surface(mesh, surface, loop, o)) return true;
+  if (L <= o.max_fill_edges && is_inside_surface(mesh, surface, loop, o)) return true;
   switch (o.policy) {
     case HolePolicy::fill: return true;
     case HolePolicy::keep: return L <= o.sampled_hole_factor * o.max_hole_edges && is_sampled_hole(mesh, surface, loop, o);

@@ -24,10 +24,10 @@ enum class HolePolicy { automatic, fill, keep };
 /// Options of fill_holes(). h is the mean edge length of a loop.
 struct HoleFillingOptions {
   HolePolicy policy = HolePolicy::automatic;  ///< Default automatic.
-  /// Where the surface's own border is known (SurfaceProjector::has_border(): an input mesh), a
+  /// Where the surface's own border is known (SurfaceProjector::border_known(): an input mesh), a
   /// loop of at most max_fill_edges edges whose every vertex is farther than this·h from that
-  /// border is a hole inside the surface, not one of its boundaries: filled under every policy
-  /// (the surface is there). Default 1.
+  /// border (every loop, on a closed surface) is a hole inside the surface, not one of its
+  /// boundaries: filled under every policy (the surface is there). Default 1.
   double interior_hole_clearance = 1.0;
   /// With HolePolicy::fill: the longest loop triangulated (the triangulation costs O(L³)). Default 600.
   int max_fill_edges = 600;

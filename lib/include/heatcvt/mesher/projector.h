@@ -23,7 +23,10 @@ class SurfaceProjector {
   /// Distance from `x` to the sampled surface (nearest sample point, or nearest surface point):
   /// hole filling asks whether the surface continues beyond a boundary.
   virtual double distance_to_samples(const Eigen::Vector3d& x) const = 0;
-  /// Whether the surface's border is known (an input mesh's boundary edges); a cloud's is not.
+  /// Whether the surface's border is known (an input mesh's boundary edges, none for a closed
+  /// mesh); a cloud's is not.
+  virtual bool border_known() const { return false; }
+  /// Whether the border is known and not empty.
   virtual bool has_border() const { return false; }
   /// Where has_border(): the point of the border nearest `x` and the surface's unit normal there.
   /// Returns false (and leaves the outputs alone) where the surface has no border.
@@ -104,6 +107,7 @@ class MeshSurfaceProjector final : public SurfaceProjector {
   void project(const Eigen::Vector3d& x, int& hint, Eigen::Vector3d& position, Eigen::Vector3d& normal) const override;
   double distance_to_samples(const Eigen::Vector3d& x) const override;
   /// The mesh's boundary edges (edges of one face), searched exhaustively: borders are short.
+  bool border_known() const override { return true; }
   bool has_border() const override { return !border_.empty(); }
   bool project_to_border(const Eigen::Vector3d& x, Eigen::Vector3d& position, Eigen::Vector3d& normal) const override;
 
