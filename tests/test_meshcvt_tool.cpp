@@ -130,11 +130,12 @@ TEST(MeshcvtTool, OpenMeshesAreCoveredWhole) {
   expect_input_covered("hemisphere_open.obj", 1000);
 }
 
-// Closed meshes of a few thousand vertices at 3,000 sites (refined under the CVT, thin ears):
-// every check passes (closed, manifold, the input's genus, no self-intersection), the count is
-// within 2 % and the angles meet the remeshing targets (φmin ≥ 30°, φm ≥ 52°).
-TEST(MeshcvtTool, ClosedBunniesAt3000MeetTheTargets) {
-  for (const std::string file : {"bunny_libigl.off", "bunny_pmp.off"}) {
+// A closed bunny at 3,000 sites, where the post-CVT stages leave holes at the thin ears that
+// the hole filling must close: every check passes (closed, manifold, the input's genus, no
+// self-intersection), the count is within 2 % and the angles meet the remeshing targets
+// (φmin ≥ 30°, φm ≥ 52°).
+TEST(MeshcvtTool, ClosedBunnyAt3000MeetsTheTargets) {
+  for (const std::string file : {"bunny_pmp.off"}) {
     SCOPED_TRACE(file);
     test::ScratchDir dir("meshcvt");
     const std::string out = dir.path("out.ply"), report = dir.path("r.json");

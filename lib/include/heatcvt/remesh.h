@@ -76,9 +76,9 @@ struct RemeshOptions {
   /// The post-CVT stages' result is kept only where it covers the input about as well as a dual
   /// that is a manifold: the input vertex farthest from it is at most max_coverage_ratio times
   /// farther than from the dual, plus coverage_slack site spacings sqrt(area / sites) (a lost
-  /// ear or a cavity capped by a hole fill is not). Defaults 1.5 and 1.
+  /// ear or a cavity capped by a hole fill is not). Defaults 1.5 and 0.25.
   double max_coverage_ratio = 1.5;
-  double coverage_slack = 1.0;
+  double coverage_slack = 0.25;
   /// Run the shared post-CVT stages (mesh_dual_surface(), mesher/surface_mesher.h) on the dual with
   /// the input mesh as the projector: the vertices are then projected onto the input and may be
   /// fewer or more than the sites (unused sites dropped, slivers collapsed, long edges split).
