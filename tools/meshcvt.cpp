@@ -276,7 +276,7 @@ int main(int argc, char** argv) {
       for (const auto& [name, seconds] : res.stage_seconds) std::printf(" %s %.2f s;", name.c_str(), seconds);
       std::printf("\n");
       if (!no_post && !res.post_cvt_kept)
-        std::printf("  the post-CVT stages' result is not kept (%s): the dual is written\n", res.post_cvt_refusal.c_str());
+        std::printf("  post-CVT stages: %s; the dual is written\n", res.post_cvt_refusal.c_str());
       if (res.repair_rounds)
         std::printf("  %d sites added, %d dropped in %d closed-ball repair rounds\n", res.repair_sites,
                     res.repair_dropped_sites, res.repair_rounds);

@@ -152,12 +152,27 @@ double farthest_input_vertex(const TriangleMesh& input, const TriangleMesh& mesh
   return farthest;
 }
 
+// Whether the checks found every edge and vertex manifold.
 bool is_manifold(const ValidationReport& r) {
   for (const char* name : {"manifold_edges", "manifold_vertices"}) {
     const MeshCheck* c = r.find(name);
     if (!(c && c->ran && c->passed)) return false;
   }
   return true;
+}
+
+// Whether the dual of a closed input already is what the post-CVT stages aim at: every check
+// passed (closed, manifold, the input's genus, no self-intersection), the vertex count within the
+// sizing's tolerance of the sites asked for, φmin and φm at the sizing's targets. The stages
+// would only move its vertices, and their relaxation rounds off tips. (On an open input they
+// also bring the dual's border, inset by about a cell, onto the input's.)
+bool dual_meets_targets(const RemeshResult& out, const RemeshOptions& options) {
+  const IsotropicRemeshOptions& targets = options.mesher.sizing;
+  if (out.input.topology.boundary_edges > 0 || !out.checks.ok() || out.mesh.F.rows() == 0) return false;
+  const TriangleQuality q = triangle_quality(out.mesh.V, out.mesh.F);
+  const int sites = options.cvt.sites;
+  return std::abs(static_cast<int>(out.mesh.V.rows()) - sites) <= targets.count_tolerance * sites &&
+         q.min_angle_deg >= targets.min_angle_deg && q.mean_min_angle_deg >= targets.mean_angle_deg;
 }
 
 // Why the post-CVT stages' result `post` (its checks `after`) does not replace the dual
@@ -203,7 +218,7 @@ void run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options
     post = mesh_dual_surface(out.cvt.dual.V, out.cvt.dual.F, surface, mo);
   } catch (const Error& e) {  // nothing extracted (a dual of very few sites): the dual stays
     out.post_cvt_kept = false;
-    out.post_cvt_refusal = e.what();
+    out.post_cvt_refusal = std::string("nothing extracted: ") + e.what();
     return;
   }
   out.mesher = std::move(post.stats);
@@ -212,8 +227,9 @@ void run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options
     if (stage.first != "validate") out.stage_seconds.push_back(stage);
   const auto t = Clock::now();
   ValidationReport checks = check_result(post.mesh, out.input, true);
-  out.post_cvt_refusal = post_cvt_refusal(input, post.mesh, checks, options, out);
-  out.post_cvt_kept = out.post_cvt_refusal.empty();
+  const std::string refusal = post_cvt_refusal(input, post.mesh, checks, options, out);
+  out.post_cvt_kept = refusal.empty();
+  if (!out.post_cvt_kept) out.post_cvt_refusal = "result not kept: " + refusal;
   if (out.post_cvt_kept) {
     out.mesh = std::move(post.mesh);
     out.checks = std::move(checks);
@@ -296,8 +312,12 @@ RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions&
   out.checks = check_result(out.mesh, out.input, options.cvt.build_dual);
   out.stage_seconds.emplace_back("checks", seconds_since(t));
   // The stages orient every closed piece outward: not for a non-orientable input.
-  if (options.post_cvt_stages && options.cvt.build_dual && out.mesh.F.rows() > 0 && !out.input.non_orientable)
-    run_post_cvt_stages(mesh, options, out);
+  if (options.post_cvt_stages && options.cvt.build_dual && out.mesh.F.rows() > 0 && !out.input.non_orientable) {
+    if (dual_meets_targets(out, options))
+      out.post_cvt_refusal = "not run: the dual of the closed input passes every check and meets the targets";
+    else
+      run_post_cvt_stages(mesh, options, out);
+  }
   out.quality = triangle_quality(out.mesh.V, out.mesh.F);
   out.iterations = static_cast<int>(out.cvt.iterations.size());
   out.converged = out.cvt.converged;

@@ -83,7 +83,9 @@ struct RemeshOptions {
   /// the input mesh as the projector: the vertices are then projected onto the input and may be
   /// fewer or more than the sites (unused sites dropped, slivers collapsed, long edges split).
   /// Their result is kept unless it fails a check that the dual passed (RemeshResult::post_cvt_kept).
-  /// Not run on non-orientable inputs (the stages orient closed pieces outward).
+  /// Not run on non-orientable inputs (the stages orient closed pieces outward), nor where the
+  /// dual of a closed input passes every check with the vertex count, φmin and φm of
+  /// mesher.sizing's targets (their relaxation would only round off tips).
   /// false = the output is the dual itself (vertex i = site i). Default true.
   bool post_cvt_stages = true;
   /// Options of those stages (threads: cvt.threads is used). Default SurfaceMesherOptions{} with

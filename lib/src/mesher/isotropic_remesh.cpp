@@ -411,10 +411,10 @@ class Sizer {
     attempt([&] { return final_polish(); });
     local_ = false;
     // Slivers the polish could not open: flipped over creases and folds, those flat along the
-    // border and the sliver ears trimmed,
-    // the others' shortest edges collapsed (border edges and interior vertices into border ones
-    // too); the pieces they cut off removed, the count restored and polished once more; repeated
-    // while slivers are left, as each polish can expose new ones.
+    // border and the sliver ears trimmed, the others' shortest edges collapsed (border edges and
+    // interior vertices into border ones too); the pieces they cut off removed, the count
+    // restored and polished once more; repeated while slivers are left, as each polish can
+    // expose new ones.
     for (int pass = 0; pass < o_.sliver_passes && figures_below_target(); ++pass) {
       const int changed = attempt([&] {
         const int flipped = flip_sliver_edges(mesh_, surface_, o_.sliver_flips, frozen());
