@@ -565,6 +565,7 @@ class Sizer {
   // Splits the longest or collapses the shortest edges until the count is within half the
   // tolerance of the target (or nothing more can be done).
   void adjust_count(double long_limit) {
+    const double base_limit = long_limit;
     const int target = o_.target_vertices;
     const int slack = std::max(0, static_cast<int>(std::floor(0.5 * o_.count_tolerance * target)));
     for (int round = 0; round < 12; ++round) {
@@ -580,7 +581,12 @@ class Sizer {
         flip_and_relax();
         return n;
       });
-      if (changed == 0) break;
+      // Collapses stall where every ring would get an edge above the limit (a mesh far above
+      // the target on a small area): the limit grows, up to max_collapse_growth times.
+      if (diff < 0 && changed < -diff / 2 && long_limit < o_.max_collapse_growth * base_limit)
+        long_limit *= 1.25;
+      else if (changed == 0)
+        break;
     }
   }
 
@@ -673,8 +679,9 @@ SizingFigures figures(const WorkingMesh& mesh, const SurfaceProjector& surface, 
 // Whether `after` is no worse than `before` on any target: the count is within the tolerance or
 // nearer; φmin meets its target if it did, else the share of faces below it is no larger; φm
 // meets its target or is no lower than before (both less border_fit_angle_slack_deg where the
-// border was brought onto the surface's own); the border is on the surface's border within the
-// tolerance or no farther off than before.
+// border was brought onto the surface's own; φmin not at all where the count was off by more
+// than count_first_error); the border is on the surface's border within the tolerance or no
+// farther off than before.
 bool no_worse(const SizingFigures& after, const SizingFigures& before, const IsotropicRemeshOptions& o) {
   const double count_slack = o.count_tolerance * o.target_vertices;
   const int err_after = std::abs(after.vertices - o.target_vertices), err_before = std::abs(before.vertices - o.target_vertices);
@@ -684,7 +691,11 @@ bool no_worse(const SizingFigures& after, const SizingFigures& before, const Iso
   const bool border_fitted = before.border_gap > o.border_tolerance && after.border_gap <= o.border_tolerance;
   const double slack = border_fitted ? o.border_fit_angle_slack_deg * kDegree : 0.0;
   const double target = o.min_angle_deg * kDegree;
-  const bool min_angle = before.min_angle >= target ? after.min_angle >= target - slack : after.below <= before.below;
+  // A mesh off the count by more than count_first_error is mostly missing: its count comes
+  // first, φmin may drop (φm may not).
+  const bool count_first = err_before > o.count_first_error * o.target_vertices && err_after < err_before;
+  const bool min_angle = count_first || (before.min_angle >= target ? after.min_angle >= target - slack
+                                                                    : after.below <= before.below);
   const bool mean_angle = after.mean_angle >= std::min(before.mean_angle, o.mean_angle_deg * kDegree) - slack - 1e-12;
   const bool border = after.border_gap <= std::max(before.border_gap, o.border_tolerance);
   return count && min_angle && mean_angle && border;

@@ -40,6 +40,10 @@ struct IsotropicRemeshOptions {
   /// up to this much lower than before (or than their targets): the inset border's triangles
   /// were shaped for a border that is not the surface's. Default 1°.
   double border_fit_angle_slack_deg = 1.0;
+  /// A mesh whose count is off by more than this fraction of the target is mostly missing
+  /// (the dual left most sites out): a result nearer the count is kept even where φmin drops
+  /// (φm may not). Default 0.25.
+  double count_first_error = 0.25;
   /// A mesh that meets the shape targets and whose count is off by at most this fraction of the
   /// target only has its count adjusted (no remeshing rounds). Default 0.05.
   double reshape_count_error = 0.05;
@@ -51,6 +55,10 @@ struct IsotropicRemeshOptions {
   /// An edge is collapsed when shorter than this times the target length (and no edge of the
   /// collapsed ring becomes long). Default 4/5.
   double short_factor = 4.0 / 5.0;
+  /// Where the count adjustment's collapses stall (every ring would get an edge longer than
+  /// long_factor times the target length), that limit grows by 25 % per round up to this factor.
+  /// Default 2.
+  double max_collapse_growth = 2.0;
   /// A split is refused where the edge's midpoint projects farther than this times the edge's
   /// length from it (the edge spans a gap or a depth jump of the surface). Default 0.25.
   double max_split_offset = 0.25;
