@@ -183,6 +183,39 @@ TEST(IsotropicRemesh, InsetBorderIsMovedOntoTheSurfacesBorder) {
   }
 }
 
+// The rule that keeps or refuses a sizing result, on figures built by hand (target 1,000).
+TEST(IsotropicRemesh, ResultIsKeptOnlyWhenNoWorseOnAnyTarget) {
+  const IsotropicRemeshOptions o = sized_to(1000);
+  const double deg = M_PI / 180;
+  auto figures = [&](int vertices, double min_deg, double mean_deg, double below, double gap) {
+    SizingFigures f;
+    f.vertices = vertices;
+    f.min_angle = min_deg * deg;
+    f.mean_angle = mean_deg * deg;
+    f.below = below;
+    f.border_gap = gap;
+    return f;
+  };
+  const SizingFigures good = figures(1000, 30, 53, 0, 0);
+  // Count to within 2 %, shape kept: kept; a count farther off, or φmin / φm lost: refused.
+  EXPECT_TRUE(sizing_no_worse(good, figures(950, 30, 53, 0, 0), o));
+  EXPECT_FALSE(sizing_no_worse(figures(900, 30, 53, 0, 0), figures(950, 30, 53, 0, 0), o));
+  EXPECT_FALSE(sizing_no_worse(figures(1000, 20, 53, 0.01, 0), figures(950, 30, 53, 0, 0), o));
+  EXPECT_FALSE(sizing_no_worse(figures(1000, 30, 50, 0, 0), figures(950, 30, 53, 0, 0), o));
+  // Below the φmin target before: a smaller share of faces below it is enough.
+  EXPECT_TRUE(sizing_no_worse(figures(1000, 10, 53, 0.01, 0), figures(950, 5, 53, 0.02, 0), o));
+  EXPECT_FALSE(sizing_no_worse(figures(1000, 10, 53, 0.03, 0), figures(950, 5, 53, 0.02, 0), o));
+  // A mesh off the count by more than count_first_error (25 %): the count first, φmin may drop.
+  EXPECT_TRUE(sizing_no_worse(figures(1000, 5, 45, 0.05, 0), figures(600, 30, 44, 0, 0), o));
+  EXPECT_FALSE(sizing_no_worse(figures(1000, 5, 43, 0.05, 0), figures(600, 30, 44, 0, 0), o));  // φm may not
+  EXPECT_FALSE(sizing_no_worse(figures(1000, 5, 45, 0.05, 0), figures(800, 30, 44, 0, 0), o));  // 20 % off only
+  // A border brought onto the surface's own may cost up to 1° of φmin and φm; a border moved off
+  // it is refused.
+  EXPECT_TRUE(sizing_no_worse(figures(1000, 24.5, 51.5, 0.001, 0), figures(1000, 30, 53, 0, 2.5), o));
+  EXPECT_FALSE(sizing_no_worse(figures(1000, 23.5, 53, 0.001, 0), figures(1000, 30, 53, 0, 2.5), o));
+  EXPECT_FALSE(sizing_no_worse(figures(1000, 30, 53, 0, 0.5), good, o));
+}
+
 TEST(IsotropicRemesh, FlyingFacesAcrossADepthJumpAreRemoved) {
   // Two parallel sheets (z = 0 and z = 0.5) as the surface; the mesh is both grids plus a strip
   // of faces bridging their facing edges (what a hole fill across a depth jump makes).

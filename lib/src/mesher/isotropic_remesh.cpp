@@ -652,17 +652,7 @@ int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, cons
   return removed > 0 ? removed + make_vertices_manifold(mesh) : 0;
 }
 
-namespace {
-
-// Vertex count and shape of a mesh, as the sizing's targets measure them.
-struct SizingFigures {
-  double border_gap = 0;  ///< border_gap(): how far the border is off the surface's own
-  int vertices = 0;
-  double min_angle = M_PI, mean_angle = 0;
-  double below = 0;  ///< fraction of the faces with a smallest angle below the min_angle_deg target
-};
-
-SizingFigures figures(const WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o) {
+SizingFigures sizing_figures(const WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o) {
   SizingFigures q;
   q.border_gap = border_gap(mesh, surface, o);
   q.vertices = vertices_in_faces(mesh);
@@ -676,13 +666,7 @@ SizingFigures figures(const WorkingMesh& mesh, const SurfaceProjector& surface, 
   return q;
 }
 
-// Whether `after` is no worse than `before` on any target: the count is within the tolerance or
-// nearer; φmin meets its target if it did, else the share of faces below it is no larger; φm
-// meets its target or is no lower than before (both less border_fit_angle_slack_deg where the
-// border was brought onto the surface's own; φmin not at all where the count was off by more
-// than count_first_error); the border is on the surface's border within the tolerance or no
-// farther off than before.
-bool no_worse(const SizingFigures& after, const SizingFigures& before, const IsotropicRemeshOptions& o) {
+bool sizing_no_worse(const SizingFigures& after, const SizingFigures& before, const IsotropicRemeshOptions& o) {
   const double count_slack = o.count_tolerance * o.target_vertices;
   const int err_after = std::abs(after.vertices - o.target_vertices), err_before = std::abs(before.vertices - o.target_vertices);
   const bool count = err_after <= count_slack || err_after <= err_before;
@@ -701,11 +685,9 @@ bool no_worse(const SizingFigures& after, const SizingFigures& before, const Iso
   return count && min_angle && mean_angle && border;
 }
 
-}  // namespace
-
 bool needs_sizing(const WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options) {
   if (options.target_vertices <= 0 || mesh.empty()) return false;
-  const SizingFigures q = figures(mesh, surface, options);
+  const SizingFigures q = sizing_figures(mesh, surface, options);
   return std::abs(q.vertices - options.target_vertices) > options.count_tolerance * options.target_vertices ||
          q.min_angle < options.min_angle_deg * kDegree || q.mean_angle < options.mean_angle_deg * kDegree ||
          q.border_gap > options.border_tolerance;
@@ -715,7 +697,7 @@ bool size_to_target(WorkingMesh& mesh, const SurfaceProjector& surface, const Is
                     MesherStats& stats) {
   if (!needs_sizing(mesh, surface, options)) return false;
   const WorkingMesh::Checkpoint before = mesh.checkpoint();
-  const SizingFigures figures_before = figures(mesh, surface, options);
+  const SizingFigures figures_before = sizing_figures(mesh, surface, options);
   const MesherStats stats_before = stats;
   // A mesh of the right shape whose count is off by little only gets the count adjusted.
   const bool shape_met = figures_before.min_angle >= options.min_angle_deg * kDegree &&
@@ -724,7 +706,7 @@ bool size_to_target(WorkingMesh& mesh, const SurfaceProjector& surface, const Is
   const bool count_near = std::abs(figures_before.vertices - options.target_vertices) <=
                           options.reshape_count_error * options.target_vertices;
   Sizer(mesh, surface, options, stats).run(!(shape_met && count_near));
-  if (no_worse(figures(mesh, surface, options), figures_before, options)) return true;
+  if (sizing_no_worse(sizing_figures(mesh, surface, options), figures_before, options)) return true;
   mesh.rollback(before);
   stats = stats_before;
   return false;

@@ -14,6 +14,8 @@
 #include "heatcvt/mesher/sliver_collapse.h"
 #include "heatcvt/mesher/working_mesh.h"
 
+#include <cmath>
+
 namespace heatcvt {
 
 /// Options of size_to_target().
@@ -115,8 +117,28 @@ struct IsotropicRemeshOptions {
   int threads = 0;           ///< 0 = all cores; results do not depend on it. Default 0.
 };
 
-/// Whether the mesh misses the targets of `options` (count, smallest angle, φm), i.e. whether
-/// size_to_target() would work on it.
+/// Vertex count, shape and border of a mesh, as the sizing's targets measure them.
+struct SizingFigures {
+  /// Largest distance, in target edge lengths, from a border vertex to the surface's own border
+  /// (among those within max_border_gap of it); 0 where the surface's border is not known.
+  double border_gap = 0;
+  int vertices = 0;                         ///< vertices in faces
+  double min_angle = M_PI, mean_angle = 0;  ///< φmin, φm (radians)
+  double below = 0;  ///< fraction of the faces with a smallest angle below min_angle_deg
+};
+SizingFigures sizing_figures(const WorkingMesh& mesh, const SurfaceProjector& surface,
+                             const IsotropicRemeshOptions& options);
+
+/// Whether `after` is no worse than `before` on any target, the rule by which size_to_target()
+/// keeps its result: the count is within count_tolerance or nearer; φmin meets its target if it
+/// did, else the share of faces below it is no larger; φm meets its target or is no lower than
+/// before (both less border_fit_angle_slack_deg where the border was brought onto the surface's
+/// own; φmin not at all where the count was off by more than count_first_error); the border is on
+/// the surface's border within border_tolerance or no farther off than before.
+bool sizing_no_worse(const SizingFigures& after, const SizingFigures& before, const IsotropicRemeshOptions& options);
+
+/// Whether the mesh misses the targets of `options` (count, smallest angle, φm, border), i.e.
+/// whether size_to_target() would work on it.
 bool needs_sizing(const WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options);
 
 /// Removes the faces of open pieces (pieces with a border) that do not lie on the surface: their
