@@ -12,6 +12,8 @@
 #include "heatcvt/mesh.h"
 #include "heatcvt/mesher/angle_polish.h"
 #include "heatcvt/mesher/compaction.h"
+#include "heatcvt/mesher/manifold_extraction.h"
+#include "heatcvt/mesher/mesh_checks.h"
 #include "heatcvt/mesher/orientation.h"
 #include "heatcvt/mesher/projector.h"
 #include "heatcvt/mesher/sliver_collapse.h"
@@ -108,6 +110,59 @@ TEST(BoundaryTrim, CutsSliverEarsAndKeepsAWellShapedOne) {
   WorkingMesh fine = ear(0.3);
   EXPECT_EQ(trim_boundary_slivers(fine, {}), 0);
   EXPECT_EQ(fine.num_faces(), 2);
+}
+
+// A unit grid with a ribbon one triangle wide (height 0.02 over edges of 1/6: 13.5° at its base
+// corners) leaving its right border at the bottom corner: every ribbon triangle has all three
+// corners on the border, so no vertex move opens it and no single-apex trim applies.
+WorkingMesh grid_with_ribbon(int segments, int* grid_faces) {
+  const int n = 6;
+  const TriangleMesh g = test::grid(n, 0, 1, 0, 1, true);
+  const double step = 1.0 / n, width = 0.02;
+  const int b0 = n, q = n + (n + 1);  // bottom-right corner and the vertex above it
+  EXPECT_NEAR(g.V(b0, 0), 1.0, 1e-12);
+  EXPECT_NEAR(g.V(b0, 1), 0.0, 1e-12);
+  EXPECT_NEAR(g.V(q, 1), step, 1e-12);
+  Eigen::MatrixX3d V(g.V.rows() + 2 * segments + 1, 3);
+  V.topRows(g.V.rows()) = g.V;
+  std::vector<MeshFace> faces;
+  for (Eigen::Index f = 0; f < g.F.rows(); ++f) faces.push_back({g.F(f, 0), g.F(f, 1), g.F(f, 2)});
+  *grid_faces = static_cast<int>(faces.size());
+  // Bottom vertices B_k = (1 + k step, 0), k = 1..segments (B_0 = b0); top T_k = (1 + (k + 1/2) step, width).
+  const auto bottom = [&](int k) { return k == 0 ? b0 : static_cast<int>(g.V.rows()) + k - 1; };
+  const auto top = [&](int k) { return static_cast<int>(g.V.rows()) + segments + k; };
+  for (int k = 1; k <= segments; ++k) V.row(bottom(k)) << 1 + k * step, 0, 0;
+  for (int k = 0; k <= segments; ++k) V.row(top(k)) << 1 + (k + 0.5) * step, width, 0;
+  faces.push_back({q, b0, top(0)});
+  for (int k = 0; k < segments; ++k) {
+    faces.push_back({bottom(k), bottom(k + 1), top(k)});
+    faces.push_back({top(k), bottom(k + 1), top(k + 1)});
+  }
+  return working(V, faces);
+}
+
+TEST(BoundaryTrim, CutsARibbonOneTriangleWide) {
+  int grid_faces = 0;
+  WorkingMesh w = grid_with_ribbon(4, &grid_faces);
+  ASSERT_LT(triangle_quality(w.V, face_matrix(w)).min_angle_deg, 15);
+  // Without cut_necks only the ear at the ribbon's end goes; its other slivers stay, as their
+  // apexes are on the border.
+  BoundaryTrimOptions keep;
+  keep.cut_necks = false;
+  WorkingMesh kept = w;
+  EXPECT_LE(trim_boundary_slivers(kept, keep), 1);
+  EXPECT_LT(triangle_quality(kept.V, face_matrix(kept)).min_angle_deg, 15);
+  // With it the ribbon is cut at its root; what is left of it is a small piece.
+  EXPECT_GT(trim_boundary_slivers(w, {}), 0);
+  remove_small_pieces(w, 20);
+  EXPECT_GE(w.num_faces(), grid_faces) << "the grid is kept";
+  EXPECT_LE(w.num_faces(), grid_faces + 1);
+  EXPECT_GE(triangle_quality(w.V, face_matrix(w)).min_angle_deg, 25);
+  EXPECT_EQ(self_intersecting_pairs(w), 0);
+  // Every vertex in faces has a single fan (the mesh is a manifold with boundary).
+  const std::vector<std::vector<int>> vf = w.vertex_faces();
+  for (int v = 0; v < w.num_vertices(); ++v)
+    if (!vf[v].empty()) EXPECT_EQ(vertex_fans(w, v, vf[v]).size(), 1u) << v;
 }
 
 // A fan around the border vertex 0 of a grid, with the interior vertex next to it pulled within

@@ -411,22 +411,32 @@ class Sizer {
     attempt([&] { return final_polish(); });
     local_ = false;
     // Slivers the polish could not open: flipped over creases and folds, those flat along the
-    // border and the sliver ears trimmed, the others' shortest edges collapsed (border edges and
-    // interior vertices into border ones too); the pieces they cut off removed, the count
-    // restored and polished once more; repeated while slivers are left, as each polish can
-    // expose new ones.
+    // border, the sliver ears and the slivers across ribbons one triangle wide trimmed, the
+    // others' shortest edges collapsed (border edges and interior vertices into border ones
+    // too); the pieces they cut off removed, the count restored and polished once more; repeated
+    // while slivers are left, as each polish can expose new ones. Each pass starts with only the
+    // regions around faces crossing now frozen.
     for (int pass = 0; pass < o_.sliver_passes && figures_below_target(); ++pass) {
-      const int changed = attempt([&] {
+      thaw();
+      // Each kind of edit is its own attempt: a collapse that makes faces cross costs neither
+      // the flips nor the trims elsewhere.
+      int changed = attempt([&] {
         const int flipped = flip_sliver_edges(mesh_, surface_, o_.sliver_flips, frozen());
         stats_.flipped_edges += flipped;
+        return flipped;
+      });
+      changed += attempt([&] {
         const int trimmed = trim_boundary_slivers(mesh_, o_.border_slivers);
         stats_.trimmed_faces += trimmed;
-        const int collapsed = collapse_slivers(mesh_, surface_, o_.slivers, stats_);
-        stats_.collapsed_edges += collapsed;
-        stats_.removed_triangles +=
-            remove_small_pieces(mesh_, o_.min_piece_faces, o_.min_piece_vertex_fraction, &stats_.pieces_removed);
-        return flipped + trimmed + collapsed;
+        return trimmed;
       });
+      changed += attempt([&] {
+        const int collapsed = collapse_slivers(mesh_, surface_, o_.slivers, stats_, &frozen());
+        stats_.collapsed_edges += collapsed;
+        return collapsed;
+      });
+      stats_.removed_triangles +=
+          remove_small_pieces(mesh_, o_.min_piece_faces, o_.min_piece_vertex_fraction, &stats_.pieces_removed);
       if (changed == 0) break;
       adjust_count(o_.long_factor * length);
       attempt([&] { return final_polish(); });
@@ -452,6 +462,14 @@ class Sizer {
       changed += attempt([&] { return cut_ears(mesh_, o_, frozen()); });
       if (changed == 0) break;
     }
+  }
+
+  // Only the faces crossing now and their neighbours stay frozen: the regions frozen where an
+  // earlier step made faces cross are opened again (a later step on the changed mesh may succeed
+  // there), as are those around crossings the steps have removed.
+  void thaw() {
+    frozen_.assign(mesh_.num_vertices(), 0);
+    freeze_around(crossings_);
   }
 
   const std::vector<char>& frozen() {

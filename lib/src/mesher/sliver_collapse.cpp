@@ -105,7 +105,7 @@ struct CollapsePass {
   }
 
   // One pass over the faces; returns the collapses done.
-  int run() {
+  int run(const std::vector<char>* frozen) {
     const double thr = o.sliver_angle_deg * M_PI / 180.0;
     const Eigen::MatrixX3d& S = mesh.V;
     vf = mesh.vertex_faces();
@@ -113,6 +113,10 @@ struct CollapsePass {
     border = mesh.boundary_vertices();
     links = border_links(mesh);
     touched.assign(mesh.num_vertices(), 0);
+    // A frozen vertex is treated as touched: no collapse reaches its ring.
+    if (frozen)
+      for (int v = 0; v < mesh.num_vertices() && v < static_cast<int>(frozen->size()); ++v)
+        if ((*frozen)[v]) touched[v] = 1;
     int done = 0;
     for (int id = 0; id < mesh.num_faces(); ++id) {
       const MeshFace f = mesh.face(id);
@@ -136,18 +140,19 @@ struct CollapsePass {
 };
 
 // Valence-3 vertices of remaining slivers (no flip removes them); undone if that self-intersects.
-void remove_sliver_valence3(WorkingMesh& mesh, const SliverCollapseOptions& o, MesherStats& stats) {
+void remove_sliver_valence3(WorkingMesh& mesh, const SliverCollapseOptions& o, MesherStats& stats, int crossing_before,
+                            const std::vector<char>* frozen) {
   const WorkingMesh::Checkpoint before = mesh.checkpoint();
   const int flips_before = stats.flipped_edges;
   std::vector<char> in_sliver(mesh.num_vertices(), 0);
   for (const MeshFace& f : mesh.faces())
     if (face_min_angle(mesh, f) < o.sliver_angle_deg * M_PI / 180.0)
-      for (int v : f) in_sliver[v] = 1;
+      for (int v : f) in_sliver[v] = !frozen || v >= static_cast<int>(frozen->size()) || !(*frozen)[v];
   if (remove_valence3(mesh, o.valence3, &in_sliver) > 0) {
     FlipOptions fo = o.flips;
     fo.valence_mode = false;
     stats.flipped_edges += flip_edges(mesh, fo, &in_sliver);
-    if (self_intersecting_pairs(mesh) > 0) {
+    if (self_intersecting_pairs(mesh) > crossing_before) {
       mesh.rollback(before, true);
       stats.flipped_edges = flips_before;
     }
@@ -169,26 +174,54 @@ bool removable_ear(const WorkingMesh& mesh, const std::vector<std::vector<int>>&
   return true;
 }
 
+// The apex of a sliver being cut is on the border: all of its `fans` but the largest are marked
+// to go too, unless one of their corners is already touched this pass. Returns whether marked.
+bool cut_neck_fans(const WorkingMesh& mesh, const std::vector<std::vector<int>>& fans, std::vector<char>& drop,
+                   std::vector<char>& touched) {
+  std::size_t keep = 0;
+  for (std::size_t i = 1; i < fans.size(); ++i)
+    if (fans[i].size() > fans[keep].size()) keep = i;
+  for (std::size_t i = 0; i < fans.size(); ++i)
+    for (int g : fans[i])
+      for (int v : mesh.face(g))
+        if (i != keep && touched[v]) return false;
+  for (std::size_t i = 0; i < fans.size(); ++i)
+    if (i != keep)
+      for (int g : fans[i]) {
+        drop[g] = 1;
+        for (int v : mesh.face(g)) touched[v] = 1;
+      }
+  return true;
+}
+
 }  // namespace
 
 int collapse_slivers(WorkingMesh& mesh, const SurfaceProjector& surface, const SliverCollapseOptions& options,
-                     MesherStats& stats) {
+                     MesherStats& stats, const std::vector<char>* frozen) {
   const WorkingMesh::Checkpoint before = mesh.checkpoint();
+  const int crossing_before = self_intersecting_pairs(mesh);
   FlipOptions fo = options.flips;
   fo.valence_mode = false;
   int collapsed = 0;
   for (int pass = 0; pass < options.passes; ++pass) {
     CollapsePass p{mesh, surface, options, {}, {}, {}, {}, {}};
-    const int done = p.run();
+    const int done = p.run(frozen);
     if (done == 0) break;
     collapsed += done;
-    stats.flipped_edges += flip_edges(mesh, fo);
+    std::vector<char> movable;
+    if (frozen) {  // flips only at vertices with no frozen vertex in their ring
+      movable.assign(mesh.num_vertices(), 1);
+      const auto is_frozen = [&](int v) { return v < static_cast<int>(frozen->size()) && (*frozen)[v]; };
+      for (const MeshFace& f : mesh.faces())
+        if (is_frozen(f[0]) || is_frozen(f[1]) || is_frozen(f[2])) movable[f[0]] = movable[f[1]] = movable[f[2]] = 0;
+    }
+    stats.flipped_edges += flip_edges(mesh, fo, frozen ? &movable : nullptr);
   }
-  if (collapsed > 0 && self_intersecting_pairs(mesh) > 0) {
+  if (collapsed > 0 && self_intersecting_pairs(mesh) > crossing_before) {
     mesh.rollback(before, true);
     collapsed = 0;
   }
-  remove_sliver_valence3(mesh, options, stats);
+  remove_sliver_valence3(mesh, options, stats, crossing_before, frozen);
   return collapsed;
 }
 
@@ -270,13 +303,16 @@ int trim_boundary_slivers(WorkingMesh& mesh, const BoundaryTrimOptions& options)
       std::vector<int> rest;
       for (int g : vf[c])
         if (g != id) rest.push_back(g);
-      if (vertex_fans(mesh, c, rest).size() != 1) continue;
+      const std::vector<std::vector<int>> fans = vertex_fans(mesh, c, rest);
+      if (fans.size() != 1 && !(options.cut_necks && cut_neck_fans(mesh, fans, drop, touched))) continue;
       drop[id] = 1;
       touched[a] = touched[b] = touched[c] = 1;
       ++dropped;
     }
     if (dropped == 0) break;
     removed += mesh.remove_faces(drop);
+    // A cut fan may have split a border vertex of its own into two fans.
+    removed += make_vertices_manifold(mesh, ManifoldOptions{10, 0});
   }
   return removed;
 }

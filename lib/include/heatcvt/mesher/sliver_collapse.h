@@ -27,6 +27,10 @@ struct BoundaryTrimOptions {
   /// this (its height is then at most tan(90° − apex/2) / 2 ≈ 0.29 of that edge). Default 120°.
   double min_apex_angle_deg = 120;
   int passes = 1;                ///< Default 1 (each pass exposes new border triangles: more passes eat into the surface).
+  /// Also cut such a sliver where its apex is on the border too: the surface is one triangle wide
+  /// there (a ribbon or a neck narrower than the site spacing, which no vertex move can open); the
+  /// apex keeps its largest fan of faces and the others go. Default true.
+  bool cut_necks = true;
 };
 
 /// Options of flip_sliver_edges().
@@ -50,6 +54,9 @@ int flip_sliver_edges(WorkingMesh& mesh, const SurfaceProjector& surface, const 
 /// - one boundary edge, obtuse apex (at least min_apex_angle_deg) opposite it, every corner
 ///   keeping a face and the apex a single fan: the border moves onto the apex, by less than the
 ///   sliver's height, and no vertex is lost;
+/// - the same where the apex is on the border as well (cut_necks): the apex keeps its largest fan,
+///   the faces of its other fans go with the sliver (what is cut off a ribbon narrower than the
+///   spacing is left as small pieces, which the caller removes);
 /// - two boundary edges (an ear, whose lone corner is on both) where the other two corners keep
 ///   faces: the border moves onto the third edge, by less than the ear's longest edge, and the
 ///   lone corner leaves the mesh (a sliver ear is a spike or a notch of the border at the site
@@ -63,9 +70,11 @@ int trim_boundary_slivers(WorkingMesh& mesh, const BoundaryTrimOptions& options)
 /// interior vertex goes into a border one, which keeps its place), the link condition holds, the two opposite vertices keep valence ≥ 3, no ring triangle
 /// turns more than max_normal_turn_deg and the ring's smallest angle improves; the merged vertex
 /// goes to the best of the midpoint projected to the surface, a, or b. Undone as a whole when
-/// the result self-intersects. Then the valence-3 vertices of remaining slivers are removed
-/// (undone if that self-intersects). Returns the edges collapsed; flips are added to stats.
+/// the result has more self-intersecting face pairs than the input. Slivers with a `frozen`
+/// corner (if given) are left alone and the flips keep off frozen vertices. Then the valence-3
+/// vertices of remaining slivers are removed (undone if that self-intersects). Returns the edges
+/// collapsed; flips are added to stats.
 int collapse_slivers(WorkingMesh& mesh, const SurfaceProjector& surface, const SliverCollapseOptions& options,
-                     MesherStats& stats);
+                     MesherStats& stats, const std::vector<char>* frozen = nullptr);
 
 }  // namespace heatcvt
