@@ -5,11 +5,13 @@
 // reconstruct_surface_streamed at -n 3000 and at a fixed density (points / 50 sites, capped at
 // 200,000; only for clouds up to --density-max points). Each reconstruction runs in a child
 // process (this program re-executed) so that its peak memory (getrusage ru_maxrss) is its own.
-// Prints a markdown table: time, the time spent streaming (both passes), peak memory, the points
-// the reconstruction ran on, vertices and the mesh checks (closed, genus, φmin, φm).
+// The peer, PCL Poisson (depth 8) + CGAL isotropic remeshing to the same vertex count on the
+// whole cloud in memory (normals by PCA + MST), runs the same way on clouds up to --peer-max
+// points. Prints a markdown table: time, the time spent reading, peak memory, the points the
+// reconstruction ran on, vertices and the mesh checks (closed, genus, φmin, φm).
 //
 // Usage: bench_scale [--sizes 100000,1000000,10000000] [--huge] [--density-max 1000000]
-//                    [--sites 3000] [--keep-dir DIR] [--fine F] [--plain-means]
+//                    [--peer-max 1000000] [--sites 3000] [--keep-dir DIR] [--fine F] [--plain-means]
 // (--fine: StreamOptions::fine_voxel_factor; --plain-means: project_to_surface = false)
 #include <sys/resource.h>
 #include <unistd.h>
@@ -25,7 +27,11 @@
 #include <vector>
 
 #include "bench_util.h"
+#include "heatcvt/cloud_io.h"
+#include "heatcvt/dual_mesh.h"
 #include "heatcvt/mesh.h"
+#include "heatcvt/validate.h"
+#include "peer_pipelines.h"
 #include "heatcvt/mesh_io.h"
 #include "heatcvt/reconstruct.h"
 #include "heatcvt/reconstruct_stream.h"
@@ -81,6 +87,29 @@ int run_child(const std::string& path, int sites, double fine_factor, bool proje
   return 0;
 }
 
+// Peer child: the whole cloud read into memory, normals (peer_normals), PCL Poisson (depth 8)
+// and CGAL isotropic remeshing to `sites` vertices; prints the same keys as run_child.
+int run_peer_child(const std::string& path, int sites) {
+  const double t0 = bench::now_seconds();
+  const PointCloud cloud = read_cloud(path);
+  const double t_read = bench::now_seconds() - t0;
+  const Eigen::MatrixX3d N = test::peer_normals(cloud.P);
+  const TriangleMesh m = test::remesh_to(test::pcl_poisson(cloud.P, N, 8), sites);
+  const double total = bench::now_seconds() - t0;
+  rusage ru{};
+  getrusage(RUSAGE_SELF, &ru);
+  ValidationOptions vo;
+  vo.require_closed = false;
+  vo.check_self_intersections = false;
+  const ValidationReport rep = validate_triangle_mesh(m.V, m.F, vo);
+  const TriangleQuality q = triangle_quality(m.V, m.F);
+  std::printf("time=%.2f stream=%.2f peak_mb=%.0f used=%lld summarised=0 voxel=- vertices=%ld boundary=%d genus=%d "
+              "phimin=%.1f phim=%.1f\n",
+              total, t_read, static_cast<double>(ru.ru_maxrss) / 1024.0, static_cast<long long>(cloud.P.rows()),
+              static_cast<long>(m.V.rows()), rep.boundary_loops, rep.genus, q.min_angle_deg, q.mean_min_angle_deg);
+  return 0;
+}
+
 std::string value_of(const std::string& line, const std::string& key) {
   const auto p = line.find(key + "=");
   if (p == std::string::npos) return "?";
@@ -96,16 +125,47 @@ std::vector<std::int64_t> parse_sizes(const std::string& s) {
   return out;
 }
 
+// Runs `command`; returns its "time=..." line, or "failed: <all output>".
+std::string run_command(const std::string& command) {
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string line, all;
+  char buf[4096];
+  while (pipe && std::fgets(buf, sizeof buf, pipe)) {
+    all += buf;
+    if (std::strncmp(buf, "time=", 5) == 0) line = buf;
+  }
+  const int status = pipe ? pclose(pipe) : -1;
+  return status != 0 || line.empty() ? "failed: " + all : line;
+}
+
+void print_row(std::int64_t points, int n, const char* method, const std::string& line) {
+  if (line.rfind("failed", 0) == 0) {
+    std::printf("| %lld | %d | %s | %s |\n", static_cast<long long>(points), n, method, line.c_str());
+    return;
+  }
+  const long vertices = std::stol(value_of(line, "vertices"));
+  const bool closed = value_of(line, "boundary") == "0";
+  std::printf("| %lld | %d | %s | %s | %s | %s | %s%s | %s | %ld | %+.1f %% | %s | %s | %s | %s |\n",
+              static_cast<long long>(points), n, method, value_of(line, "time").c_str(), value_of(line, "stream").c_str(),
+              value_of(line, "peak_mb").c_str(), value_of(line, "used").c_str(),
+              value_of(line, "summarised") == "1" ? " means" : " raw", value_of(line, "voxel").c_str(), vertices,
+              100.0 * (static_cast<double>(vertices) - n) / n, closed ? "yes" : "no", value_of(line, "genus").c_str(),
+              value_of(line, "phimin").c_str(), value_of(line, "phim").c_str());
+  std::fflush(stdout);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc == 6 && std::string(argv[1]) == "--child")
     return run_child(argv[2], std::atoi(argv[3]), std::atof(argv[4]), std::atoi(argv[5]) != 0);
+  if (argc == 4 && std::string(argv[1]) == "--peer-child") return run_peer_child(argv[2], std::atoi(argv[3]));
   const StreamOptions defaults;
   double fine_factor = defaults.fine_voxel_factor;
   bool project = defaults.project_to_surface;
   std::vector<std::int64_t> sizes = {100000, 1000000, 10000000};
   std::int64_t density_max = 1000000;
+  std::int64_t peer_max = 1000000;
   int sites = 3000;
   std::string keep_dir;
   for (int i = 1; i < argc; ++i) {
@@ -114,6 +174,7 @@ int main(int argc, char** argv) {
     else if (a == "--huge") sizes.push_back(100000000);
     else if (a == "--density-max" && i + 1 < argc) density_max = static_cast<std::int64_t>(std::stod(argv[++i]));
     else if (a == "--sites" && i + 1 < argc) sites = std::atoi(argv[++i]);
+    else if (a == "--peer-max" && i + 1 < argc) peer_max = static_cast<std::int64_t>(std::stod(argv[++i]));
     else if (a == "--keep-dir" && i + 1 < argc) keep_dir = argv[++i];
     else if (a == "--fine" && i + 1 < argc) fine_factor = std::stod(argv[++i]);
     else if (a == "--plain-means") project = false;
@@ -126,8 +187,8 @@ int main(int argc, char** argv) {
   const double diag = (mesh.V.colwise().maxCoeff() - mesh.V.colwise().minCoeff()).norm();
   const fs::path dir = keep_dir.empty() ? fs::temp_directory_path() / ("heatcvt_bench_scale_" + std::to_string(::getpid())) : fs::path(keep_dir);
   fs::create_directories(dir);
-  std::printf("| points | -n | time s | stream s | peak MB | points reconstructed | voxel | V | V vs -n | closed | genus | "
-              "phi_min | phi_m |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("| points | -n | method | time s | read s | peak MB | points reconstructed | voxel | V | V vs -n | closed | "
+              "genus | phi_min | phi_m |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   std::fflush(stdout);
   for (const std::int64_t points : sizes) {
     const fs::path file = dir / ("armadillo_" + std::to_string(points) + ".ply");
@@ -138,37 +199,26 @@ int main(int argc, char** argv) {
     }
     std::vector<int> runs = {sites};
     if (points <= density_max) runs.push_back(static_cast<int>(std::min<std::int64_t>(points / 50, 200000)));
-    for (const int n : runs) {
-      // popen runs through the shell: /proc/self/exe would be the shell, so name this binary.
-      const std::string self = fs::read_symlink("/proc/self/exe").string();
-      const std::string command = "'" + self + "' --child '" + file.string() + "' " + std::to_string(n) + " " +
-                                  std::to_string(fine_factor) + " " + (project ? "1" : "0") + " 2>&1";
-      FILE* pipe = popen(command.c_str(), "r");
-      std::string line, all;
-      char buf[4096];
-      while (pipe && std::fgets(buf, sizeof buf, pipe)) {
-        all += buf;
-        if (std::strncmp(buf, "time=", 5) == 0) line = buf;
+    for (const int n : runs)
+      for (const bool peer : {false, true}) {
+        if (peer && points > peer_max) continue;
+        // popen runs through the shell: /proc/self/exe would be the shell, so name this binary.
+        const std::string self = fs::read_symlink("/proc/self/exe").string();
+        const std::string command =
+            "'" + self + "' " +
+            (peer ? "--peer-child '" + file.string() + "' " + std::to_string(n)
+                  : "--child '" + file.string() + "' " + std::to_string(n) + " " + std::to_string(fine_factor) + " " +
+                        (project ? "1" : "0")) +
+            " 2>&1";
+        print_row(points, n, peer ? "PCL Poisson + CGAL remesh" : "heatcvt", run_command(command));
       }
-      const int status = pipe ? pclose(pipe) : -1;
-      if (status != 0 || line.empty()) {
-        std::printf("| %lld | %d | failed: %s |\n", static_cast<long long>(points), n, all.c_str());
-        continue;
-      }
-      const long vertices = std::stol(value_of(line, "vertices"));
-      const bool closed = value_of(line, "boundary") == "0";
-      std::printf("| %lld | %d | %s | %s | %s | %s%s | %s | %ld | %+.1f %% | %s | %s | %s | %s |\n", static_cast<long long>(points), n,
-                  value_of(line, "time").c_str(), value_of(line, "stream").c_str(), value_of(line, "peak_mb").c_str(),
-                  value_of(line, "used").c_str(), value_of(line, "summarised") == "1" ? " means" : " raw",
-                  value_of(line, "voxel").c_str(), vertices, 100.0 * (static_cast<double>(vertices) - n) / n, closed ? "yes" : "no",
-                  value_of(line, "genus").c_str(), value_of(line, "phimin").c_str(), value_of(line, "phim").c_str());
-      std::fflush(stdout);
-    }
   }
   if (keep_dir.empty()) fs::remove_all(dir);
   std::printf("\nArmadillo (genus 0), noise σ = %.1f %% of the bbox diagonal, float binary PLY written in chunks of %lld "
-              "points; time = reconstruct_surface_streamed wall time (both read passes included), stream = until the "
-              "first reconstruction stage; peak MB = ru_maxrss of the child process.\n",
+              "points; time = wall time of the child process's work (heatcvt: reconstruct_surface_streamed, both read passes "
+              "included; peer: read_cloud, PCA/MST normals, PCL Poisson depth 8, CGAL isotropic remeshing to -n), read = "
+              "until the first reconstruction stage (heatcvt) or until the cloud is in memory (peer); peak MB = "
+              "ru_maxrss of the child process. The peer runs on clouds up to --peer-max points.\n",
               100 * kNoiseFraction, static_cast<long long>(kWriteChunk));
   return 0;
 }

@@ -18,6 +18,7 @@
 #include "heatcvt/cloud_io.h"
 #include "heatcvt/mesh.h"
 #include "heatcvt/reconstruct.h"
+#include "heatcvt/reconstruct_stream.h"
 #include "heatcvt/validate.h"
 #include "peer_pipelines.h"
 
@@ -117,8 +118,10 @@ int main(int argc, char** argv) {
     const double t0 = bench::now_seconds();
     std::printf("| %s ", f.filename().c_str());
     try {
-      const ReconstructionResult r = reconstruct_surface(cloud.P, o);
-      print("heatcvt", describe(r.mesh, bench::now_seconds() - t0), n);
+      // As cloud2mesh runs it: a file of more than StreamOptions::max_raw_points points is
+      // streamed into a voxel summary, a smaller one reconstructed from its raw points.
+      const StreamedReconstruction r = reconstruct_surface_streamed(f.string(), o, StreamOptions{});
+      print("heatcvt", describe(r.result.mesh, bench::now_seconds() - t0), n);
     } catch (const std::exception& e) {
       std::printf("| heatcvt | failed: %s |||||||\n", e.what());
     }

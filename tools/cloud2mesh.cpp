@@ -195,7 +195,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> cloud_paths, pose_paths;
   std::string conf_path, out_path, report_path;
   bool quiet = false, write_normals = false;
-  long long stream_above = 2000000;
+  long long stream_above = StreamOptions{}.max_raw_points;
   app.add_option("CLOUD", cloud_paths,
                  "input point clouds (.pcd .ply .xyz .pwn .txt); several scans are merged into one surface");
   app.add_option("--pose", pose_paths,

@@ -69,8 +69,8 @@ struct IsotropicRemeshOptions {
   /// flying triangles). Default 0.25.
   double max_face_offset = 0.25;
   /// ... and whose normal is tilted from its corners' surface normals by more than this on
-  /// average (it stands across the surface rather than along it). Default 75°.
-  double min_flying_tilt_deg = 75;
+  /// average (it stands across the surface rather than along it). Default 60°.
+  double min_flying_tilt_deg = 60;
   /// Whether the surface mesher calls remove_flying_faces() before size_to_target() (false where
   /// a watertight result is asked for: hole policy fill; and for an input mesh, whose faces are
   /// its surface). size_to_target() itself never removes them. Default true.
