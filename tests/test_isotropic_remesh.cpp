@@ -216,10 +216,9 @@ TEST(IsotropicRemesh, ResultIsKeptOnlyWhenNoWorseOnAnyTarget) {
   EXPECT_FALSE(sizing_no_worse(figures(1000, 30, 53, 0, 0.5), good, o));
 }
 
-TEST(IsotropicRemesh, FlyingFacesAcrossADepthJumpAreRemoved) {
-  // Two parallel sheets (z = 0 and z = 0.5) as the surface; the mesh is both grids plus a strip
-  // of faces bridging their facing edges (what a hole fill across a depth jump makes).
-  const TriangleMesh lower = test::grid(10, 0, 1, 0, 1), upper = test::grid(10, 1, 2, 0, 1);
+// The bridge of FlyingFacesAcrossADepthJumpAreRemoved with the upper sheet shifted by `shift` in x.
+void expect_bridge_removed(double shift) {
+  const TriangleMesh lower = test::grid(10, 0, 1, 0, 1), upper = test::grid(10, 1 + shift, 2 + shift, 0, 1);
   TriangleMesh both;
   both.V.resize(lower.V.rows() + upper.V.rows(), 3);
   both.V << lower.V, upper.V;
@@ -257,6 +256,17 @@ TEST(IsotropicRemesh, FlyingFacesAcrossADepthJumpAreRemoved) {
   EXPECT_EQ(validate_open(m).components, 2);
   EXPECT_NEAR(m.V.rows(), 242, 3);
 }
+
+TEST(IsotropicRemesh, FlyingFacesAcrossADepthJumpAreRemoved) {
+  // Two parallel sheets (z = 0 and z = 0.5) as the surface; the mesh is both grids plus a strip
+  // of faces bridging their facing edges (what a hole fill across a depth jump makes): upright
+  // (the upper sheet starts at x = 1) and tilted 65° (it starts at x = 1 + 0.5 / tan 65°).
+  for (const double shift : {0.0, 0.5 / std::tan(65 * M_PI / 180)}) {
+    SCOPED_TRACE(shift);
+    expect_bridge_removed(shift);
+  }
+}
+
 
 TEST(IsotropicRemesh, MeshesMeetingTheTargetsAreLeftAlone) {
   const TriangleMesh fine = test::icosphere(5);

@@ -11,15 +11,18 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "heatcvt/closest_point.h"
 #include "heatcvt/cloud_io.h"
 #include "heatcvt/errors.h"
 #include "heatcvt/mesh_io.h"
 #include "heatcvt/normals.h"
 #include "heatcvt/reconstruct.h"
+#include "heatcvt/reconstruct_stream.h"
 #include "heatcvt/scan_merge.h"
 #include "heatcvt/validate.h"
 #include "heatcvt/vertex_attributes.h"
@@ -306,6 +309,85 @@ TEST(ScanPoses, TwoViewsInTheirOwnFramesRecoverTheSingleViewResult) {
   EXPECT_EQ(both.validation.components, 1);
 }
 
+// Pairs of faces of `m` that share no vertex, face each other (normals within 30°, either
+// way) and lie closer than `gap`: the centroid of one projects inside the other within `gap`
+// of its plane. A surface meshed twice where two scans overlap has many; one layer has none
+// (a face sharing no vertex with f lies beyond f's one-ring, a good part of an edge away).
+int facing_pairs_closer_than(const TriangleMesh& m, double gap) {
+  const Eigen::Index nf = m.F.rows();
+  std::vector<Eigen::Vector3d> a(nf), b(nf), c(nf), n(nf), g(nf);
+  for (Eigen::Index f = 0; f < nf; ++f) {
+    a[f] = m.V.row(m.F(f, 0)), b[f] = m.V.row(m.F(f, 1)), c[f] = m.V.row(m.F(f, 2));
+    n[f] = (b[f] - a[f]).cross(c[f] - a[f]).normalized();
+    g[f] = (a[f] + b[f] + c[f]) / 3.0;
+  }
+  int pairs = 0;
+  for (Eigen::Index f = 0; f < nf; ++f)
+    for (Eigen::Index h = 0; h < nf; ++h) {
+      bool shared = false;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) shared = shared || m.F(f, i) == m.F(h, j);
+      if (shared || std::abs(n[f].dot(n[h])) < std::cos(M_PI / 6)) continue;
+      const double height = (g[h] - a[f]).dot(n[f]);
+      if (std::abs(height) >= gap) continue;
+      const Eigen::Vector3d q = g[h] - height * n[f];
+      const Eigen::Vector3d bary = closest_point_barycentric(q, a[f], b[f], c[f]);
+      const Eigen::Vector3d on = bary[0] * a[f] + bary[1] * b[f] + bary[2] * c[f];
+      pairs += (on - q).norm() < 1e-12 * (1 + q.norm());  // the projection falls inside f
+    }
+  return pairs;
+}
+
+double mean_edge_length(const TriangleMesh& m) {
+  double sum = 0;
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) sum += (m.V.row(m.F(f, k)) - m.V.row(m.F(f, (k + 1) % 3))).norm();
+  return sum / (3.0 * static_cast<double>(m.F.rows()));
+}
+
+// Two overlapping RGB-D fragments (Open3D's cloud_bin_0 and cloud_bin_1, registered to about
+// their point spacing) merge into one layer: no two faces closer than a quarter of the site
+// spacing facing each other; a valid mesh with the vertex count asked for.
+TEST(Cloud2MeshScans, OverlappingFragmentsGiveOneLayer) {
+  const std::string a = test::data_path("clouds/open3d_cloud_bin_0.pcd"), b = test::data_path("clouds/open3d_cloud_bin_1.pcd");
+  // Precondition: they overlap (most points of one lie within 2 point spacings of the other).
+  const PointCloud pa = read_cloud(a), pb = read_cloud(b);
+  double spacing = 0;
+  int near = 0;
+  for (Eigen::Index i = 0; i < pa.P.rows(); ++i) {
+    double own = std::numeric_limits<double>::infinity(), other = own;
+    for (Eigen::Index j = 0; j < pa.P.rows(); ++j)
+      if (j != i) own = std::min(own, (pa.P.row(i) - pa.P.row(j)).squaredNorm());
+    for (Eigen::Index j = 0; j < pb.P.rows(); ++j) other = std::min(other, (pa.P.row(i) - pb.P.row(j)).squaredNorm());
+    spacing += std::sqrt(own) / static_cast<double>(pa.P.rows());
+    near += other < 4 * own;
+  }
+  ASSERT_GT(near, pa.P.rows() / 2) << "spacing " << spacing;
+  // The check finds a double layer: a grid and its copy a tenth of an edge above it.
+  const TriangleMesh grid = test::grid(8);
+  TriangleMesh twice;
+  twice.V.resize(2 * grid.V.rows(), 3);
+  twice.V << grid.V, grid.V.rowwise() + Eigen::RowVector3d(0.01, 0.02, 0.1 / 8);
+  twice.F.resize(2 * grid.F.rows(), 3);
+  twice.F << grid.F, grid.F.array() + static_cast<int>(grid.V.rows());
+  ASSERT_GT(facing_pairs_closer_than(twice, 0.25 * mean_edge_length(twice)), grid.F.rows() / 2);
+  ASSERT_EQ(facing_pairs_closer_than(grid, 0.25 * mean_edge_length(grid)), 0);
+  test::ScratchDir dir("c2m_fragments");
+  const std::string out = dir.path("both.ply");
+  for (const int n : {1000, 2000}) {
+    SCOPED_TRACE(n);
+    const auto r = test::run_tool("cloud2mesh", "'" + a + "' '" + b + "' -n " + std::to_string(n) + " -q -o " + out);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const TriangleMesh m = read_mesh(out);
+    ValidationOptions vo;
+    vo.require_closed = false;
+    const ValidationReport v = validate_triangle_mesh(m.V, m.F, vo);
+    EXPECT_TRUE(v.ok()) << v.summary();
+    EXPECT_NEAR(static_cast<double>(v.vertices), n, 0.02 * n);
+    EXPECT_EQ(facing_pairs_closer_than(m, 0.25 * mean_edge_length(m)), 0);
+  }
+}
+
 TEST(Cloud2MeshScans, ColourWrittenOnlyWhenTheInputHasItAndNormalsOnRequest) {
   test::ScratchDir dir("c2m_colour");
   const std::string out_c = dir.path("c.ply"), out_p = dir.path("p.ply");
@@ -346,14 +428,15 @@ TEST(Cloud2MeshScans, BadPosesGiveOneErrorLineAndNoOutput) {
   }
 }
 
-// A cloud with more points than --stream-above is streamed into a voxel summary by cloud2mesh;
-// the mesh meets the same checks.
+// A cloud with more points than --stream-above (default StreamOptions::max_raw_points, 200,000)
+// is streamed into a voxel summary by cloud2mesh; the mesh meets the same checks.
 TEST(Cloud2MeshScans, ALargeCloudIsStreamedIntoAVoxelSummary) {
   test::ScratchDir dir("c2m_stream");
   const TriangleMesh sphere = test::icosphere(5);
   const std::string cloud = dir.path("big.xyz"), out = dir.path("big.ply"), rep = dir.path("big.json");
   write_points_xyz(cloud, sample_surface(sphere.V, sphere.F, 400000, 9, 0.001));
-  const auto r = test::run_tool("cloud2mesh", cloud + " -n 600 -q --stream-above 300000 -o " + out + " --report " + rep);
+  ASSERT_GT(400000, StreamOptions{}.max_raw_points);
+  const auto r = test::run_tool("cloud2mesh", cloud + " -n 600 -q -o " + out + " --report " + rep);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::ifstream in(rep);
   const std::string json((std::istreambuf_iterator<char>(in)), {});

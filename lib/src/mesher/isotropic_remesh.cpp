@@ -580,12 +580,12 @@ class Sizer {
     return moved;
   }
 
-  // Splits the longest or collapses the shortest edges until the count is within half the
-  // tolerance of the target (or nothing more can be done).
+  // Splits the longest or collapses the shortest edges until the count is within count_aim ×
+  // count_tolerance of the target (or nothing more can be done).
   void adjust_count(double long_limit) {
     const double base_limit = long_limit;
     const int target = o_.target_vertices;
-    const int slack = std::max(0, static_cast<int>(std::floor(0.5 * o_.count_tolerance * target)));
+    const int slack = std::max(0, static_cast<int>(std::floor(o_.count_aim * o_.count_tolerance * target)));
     for (int round = 0; round < 12; ++round) {
       const int diff = target - vertices_in_faces(mesh_);
       if (std::abs(diff) <= slack) break;
@@ -706,7 +706,8 @@ bool sizing_no_worse(const SizingFigures& after, const SizingFigures& before, co
 bool needs_sizing(const WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options) {
   if (options.target_vertices <= 0 || mesh.empty()) return false;
   const SizingFigures q = sizing_figures(mesh, surface, options);
-  return std::abs(q.vertices - options.target_vertices) > options.count_tolerance * options.target_vertices ||
+  return std::abs(q.vertices - options.target_vertices) >
+             options.count_aim * options.count_tolerance * options.target_vertices ||
          q.min_angle < options.min_angle_deg * kDegree || q.mean_angle < options.mean_angle_deg * kDegree ||
          q.border_gap > options.border_tolerance;
 }

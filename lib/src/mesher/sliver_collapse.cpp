@@ -140,7 +140,8 @@ struct CollapsePass {
 };
 
 // Valence-3 vertices of remaining slivers (no flip removes them); undone if that self-intersects.
-void remove_sliver_valence3(WorkingMesh& mesh, const SliverCollapseOptions& o, MesherStats& stats, int crossing_before,
+// `crossing`: the face pairs crossing in `mesh` (−1 = not counted yet).
+void remove_sliver_valence3(WorkingMesh& mesh, const SliverCollapseOptions& o, MesherStats& stats, long crossing,
                             const std::vector<char>* frozen) {
   const WorkingMesh::Checkpoint before = mesh.checkpoint();
   const int flips_before = stats.flipped_edges;
@@ -152,7 +153,13 @@ void remove_sliver_valence3(WorkingMesh& mesh, const SliverCollapseOptions& o, M
     FlipOptions fo = o.flips;
     fo.valence_mode = false;
     stats.flipped_edges += flip_edges(mesh, fo, &in_sliver);
-    if (self_intersecting_pairs(mesh) > crossing_before) {
+    const long after = self_intersecting_pairs(mesh);
+    if (after > 0 && crossing < 0) {
+      WorkingMesh input = mesh;
+      input.rollback(before, true);
+      crossing = self_intersecting_pairs(input);
+    }
+    if (after > 0 && after > crossing) {
       mesh.rollback(before, true);
       stats.flipped_edges = flips_before;
     }
@@ -199,7 +206,6 @@ bool cut_neck_fans(const WorkingMesh& mesh, const std::vector<std::vector<int>>&
 int collapse_slivers(WorkingMesh& mesh, const SurfaceProjector& surface, const SliverCollapseOptions& options,
                      MesherStats& stats, const std::vector<char>* frozen) {
   const WorkingMesh::Checkpoint before = mesh.checkpoint();
-  const int crossing_before = self_intersecting_pairs(mesh);
   FlipOptions fo = options.flips;
   fo.valence_mode = false;
   int collapsed = 0;
@@ -217,11 +223,19 @@ int collapse_slivers(WorkingMesh& mesh, const SurfaceProjector& surface, const S
     }
     stats.flipped_edges += flip_edges(mesh, fo, frozen ? &movable : nullptr);
   }
-  if (collapsed > 0 && self_intersecting_pairs(mesh) > crossing_before) {
-    mesh.rollback(before, true);
-    collapsed = 0;
+  // Undone when more face pairs cross than in the input (counted only when some cross now).
+  long crossing = collapsed > 0 ? self_intersecting_pairs(mesh) : -1;
+  if (crossing > 0) {
+    WorkingMesh input = mesh;
+    input.rollback(before, true);
+    const long crossing_before = self_intersecting_pairs(input);
+    if (crossing > crossing_before) {
+      mesh.rollback(before, true);
+      collapsed = 0;
+      crossing = crossing_before;
+    }
   }
-  remove_sliver_valence3(mesh, options, stats, crossing_before, frozen);
+  remove_sliver_valence3(mesh, options, stats, crossing, frozen);
   return collapsed;
 }
 

@@ -23,9 +23,12 @@ struct IsotropicRemeshOptions {
   /// Vertices (in faces) asked for; 0 turns the stage off. The reconstruction and the remesher
   /// set it to their site count. Default 0.
   int target_vertices = 0;
-  /// The stage runs only when the vertex count is off by more than this fraction of the target,
-  /// or the shape targets below are not met. Default 0.02 (the 2 % the count may be off by).
+  /// The count may be off by this fraction of the target. The stage aims at half of it: it runs
+  /// when the vertex count is off by more than count_aim × count_tolerance (or the shape targets
+  /// below are not met), and its count adjustment stops within that, so that the result ends
+  /// inside the tolerance with room to spare. Defaults 0.02 (2 %) and 0.5.
   double count_tolerance = 0.02;
+  double count_aim = 0.5;
   /// ... or the mesh's smallest angle is below this. Default 25°.
   double min_angle_deg = 25;
   /// ... or the mean of the triangles' smallest angles (φm) is below this. Default 52°.
