@@ -636,6 +636,14 @@ class Sizer {
   std::vector<char> active_;   // vertices near those the local count adjustment added
 };
 
+// A mesh misses a shape target, or its count is off by more than reshape_count_error.
+bool reshapes(const SizingFigures& q, const IsotropicRemeshOptions& o) {
+  const bool shape_met = q.min_angle >= o.min_angle_deg * kDegree && q.mean_angle >= o.mean_angle_deg * kDegree &&
+                         q.border_gap <= o.border_tolerance;
+  const bool count_near = std::abs(q.vertices - o.target_vertices) <= o.reshape_count_error * o.target_vertices;
+  return !(shape_met && count_near);
+}
+
 }  // namespace
 
 int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o) {
@@ -703,6 +711,10 @@ bool sizing_no_worse(const SizingFigures& after, const SizingFigures& before, co
   return count && min_angle && mean_angle && border;
 }
 
+bool sizing_reshapes(const WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options) {
+  return reshapes(sizing_figures(mesh, surface, options), options);
+}
+
 bool needs_sizing(const WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options) {
   if (options.target_vertices <= 0 || mesh.empty()) return false;
   const SizingFigures q = sizing_figures(mesh, surface, options);
@@ -719,12 +731,7 @@ bool size_to_target(WorkingMesh& mesh, const SurfaceProjector& surface, const Is
   const SizingFigures figures_before = sizing_figures(mesh, surface, options);
   const MesherStats stats_before = stats;
   // A mesh of the right shape whose count is off by little only gets the count adjusted.
-  const bool shape_met = figures_before.min_angle >= options.min_angle_deg * kDegree &&
-                         figures_before.mean_angle >= options.mean_angle_deg * kDegree &&
-                         figures_before.border_gap <= options.border_tolerance;
-  const bool count_near = std::abs(figures_before.vertices - options.target_vertices) <=
-                          options.reshape_count_error * options.target_vertices;
-  Sizer(mesh, surface, options, stats).run(!(shape_met && count_near));
+  Sizer(mesh, surface, options, stats).run(reshapes(figures_before, options));
   if (sizing_no_worse(sizing_figures(mesh, surface, options), figures_before, options)) return true;
   mesh.rollback(before);
   stats = stats_before;

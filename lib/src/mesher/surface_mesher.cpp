@@ -67,9 +67,10 @@ void mesh_from_candidates(WorkingMesh& mesh, const DualCandidates& candidates, c
 
 namespace {
 
-// The sizing stage: flying faces removed with the small pieces they cut off (so that the count is
-// shared among the pieces that stay), then size_to_target(). Where the sizing is then needed but
-// refused (it would be worse on a target), the mesh is left as it came, flying faces and all.
+// The sizing stage: where it remeshes (sizing_reshapes()), flying faces removed with the small
+// pieces they cut off (so that the count is shared among the pieces that stay), then
+// size_to_target(). Where the sizing is then needed but refused (it would be worse on a target),
+// the mesh is left as it came, flying faces and all.
 bool size_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, const SurfaceMesherOptions& options,
                MesherStats& stats) {
   IsotropicRemeshOptions sizing = options.sizing;
@@ -83,7 +84,7 @@ bool size_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, const Surface
   if (!needs_sizing(mesh, surface, sizing)) return false;
   const WorkingMesh::Checkpoint unsized = mesh.checkpoint();
   const MesherStats stats_unsized = stats;
-  if (sizing.remove_flying) {
+  if (sizing.remove_flying && sizing_reshapes(mesh, surface, sizing)) {
     stats.flying_faces += remove_flying_faces(mesh, surface, sizing);
     stats.removed_triangles += remove_small_pieces(mesh, options.min_piece_faces, options.min_piece_vertex_fraction,
                                                    &stats.pieces_removed);

@@ -152,6 +152,11 @@ bool needs_sizing(const WorkingMesh& mesh, const SurfaceProjector& surface, cons
 /// the faces removed.
 int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options);
 
+/// Whether size_to_target() remeshes `mesh` (the shape targets are missed, or the count is off by
+/// more than reshape_count_error) rather than only adjusting its count. The flying faces are
+/// removed only then: a mesh of the right shape keeps every face (the hole fills included).
+bool sizing_reshapes(const WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options);
+
 /// Remeshes `mesh` on `surface` to options.target_vertices vertices when needs_sizing().
 /// Where the shape targets are missed, the border is cleaned (notches closed, spikes collapsed,
 /// ears cut) and the target edge length L comes from the mesh's area (V ≈ 2A / (√3 L²) for
@@ -162,7 +167,7 @@ int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, cons
 /// / 60°) on the border, and tangential relaxation (border vertices towards the middle of their
 /// border neighbours); the border is cleaned again. Then (and alone where the shape targets are
 /// met and the count is off by at most reshape_count_error) the count is brought within
-/// count_tolerance / 2 of the target by splitting the longest or collapsing the shortest edges,
+/// count_aim × count_tolerance of the target by splitting the longest or collapsing the shortest edges,
 /// angle polish + max-min-angle flips follow, and the slivers left are flipped over creases,
 /// trimmed (flat along the border, or ears) or collapsed before the count is restored and polished once more, up to
 /// sliver_passes times.
