@@ -730,11 +730,16 @@ bool size_to_target(WorkingMesh& mesh, const SurfaceProjector& surface, const Is
   const WorkingMesh::Checkpoint before = mesh.checkpoint();
   const SizingFigures figures_before = sizing_figures(mesh, surface, options);
   const MesherStats stats_before = stats;
-  // A mesh of the right shape whose count is off by little only gets the count adjusted.
-  Sizer(mesh, surface, options, stats).run(reshapes(figures_before, options));
-  if (sizing_no_worse(sizing_figures(mesh, surface, options), figures_before, options)) return true;
-  mesh.rollback(before);
-  stats = stats_before;
+  // A mesh of the right shape whose count is off by little only gets the count adjusted; where
+  // that is worse on a target, it is remeshed as a whole instead.
+  const bool reshape = reshapes(figures_before, options);
+  for (const bool whole : {reshape, true}) {
+    Sizer(mesh, surface, options, stats).run(whole);
+    if (sizing_no_worse(sizing_figures(mesh, surface, options), figures_before, options)) return true;
+    mesh.rollback(before);
+    stats = stats_before;
+    if (whole) break;
+  }
   return false;
 }
 
