@@ -449,4 +449,18 @@ TEST(Cloud2MeshScans, ALargeCloudIsStreamedIntoAVoxelSummary) {
   EXPECT_EQ(v.boundary_loops, 0);
   EXPECT_EQ(v.genus, 0);
   EXPECT_GE(m.V.rows(), 0.95 * 600);
+  // --points-per-site sizes the summary too: half the voxel points per site, about half the points.
+  const std::string rep5 = dir.path("big5.json");
+  const auto r5 = test::run_tool("cloud2mesh", cloud + " -n 600 -q --points-per-site 5 -o " + dir.path("big5.ply") +
+                                                   " --report " + rep5);
+  ASSERT_EQ(r5.exit_code, 0) << r5.err;
+  std::ifstream in5(rep5);
+  const std::string json5((std::istreambuf_iterator<char>(in5)), {});
+  const auto number_after = [](const std::string& text, const std::string& key) {
+    const auto at = text.find("\"" + key + "\": ");
+    return at == std::string::npos ? -1.0 : std::atof(text.c_str() + at + key.size() + 4);
+  };
+  const double used10 = number_after(json, "points_used"), used5 = number_after(json5, "points_used");
+  ASSERT_GT(used10, 600 * 5);
+  EXPECT_NEAR(used5 / used10, 0.5, 0.15) << used5 << " of " << used10;
 }

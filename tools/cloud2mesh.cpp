@@ -164,6 +164,8 @@ bool should_stream(const std::vector<ScanInput>& scans, const ReconstructionOpti
 // The streamed reconstruction of one large file, with reading progress (bytes) per pass.
 StreamedReconstruction reconstruct_streamed(const std::string& path, const ReconstructionOptions& opt, bool quiet) {
   StreamOptions stream;
+  // --points-per-site sizes the summary: the voxel points the CVT runs on, per site.
+  if (opt.cvt_points_per_site > 0) stream.voxel.points_per_site = opt.cvt_points_per_site;
   std::unique_ptr<cli::Progress> reading;
   int reading_pass = 0;
   stream.progress = [&](int pass, const StreamProgress& p) {
@@ -260,7 +262,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--points-per-site", opt.cvt_points_per_site,
                  "the CVT runs on a uniform subset of about this many points per site (site positions are still "
-                 "fitted to every point); 0 = every point")
+                 "fitted to every point; a streamed file is summarised into this many voxel points per site); 0 = "
+                 "every point")
       ->capture_default_str();
   app.add_flag("--no-smooth-cvt-points", [&](std::int64_t) { opt.smooth_cvt_points = false; },
                "build the Laplacian on the raw CVT points instead of their projections onto the fitted surface");
