@@ -177,7 +177,8 @@ bool sizing_reshapes(const WorkingMesh& mesh, const SurfaceProjector& surface, c
 /// as min_piece_faces and min_piece_vertex_fraction say); a step that makes faces cross is redone with the region around them frozen. The result
 /// is kept only when it is no worse on any target (the count within the tolerance or nearer to
 /// it; φmin at its target if it was, else no larger a share of faces below the target; φm at its
-/// target or no lower than before); otherwise the mesh is left as it was.
+/// target or no lower than before). Where a count-only adjustment is worse, the whole remesh is
+/// tried instead; otherwise the mesh is left as it was.
 /// Returns whether the mesh was remeshed.
 bool size_to_target(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options,
                     MesherStats& stats);
