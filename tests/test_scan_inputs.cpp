@@ -451,9 +451,13 @@ TEST(Cloud2MeshScans, ALargeCloudIsStreamedIntoAVoxelSummary) {
   EXPECT_GE(m.V.rows(), 0.95 * 600);
   // --points-per-site sizes the summary too: half the voxel points per site, about half the points.
   const std::string rep5 = dir.path("big5.json");
-  const auto r5 = test::run_tool("cloud2mesh", cloud + " -n 600 -q --points-per-site 5 -o " + dir.path("big5.ply") +
+  const auto r5 = test::run_tool("cloud2mesh", cloud + " -n 600 --points-per-site 5 -o " + dir.path("big5.ply") +
                                                    " --report " + rep5);
   ASSERT_EQ(r5.exit_code, 0) << r5.err;
+  // Progress on stderr (not a terminal): both read passes, then a line as each stage starts.
+  for (const char* line : {"reading (pass 1): done", "reading (pass 2): done", "(laplacian)", "(cvt: factor and start)",
+                           "(cvt: heat Lloyd iterations)", "(mesh)", "(validate)", "reconstructing: done"})
+    EXPECT_NE(r5.err.find(line), std::string::npos) << line << " missing from\n" << r5.err;
   std::ifstream in5(rep5);
   const std::string json5((std::istreambuf_iterator<char>(in5)), {});
   const auto number_after = [](const std::string& text, const std::string& key) {

@@ -142,7 +142,9 @@ ReconstructionCallback stage_progress(cli::Progress& bar) {
     else if (stage == "cvt") done = 0.10 + 0.80 * f;
     else if (stage == "mesh") done = 0.90 + 0.05 * f;
     else done = 0.95 + 0.05 * f;
-    bar.update(static_cast<long>(1000 * done));
+    // The CVT's start (factorisation and surface Lloyd) reports 0, its heat Lloyd iterations more.
+    const std::string what = stage != "cvt" ? stage : f > 0 ? "cvt: heat Lloyd iterations" : "cvt: factor and start";
+    bar.update(static_cast<long>(1000 * done), what);
   };
 }
 
@@ -174,12 +176,22 @@ StreamedReconstruction reconstruct_streamed(const std::string& path, const Recon
       reading = std::make_unique<cli::Progress>("reading (pass " + std::to_string(pass) + ")", p.bytes_total, quiet);
       reading_pass = pass;
     }
-    reading->update(p.bytes_read);
+    reading->update(p.bytes_read, "", std::to_string(p.points_read) + " points");
   };
-  cli::Progress bar("reconstructing", 1000, quiet);
-  StreamedReconstruction s = cli::on_file(path, [&] { return reconstruct_surface_streamed(path, opt, stream, stage_progress(bar)); });
+  // The reconstruction's bar starts when reading ends (its first stage report).
+  std::unique_ptr<cli::Progress> bar;
+  ReconstructionCallback stages;
+  const ReconstructionCallback on_stage = [&](const std::string& stage, double f) {
+    if (!bar) {
+      if (reading) reading->finish();
+      bar = std::make_unique<cli::Progress>("reconstructing", 1000, quiet);
+      stages = stage_progress(*bar);
+    }
+    stages(stage, f);
+  };
+  StreamedReconstruction s = cli::on_file(path, [&] { return reconstruct_surface_streamed(path, opt, stream, on_stage); });
   if (reading) reading->finish();
-  bar.finish();
+  if (bar) bar->finish();
   return s;
 }
 

@@ -402,6 +402,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   orient_normals_mst(cp.PC, cp.NC, std::min(options.cloud.orientation_neighbors, options.neighbors), options.threads,
                      options.cloud.orientation_offset_penalty);
   stage.done("normals");
+  report("laplacian", 0.2);
   CloudFitOptions fopt = options.fit;
   fopt.fit_neighbors = std::min(std::max(options.neighbors, static_cast<int>(std::lround(options.cloud.fit_cells * n / options.sites))),
                                 std::min(options.cloud.max_fit_neighbors, n - 1));
@@ -411,11 +412,13 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
                                 ? cp.knn
                                 : k_nearest_neighbors(P, fopt.fit_neighbors, options.threads);
   stage.done("fit neighbourhoods");
+  report("laplacian", 0.4);
   Eigen::MatrixX3d N = cloud_normals(cp, knn_fit, n);
   const CloudSurfaceProjector fit(P, std::move(N), fopt, std::move(knn_fit));
   stage.done("cloud normals");
   if (options.smooth_cvt_points) smooth_cvt_points(cp, fit, options);
   stage.done("smoothed cvt points");
+  report("laplacian", 0.6);
   PointLaplacian pl = cvt_point_laplacian(cp, options);
   stage.done("point laplacian");
   const Eigen::MatrixX3i& T = pl.triangles;
@@ -464,6 +467,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   if (mopt.sizing.target_vertices == 0) mopt.sizing.target_vertices = options.sites;
   MesherStats stats;
   mesh_from_candidates(mesh, candidates, fit, mopt, stats);
+  report("mesh", 0.5);
   stage.t = Clock::now();
   if (mesh.empty())
     throw Error("reconstruct_surface: no triangle could be extracted from the Voronoi diagram of " +

@@ -21,22 +21,26 @@ Progress::Progress(std::string label, long total, bool quiet)
     : label_(std::move(label)), total_(total), quiet_(quiet), tty_(isatty(fileno(stderr)) != 0),
       start_(std::chrono::steady_clock::now()), last_(start_) {}
 
-void Progress::update(long done) {
+void Progress::update(long done, const std::string& stage, const std::string& note) {
   if (quiet_ || total_ <= 0) return;
   const auto now = std::chrono::steady_clock::now();
   const double since_last = std::chrono::duration<double>(now - last_).count();
-  if (tty_ ? since_last < 0.1 : since_last < 5.0) return;
+  const bool new_stage = stage != stage_;
+  stage_ = stage;
+  if (!new_stage && (tty_ ? since_last < 0.1 : since_last < 5.0)) return;
   last_ = now;
   const double elapsed = std::chrono::duration<double>(now - start_).count();
   const double frac = static_cast<double>(done) / static_cast<double>(total_);
   const double eta = frac > 0 ? elapsed * (1 - frac) / frac : 0;
+  const std::string detail = stage.empty() || note.empty() ? stage + note : stage + ", " + note;
+  const std::string at = detail.empty() ? "" : " (" + detail + ")";
   if (tty_) {
     const int width = 30, filled = static_cast<int>(frac * width);
-    std::fprintf(stderr, "\r%s [%s%s] %ld/%ld  %.1fs, ETA %.1fs ", label_.c_str(), std::string(filled, '#').c_str(),
-                 std::string(width - filled, '.').c_str(), done, total_, elapsed, eta);
+    std::fprintf(stderr, "\r%s [%s%s] %ld/%ld  %.1fs, ETA %.1fs%-28s", label_.c_str(), std::string(filled, '#').c_str(),
+                 std::string(width - filled, '.').c_str(), done, total_, elapsed, eta, at.c_str());
   } else {
-    std::fprintf(stderr, "%s: %ld/%ld (%.0f%%), %.1fs elapsed, ETA %.1fs\n", label_.c_str(), done, total_, 100 * frac,
-                 elapsed, eta);
+    std::fprintf(stderr, "%s: %ld/%ld (%.0f%%), %.1fs elapsed, ETA %.1fs%s\n", label_.c_str(), done, total_, 100 * frac,
+                 elapsed, eta, at.c_str());
   }
   std::fflush(stderr);
 }

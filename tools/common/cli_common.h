@@ -31,14 +31,16 @@ std::string exit_status_help();
 int parse_command_line(CLI::App& app, int argc, char** argv, const std::string& tool);
 
 /// Progress on stderr: a bar with ETA when stderr is a terminal, a line every few seconds
-/// otherwise, nothing when quiet.
+/// otherwise (and one whenever the stage named by update()'s `stage` changes), nothing when
+/// quiet. `stage` and `note` (e.g. the points read so far) are shown after the figures.
 class Progress {
  public:
   Progress(std::string label, long total, bool quiet);
-  void update(long done);
+  void update(long done, const std::string& stage = "", const std::string& note = "");
   void finish();
  private:
   std::string label_;
+  std::string stage_;
   long total_;
   bool quiet_, tty_;
   std::chrono::steady_clock::time_point start_, last_;
