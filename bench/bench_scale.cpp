@@ -30,11 +30,11 @@
 #include "heatcvt/cloud_io.h"
 #include "heatcvt/dual_mesh.h"
 #include "heatcvt/mesh.h"
-#include "heatcvt/validate.h"
-#include "peer_pipelines.h"
 #include "heatcvt/mesh_io.h"
 #include "heatcvt/reconstruct.h"
 #include "heatcvt/reconstruct_stream.h"
+#include "heatcvt/validate.h"
+#include "peer_pipelines.h"
 
 using namespace heatcvt;
 namespace fs = std::filesystem;
@@ -190,6 +190,8 @@ int main(int argc, char** argv) {
   std::printf("| points | -n | method | time s | read s | peak MB | points reconstructed | voxel | V | V vs -n | closed | "
               "genus | phi_min | phi_m |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   std::fflush(stdout);
+  // popen runs through the shell: /proc/self/exe would be the shell, so name this binary.
+  const std::string self = fs::read_symlink("/proc/self/exe").string();
   for (const std::int64_t points : sizes) {
     const fs::path file = dir / ("armadillo_" + std::to_string(points) + ".ply");
     if (!fs::exists(file)) {
@@ -202,8 +204,6 @@ int main(int argc, char** argv) {
     for (const int n : runs)
       for (const bool peer : {false, true}) {
         if (peer && points > peer_max) continue;
-        // popen runs through the shell: /proc/self/exe would be the shell, so name this binary.
-        const std::string self = fs::read_symlink("/proc/self/exe").string();
         const std::string command =
             "'" + self + "' " +
             (peer ? "--peer-child '" + file.string() + "' " + std::to_string(n)

@@ -105,7 +105,7 @@ struct CollapsePass {
   }
 
   // One pass over the faces; returns the collapses done.
-  int run(const std::vector<char>* frozen) {
+  int run(const std::vector<char>& frozen) {
     const double thr = o.sliver_angle_deg * M_PI / 180.0;
     const Eigen::MatrixX3d& S = mesh.V;
     vf = mesh.vertex_faces();
@@ -114,9 +114,7 @@ struct CollapsePass {
     links = border_links(mesh);
     touched.assign(mesh.num_vertices(), 0);
     // A frozen vertex is treated as touched: no collapse reaches its ring.
-    if (frozen)
-      for (int v = 0; v < mesh.num_vertices() && v < static_cast<int>(frozen->size()); ++v)
-        if ((*frozen)[v]) touched[v] = 1;
+    if (!frozen.empty()) touched = frozen;
     int done = 0;
     for (int id = 0; id < mesh.num_faces(); ++id) {
       const MeshFace f = mesh.face(id);
@@ -139,26 +137,30 @@ struct CollapsePass {
   }
 };
 
-// Valence-3 vertices of remaining slivers (no flip removes them); undone if that self-intersects.
-// `crossing`: the face pairs crossing in `mesh` (−1 = not counted yet).
+// Face pairs crossing in the state `mesh` had at `saved` (no vertex added since).
+long crossing_at(const WorkingMesh& mesh, const WorkingMesh::Checkpoint& saved) {
+  WorkingMesh then = mesh;
+  then.rollback(saved, true);
+  return self_intersecting_pairs(then);
+}
+
+// Valence-3 vertices of remaining slivers (no flip removes them); undone if that makes more face
+// pairs cross. `crossing`: the pairs crossing in `mesh` (−1 = not counted yet); `frozen`: one
+// entry per vertex, or empty.
 void remove_sliver_valence3(WorkingMesh& mesh, const SliverCollapseOptions& o, MesherStats& stats, long crossing,
-                            const std::vector<char>* frozen) {
+                            const std::vector<char>& frozen) {
   const WorkingMesh::Checkpoint before = mesh.checkpoint();
   const int flips_before = stats.flipped_edges;
   std::vector<char> in_sliver(mesh.num_vertices(), 0);
   for (const MeshFace& f : mesh.faces())
     if (face_min_angle(mesh, f) < o.sliver_angle_deg * M_PI / 180.0)
-      for (int v : f) in_sliver[v] = !frozen || v >= static_cast<int>(frozen->size()) || !(*frozen)[v];
+      for (int v : f) in_sliver[v] = frozen.empty() || !frozen[v];
   if (remove_valence3(mesh, o.valence3, &in_sliver) > 0) {
     FlipOptions fo = o.flips;
     fo.valence_mode = false;
     stats.flipped_edges += flip_edges(mesh, fo, &in_sliver);
     const long after = self_intersecting_pairs(mesh);
-    if (after > 0 && crossing < 0) {
-      WorkingMesh input = mesh;
-      input.rollback(before, true);
-      crossing = self_intersecting_pairs(input);
-    }
+    if (after > 0 && crossing < 0) crossing = crossing_at(mesh, before);
     if (after > 0 && after > crossing) {
       mesh.rollback(before, true);
       stats.flipped_edges = flips_before;
@@ -206,36 +208,39 @@ bool cut_neck_fans(const WorkingMesh& mesh, const std::vector<std::vector<int>>&
 int collapse_slivers(WorkingMesh& mesh, const SurfaceProjector& surface, const SliverCollapseOptions& options,
                      MesherStats& stats, const std::vector<char>* frozen) {
   const WorkingMesh::Checkpoint before = mesh.checkpoint();
+  // One entry per vertex (collapses add none), or empty when nothing is frozen.
+  std::vector<char> fixed;
+  if (frozen) {
+    fixed = *frozen;
+    fixed.resize(mesh.num_vertices(), 0);
+  }
+  std::vector<char> movable;
   FlipOptions fo = options.flips;
   fo.valence_mode = false;
   int collapsed = 0;
   for (int pass = 0; pass < options.passes; ++pass) {
     CollapsePass p{mesh, surface, options, {}, {}, {}, {}, {}};
-    const int done = p.run(frozen);
+    const int done = p.run(fixed);
     if (done == 0) break;
     collapsed += done;
-    std::vector<char> movable;
-    if (frozen) {  // flips only at vertices with no frozen vertex in their ring
-      movable.assign(mesh.num_vertices(), 1);
-      const auto is_frozen = [&](int v) { return v < static_cast<int>(frozen->size()) && (*frozen)[v]; };
+    // Flips only at vertices with no frozen vertex in their ring (of the faces after the pass).
+    movable.assign(mesh.num_vertices(), 1);
+    if (!fixed.empty())
       for (const MeshFace& f : mesh.faces())
-        if (is_frozen(f[0]) || is_frozen(f[1]) || is_frozen(f[2])) movable[f[0]] = movable[f[1]] = movable[f[2]] = 0;
-    }
-    stats.flipped_edges += flip_edges(mesh, fo, frozen ? &movable : nullptr);
+        if (fixed[f[0]] || fixed[f[1]] || fixed[f[2]]) movable[f[0]] = movable[f[1]] = movable[f[2]] = 0;
+    stats.flipped_edges += flip_edges(mesh, fo, fixed.empty() ? nullptr : &movable);
   }
   // Undone when more face pairs cross than in the input (counted only when some cross now).
   long crossing = collapsed > 0 ? self_intersecting_pairs(mesh) : -1;
   if (crossing > 0) {
-    WorkingMesh input = mesh;
-    input.rollback(before, true);
-    const long crossing_before = self_intersecting_pairs(input);
+    const long crossing_before = crossing_at(mesh, before);
     if (crossing > crossing_before) {
       mesh.rollback(before, true);
       collapsed = 0;
       crossing = crossing_before;
     }
   }
-  remove_sliver_valence3(mesh, options, stats, crossing, frozen);
+  remove_sliver_valence3(mesh, options, stats, crossing, fixed);
   return collapsed;
 }
 
