@@ -165,6 +165,34 @@ TEST(BoundaryTrim, CutsARibbonOneTriangleWide) {
     if (!vf[v].empty()) EXPECT_EQ(vertex_fans(w, v, vf[v]).size(), 1u) << v;
 }
 
+// A grid whose bottom border vertex 3 (two faces, both with the interior vertex 10 above it) is
+// pulled three rows' height out of the border: a spike with a surface angle of 36.9° there.
+TEST(BoundaryTrim, CutsASpikeOfTheBorder) {
+  const int n = 6;
+  const TriangleMesh g = test::grid(n, 0, 1, 0, 1, true);
+  std::vector<MeshFace> faces;
+  for (Eigen::Index f = 0; f < g.F.rows(); ++f) faces.push_back({g.F(f, 0), g.F(f, 1), g.F(f, 2)});
+  WorkingMesh w = working(g.V, faces);
+  const int tip = 3, inner = 3 + n + 1;
+  ASSERT_EQ(w.vertex_faces()[tip].size(), 2u);
+  ASSERT_FALSE(w.boundary_vertices()[inner]);
+  w.V(tip, 1) = -3.0 / n;
+  ASSERT_LT(triangle_quality(w.V, face_matrix(w)).min_angle_deg, 25);
+  // With spike_angle_deg 0 the spike stays: no other trim applies to it.
+  BoundaryTrimOptions no_spikes;
+  no_spikes.spike_angle_deg = 0;
+  WorkingMesh kept = w;
+  EXPECT_EQ(trim_boundary_slivers(kept, no_spikes), 0);
+  EXPECT_EQ(trim_boundary_slivers(w, {}), 2);
+  EXPECT_EQ(used_vertices(w), static_cast<int>(g.V.rows()) - 1);
+  EXPECT_TRUE(w.vertex_faces()[tip].empty());
+  EXPECT_TRUE(w.boundary_vertices()[inner]) << "the border moves onto the spike's interior vertex";
+  EXPECT_GE(triangle_quality(w.V, face_matrix(w)).min_angle_deg, 25);
+  const std::vector<std::vector<int>> vf = w.vertex_faces();
+  for (int v = 0; v < w.num_vertices(); ++v)
+    if (!vf[v].empty()) EXPECT_EQ(vertex_fans(w, v, vf[v]).size(), 1u) << v;
+}
+
 // A fan around the border vertex 0 of a grid, with the interior vertex next to it pulled within
 // 2 % of an edge of it: its faces are slivers that no move of vertex 0 (on the border) opens.
 TEST(SliverCollapse, AnInteriorVertexGoesIntoTheBorderVertexNextToIt) {

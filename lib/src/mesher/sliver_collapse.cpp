@@ -183,6 +183,40 @@ bool removable_ear(const WorkingMesh& mesh, const std::vector<std::vector<int>>&
   return true;
 }
 
+// Whether the sliver f, with one border edge, is at a spike of the border: its corner v on that
+// edge has only one other face g, whose edge with f goes to an interior vertex, and the surface
+// angle at v (over f and g) is below `spike`. Marks both faces to go and their corners touched.
+bool cut_spike(const WorkingMesh& mesh, const std::vector<std::vector<int>>& vf, const std::vector<char>& border,
+               int id, double spike, std::vector<char>& drop, std::vector<char>& touched) {
+  const MeshFace& f = mesh.face(id);
+  for (int k = 0; k < 3; ++k) {
+    const int v = f[k];
+    if (vf[v].size() != 2) continue;
+    const int g = vf[v][0] == id ? vf[v][1] : vf[v][0];
+    double angle = 0;
+    int inner = -1;
+    for (int h : {id, g}) {
+      const MeshFace& t = mesh.face(h);
+      int q = 0;
+      while (t[q] != v) ++q;
+      angle += corner_angle(mesh, t, q);
+      for (int u : t)
+        if (u != v && mesh.edge_face_count(v, u) == 2) inner = u;
+    }
+    if (inner < 0 || border[inner] || !(angle < spike)) continue;
+    bool free = true;
+    for (int h : {id, g})
+      for (int u : mesh.face(h)) free = free && !touched[u] && (u == v || u == inner || vf[u].size() >= 2);
+    if (!free) continue;
+    for (int h : {id, g}) {
+      drop[h] = 1;
+      for (int u : mesh.face(h)) touched[u] = 1;
+    }
+    return true;
+  }
+  return false;
+}
+
 // The apex of a sliver being cut is on the border: all of its `fans` but the largest are marked
 // to go too, unless one of their corners is already touched this pass. Returns whether marked.
 bool cut_neck_fans(const WorkingMesh& mesh, const std::vector<std::vector<int>>& fans, std::vector<char>& drop,
@@ -299,9 +333,11 @@ int flip_sliver_edges(WorkingMesh& mesh, const SurfaceProjector& surface, const 
 int trim_boundary_slivers(WorkingMesh& mesh, const BoundaryTrimOptions& options) {
   if (!options.enabled) return 0;
   const double sliver = options.sliver_angle_deg * M_PI / 180.0, apex_min = options.min_apex_angle_deg * M_PI / 180.0;
+  const double spike = options.spike_angle_deg * M_PI / 180.0;
   int removed = 0;
   for (int pass = 0; pass < options.passes; ++pass) {
     const std::vector<std::vector<int>> vf = mesh.vertex_faces();
+    const std::vector<char> border = mesh.boundary_vertices();
     std::vector<char> drop(mesh.num_faces(), 0), touched(mesh.num_vertices(), 0);
     int dropped = 0;
     for (int id = 0; id < mesh.num_faces(); ++id) {
@@ -312,6 +348,10 @@ int trim_boundary_slivers(WorkingMesh& mesh, const BoundaryTrimOptions& options)
       if (boundary == 0 || boundary == 3 || face_min_angle(mesh, f) >= sliver) continue;
       if (boundary == 2) {
         if (removable_ear(mesh, vf, f, touched)) drop[id] = 1, ++dropped;
+        continue;
+      }
+      if (cut_spike(mesh, vf, border, id, spike, drop, touched)) {
+        dropped += 2;
         continue;
       }
       const int a = f[k_edge], b = f[(k_edge + 1) % 3], c = f[(k_edge + 2) % 3];

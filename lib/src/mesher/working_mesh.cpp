@@ -165,6 +165,13 @@ double face_min_angle(const WorkingMesh& mesh, const MeshFace& f) {
   return triangle_min_angle(mesh.V.row(f[0]).transpose(), mesh.V.row(f[1]).transpose(), mesh.V.row(f[2]).transpose());
 }
 
+double corner_angle(const WorkingMesh& mesh, const MeshFace& f, int k) {
+  const Eigen::Vector3d e1 = (mesh.V.row(f[(k + 1) % 3]) - mesh.V.row(f[k])).transpose();
+  const Eigen::Vector3d e2 = (mesh.V.row(f[(k + 2) % 3]) - mesh.V.row(f[k])).transpose();
+  if (!(e1.norm() > 0 && e2.norm() > 0)) return 0;
+  return std::acos(std::clamp(e1.normalized().dot(e2.normalized()), -1.0, 1.0));
+}
+
 int vertices_in_faces(const WorkingMesh& mesh) {
   std::vector<char> used(mesh.num_vertices(), 0);
   for (const MeshFace& f : mesh.faces())

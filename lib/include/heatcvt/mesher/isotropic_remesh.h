@@ -109,8 +109,8 @@ struct IsotropicRemeshOptions {
   BoundaryTrimOptions border_slivers;
   SliverCollapseOptions slivers;
   /// Times the trim, collapse, count restoration and polish are repeated while slivers are left
-  /// (each polish can expose new flat border triangles). Default 3.
-  int sliver_passes = 3;
+  /// (each polish can expose new flat border triangles or ears). Default 8.
+  int sliver_passes = 8;
   /// Pieces the collapses cut off are removed as remove_small_pieces() does with these (the
   /// surface mesher sets them to its own min_piece_faces and min_piece_vertex_fraction).
   /// Defaults 20 and 0.01.

@@ -31,6 +31,12 @@ struct BoundaryTrimOptions {
   /// there (a ribbon or a neck narrower than the site spacing, which no vertex move can open); the
   /// apex keeps its largest fan of faces and the others go. Default true.
   bool cut_necks = true;
+  /// Also cut a spike of the border: a border vertex with two faces, a sliver among them, whose
+  /// surface angle is below this and whose inner edge goes to an interior vertex. Below twice the
+  /// sliver angle the two faces cannot both meet it there, a flip would leave a lone ear (and is
+  /// impossible where the pair is concave at the interior vertex): both faces go and the interior
+  /// vertex becomes the border's. 0 = never. Default 50°.
+  double spike_angle_deg = 50;
 };
 
 /// Options of flip_sliver_edges().
@@ -60,7 +66,9 @@ int flip_sliver_edges(WorkingMesh& mesh, const SurfaceProjector& surface, const 
 /// - two boundary edges (an ear, whose lone corner is on both) where the other two corners keep
 ///   faces: the border moves onto the third edge, by less than the ear's longest edge, and the
 ///   lone corner leaves the mesh (a sliver ear is a spike or a notch of the border at the site
-///   spacing: no vertex move opens it).
+///   spacing: no vertex move opens it);
+/// - a spike (spike_angle_deg): the border moves onto the spike's interior vertex, by less than
+///   the spike's shorter side, and the spike's tip leaves the mesh.
 /// Returns the faces removed.
 int trim_boundary_slivers(WorkingMesh& mesh, const BoundaryTrimOptions& options);
 

@@ -105,6 +105,8 @@ int vertices_in_faces(const WorkingMesh& mesh);
 double triangle_min_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c);
 /// Smallest angle of face f of the mesh.
 double face_min_angle(const WorkingMesh& mesh, const MeshFace& f);
+/// Angle (radians) of face f at its corner k; 0 where an edge there has zero length.
+double corner_angle(const WorkingMesh& mesh, const MeshFace& f, int k);
 
 /// The border of a mesh: along each border half-edge a→b (one without its opposite b→a),
 /// next[a] = b and prev[b] = a. −1 where a vertex has no such half-edge, −2 where it has several
