@@ -159,6 +159,23 @@ TEST(MeshcvtTool, MoebiusStripKeepsItsBoundaryAndStaysNonOrientable) {
   expect_open_mesh_kept("moebius.obj", 100, false);
 }
 
+// fandisk's creases are kept by default (the report counts its lines and the vertices moved onto
+// them) and not with --no-features; the library tests measure how close the output follows them.
+TEST(MeshcvtTool, CreasesAreKeptUnlessNoFeatures) {
+  test::ScratchDir dir("meshcvt");
+  const std::string in = test::data_path("meshes/fandisk.off");
+  const test::CommandResult with =
+      test::run_tool("meshcvt", in + " -n 1000 -q -o " + dir.path("a.obj") + " --report " + dir.path("a.json"));
+  ASSERT_EQ(with.exit_code, 0) << with.err;
+  const std::string a = test::read_file(dir.path("a.json"));
+  EXPECT_GE(test::json_number(a, "lines"), 20);
+  EXPECT_GE(test::json_number(a, "snapped_vertices"), 100);
+  const test::CommandResult without = test::run_tool(
+      "meshcvt", in + " -n 1000 -q --no-features -o " + dir.path("b.obj") + " --report " + dir.path("b.json"));
+  ASSERT_EQ(without.exit_code, 0) << without.err;
+  EXPECT_EQ(test::json_number(test::read_file(dir.path("b.json")), "lines"), 0);
+}
+
 TEST(MeshcvtTool, MissingFile) {
   test::ScratchDir dir("meshcvt");
   const std::string missing = dir.path("nope.obj");
@@ -217,6 +234,8 @@ TEST(MeshcvtTool, BadOptions) {
   fails("-n 3 --target-phi-m 70", "--target-phi-m");
   fails("-n 3 --init sideways", "--init");
   fails("-n 3 --bogus", "bogus");
+  fails("-n 3 --crease-angle 0", "--crease-angle");
+  fails("-n 3 --crease-angle 180", "--crease-angle");
   test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", dir.path("t.obj") + " -n 3 -o " + dir.path("o.xyz")),
                             {"o.xyz"}, dir, 1);
   test::expect_tool_failure("meshcvt",

@@ -36,6 +36,8 @@ int main(int argc, char** argv) {
   double min_vertices_per_site = defaults.min_vertices_per_site;
   int repair_rounds = defaults.repair_rounds;
   bool no_post = !defaults.post_cvt_stages;
+  bool no_features = !defaults.creases.enabled;
+  double crease_angle = defaults.creases.min_dihedral_deg;
   std::string mesh_path, out_path, cells_path, report_path,
       init = cvt.initialization == CvtInitialization::farthest_point ? "farthest" : "random";
   double relaxation = cvt.relaxation;
@@ -99,6 +101,11 @@ int main(int argc, char** argv) {
   app.add_flag("--no-post-cvt", no_post,
                "write the dual triangulation itself, without the post-CVT stages (manifold extraction, hole filling, "
                "untangling, polish, sliver collapse, edge splits; the input mesh is their projector)");
+  app.add_flag("--no-features", no_features,
+               "do not keep sharp creases: by default edges of the input whose faces meet at more than --crease-angle "
+               "are kept as edge paths of the output, their corners fixed");
+  app.add_option("--crease-angle", crease_angle, "dihedral angle (degrees) above which an input edge is a sharp crease")
+      ->capture_default_str();
   app.add_flag("--paper", paper,
                "the paper's configuration for every option not given: random start, plain Lloyd, 100 iterations, "
                "no quality evaluation or target, no splitting, no repair rounds, no post-CVT stages");
@@ -118,6 +125,7 @@ int main(int argc, char** argv) {
     if (!given("--no-split")) no_split = !paper_cvt.split_nonmanifold_cells;
     if (!given("--repair-rounds")) repair_rounds = 0;
     if (!given("--no-post-cvt")) no_post = true;
+    if (!given("--no-features")) no_features = true;
     cvt = paper_cvt;
   }
   return cli::run_tool("meshcvt", [&]() -> int {
@@ -133,6 +141,7 @@ int main(int argc, char** argv) {
     if (!(min_vertices_per_site >= 0) || !std::isfinite(min_vertices_per_site))
       throw InvalidInputError("--min-vertices-per-site must be a number >= 0");
     if (repair_rounds < 0) throw InvalidInputError("--repair-rounds must be >= 0");
+    if (!(crease_angle > 0 && crease_angle < 180)) throw InvalidInputError("--crease-angle must be in (0, 180) degrees");
     if (quality_every < 0) throw InvalidInputError("--quality-every must be >= 0");
     if (!(target_mean >= 0 && target_mean <= 60) || !(target_min >= 0 && target_min <= 60))
       throw InvalidInputError("--target-phi-m / --target-phi-min must be angles in [0, 60] degrees");
@@ -159,6 +168,8 @@ int main(int argc, char** argv) {
     remesh.min_vertices_per_site = min_vertices_per_site;
     remesh.repair_rounds = repair_rounds;
     remesh.post_cvt_stages = !no_post;
+    remesh.creases.enabled = !no_features;
+    remesh.creases.min_dihedral_deg = crease_angle;
     remesh.cvt = cvt;
     remesh.cvt.sites = sites;
     remesh.cvt.iterations = iterations;
@@ -241,6 +252,9 @@ int main(int argc, char** argv) {
     rep["output_vertices"] = res.mesh.V.rows();
     rep["post_cvt_kept"] = res.post_cvt_kept;
     if (!res.post_cvt_refusal.empty()) rep["post_cvt_refusal"] = res.post_cvt_refusal;
+    rep["creases"] = {{"lines", res.creases.lines}, {"corners", res.creases.corners},
+                      {"snapped_vertices", res.creases.snapped}, {"line_edges", res.creases.line_edges},
+                      {"missing_edges", res.creases.missing_edges}, {"undone", res.creases.undone}};
     rep["refinement_levels"] = res.refinement_levels;
     rep["cvt_vertices"] = res.cvt_vertices;
     rep["repair_rounds"] = res.repair_rounds;
@@ -277,6 +291,11 @@ int main(int argc, char** argv) {
       std::printf("\n");
       if (!no_post && !res.post_cvt_kept)
         std::printf("  post-CVT stages: %s; the dual is written\n", res.post_cvt_refusal.c_str());
+      if (res.creases.lines > 0)
+        std::printf("  creases: %d lines, %d corners, %d vertices moved onto them, %d of %d line edges made%s\n",
+                    res.creases.lines, res.creases.corners, res.creases.snapped, res.creases.line_edges,
+                    res.creases.line_edges + res.creases.missing_edges,
+                    res.creases.undone ? "; undone (the result failed a check), not kept" : "");
       if (res.repair_rounds)
         std::printf("  %d sites added, %d dropped in %d closed-ball repair rounds\n", res.repair_sites,
                     res.repair_dropped_sites, res.repair_rounds);

@@ -12,6 +12,7 @@
 #include "heatcvt/errors.h"
 #include "heatcvt/laplacian.h"
 #include "heatcvt/mesh.h"
+#include "heatcvt/mesher/compaction.h"
 #include "heatcvt/mesher/projector.h"
 #include "heatcvt/normalize.h"
 #include "heatcvt/subdivision.h"
@@ -237,6 +238,44 @@ void run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options
   out.stage_seconds.emplace_back("post-CVT checks", seconds_since(t));
 }
 
+// Sharp creases of the input kept as lines of out.mesh (mesher/creases.h). The result replaces
+// out.mesh only where it fails no check that out.mesh passed.
+void keep_creases(const TriangleMesh& input, const RemeshOptions& options, RemeshResult& out) {
+  if (!options.creases.enabled || out.mesh.F.rows() == 0 || out.input.non_orientable) return;
+  const CreaseLines lines = detect_creases(input.V, input.F, options.creases);
+  if (lines.lines.empty()) return;
+  const auto t = Clock::now();
+  const MeshSurfaceProjector surface(input.V, input.F);
+  WorkingMesh work(out.mesh.V, Eigen::MatrixX3d::Zero(out.mesh.V.rows(), 3), std::vector<int>(out.mesh.V.rows(), -1));
+  for (int v = 0; v < work.num_vertices(); ++v) {
+    Eigen::Vector3d pos, nrm;
+    surface.project(work.V.row(v).transpose(), work.anchor[v], pos, nrm);
+    work.N.row(v) = nrm.transpose();
+  }
+  std::vector<MeshFace> faces(out.mesh.F.rows());
+  for (Eigen::Index f = 0; f < out.mesh.F.rows(); ++f) faces[f] = {out.mesh.F(f, 0), out.mesh.F(f, 1), out.mesh.F(f, 2)};
+  work.set_faces(std::move(faces));
+  CreaseOptions co = options.creases;
+  co.threads = options.cvt.threads;
+  out.creases = recover_creases(work, surface, input.V, lines, co);
+  if (!out.creases.undone) {
+    TriangleMesh result = compact_mesh(work);
+    ValidationReport checks = check_result(result, out.input, true);
+    bool keeps = true;
+    for (const MeshCheck& c : out.checks.checks) {
+      const MeshCheck* now = checks.find(c.name);
+      if (c.ran && c.passed && !(now && now->ran && now->passed)) keeps = false;
+    }
+    if (keeps) {
+      out.mesh = std::move(result);
+      out.checks = std::move(checks);
+    } else {
+      out.creases.undone = true;
+    }
+  }
+  out.stage_seconds.emplace_back("creases", seconds_since(t));
+}
+
 }  // namespace
 
 std::string SurfaceDescription::genus_text() const {
@@ -318,6 +357,7 @@ RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions&
     else
       run_post_cvt_stages(mesh, options, out);
   }
+  if (options.cvt.build_dual && options.post_cvt_stages) keep_creases(mesh, options, out);
   out.quality = triangle_quality(out.mesh.V, out.mesh.F);
   out.iterations = static_cast<int>(out.cvt.iterations.size());
   out.converged = out.cvt.converged;

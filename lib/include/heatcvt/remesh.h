@@ -12,7 +12,8 @@
 ///        every cell at a non-manifold spot and the CVT again from all sites  repair rounds below
 ///     6. the shared post-CVT stages on the dual with the input mesh as the
 ///        projector (manifold extraction, holes, untangle, polish, slivers)    mesh_dual_surface()
-///     7. checks of the result (manifold, closed, genus, self-intersections)   validate_triangle_mesh()
+///     7. sharp creases of the input kept as lines of the result              recover_creases()
+///     8. checks of the result (manifold, closed, genus, self-intersections)   validate_triangle_mesh()
 #include <Eigen/Core>
 #include <string>
 #include <utility>
@@ -21,6 +22,7 @@
 #include "heatcvt/cvt.h"
 #include "heatcvt/dual_mesh.h"
 #include "heatcvt/mesh.h"
+#include "heatcvt/mesher/creases.h"
 #include "heatcvt/mesher/mesher_stats.h"
 #include "heatcvt/mesher/surface_mesher.h"
 #include "heatcvt/validate.h"
@@ -100,6 +102,12 @@ struct RemeshOptions {
     m.sizing.remove_flying = false;  // an input mesh's faces are its surface
     return m;
   }();
+  /// Sharp creases of the input (dihedral angle above creases.min_dihedral_deg, default 60°) kept
+  /// as edge paths of the result, corners fixed (mesher/creases.h); undone where the result then
+  /// fails a check it passed. creases.enabled = false (`--no-features`) turns it off; it does not
+  /// run where post_cvt_stages is false (the output is then the dual itself). threads:
+  /// cvt.threads is used.
+  CreaseOptions creases;
 };
 
 /// Result of remesh_cvt().
@@ -122,6 +130,7 @@ struct RemeshResult {
   int repair_sites = 0;              ///< sites added by them
   int repair_dropped_sites = 0;      ///< sites in no dual triangle dropped by them (a cell enclosed by another)
   MesherStats mesher;                ///< counts of the post-CVT stages (empty when not run)
+  CreaseStats creases;               ///< what the crease recovery did (zero when the input has no creases)
   /// The post-CVT stages ran and their result is `mesh`; false when they did not run, their
   /// result failed a check that the dual passed or covers the input less well than the dual
   /// (RemeshOptions::max_coverage_ratio; then `mesh` is the dual).

@@ -1,0 +1,77 @@
+#pragma once
+/// \file creases.h
+/// Sharp creases of an input mesh kept as feature lines of a remesh: the crease lines are found
+/// on the input (edges whose two faces meet at a dihedral angle above a threshold), resampled at
+/// the output's spacing (a uniform 1D sampling of each line between its corners, which is the 1D
+/// centroidal Voronoi tessellation of the line), the nearest output vertices moved onto the
+/// samples and joined by edges along the line, and the rest of the mesh relaxed around them.
+#include <Eigen/Core>
+#include <vector>
+
+#include "heatcvt/mesh.h"
+#include "heatcvt/mesher/projector.h"
+#include "heatcvt/mesher/working_mesh.h"
+
+namespace heatcvt {
+
+/// Options of detect_creases() and recover_creases().
+struct CreaseOptions {
+  bool enabled = true;  ///< Default true (`meshcvt --no-features` turns it off).
+  /// An edge of two faces whose normals differ by more than this is a crease. Default 60°.
+  double min_dihedral_deg = 60;
+  /// A crease vertex where its line turns by more than this, or where other than two crease
+  /// edges meet, is a corner: lines are resampled between corners, which keep their place. Default 60°.
+  double corner_turn_deg = 60;
+  /// Lines shorter than this many output spacings (the mean edge length) are not recovered: the
+  /// output cannot resolve them. Default 1.
+  double min_line_spacings = 1;
+  /// A sample takes the nearest output vertex within this many spacings that no other sample
+  /// took. Default 0.75.
+  double max_snap_spacings = 0.75;
+  /// Rounds of tangential relaxation, max-min-angle flips and angle polish after the snap, of
+  /// the vertices off the lines within polish_rings rings of one on a line. Defaults 4 and 2.
+  int polish_rounds = 4;
+  int polish_rings = 2;
+  /// The recovery is undone where the smallest angle of the mesh falls below the lowest of its
+  /// value before, this, and the narrowest angle between two lines at a corner (which bounds
+  /// it). Default 25°.
+  double min_angle_deg = 25;
+  int threads = 0;  ///< 0 = all cores; the result does not depend on it.
+};
+
+/// Crease lines of a mesh: each a polyline of input vertices from corner to corner (or a closed
+/// loop without corners, first vertex repeated at the end).
+struct CreaseLines {
+  std::vector<std::vector<int>> lines;  ///< input vertex indices along each line
+  std::vector<char> corner;             ///< per input vertex: a corner of the crease graph
+  double length(const Eigen::MatrixX3d& V, int line) const;
+};
+
+/// The crease lines of (V, F): edges with exactly two faces whose normals differ by more than
+/// options.min_dihedral_deg, chained between corners.
+CreaseLines detect_creases(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const CreaseOptions& options = {});
+
+/// What recover_creases() did.
+struct CreaseStats {
+  int lines = 0;          ///< lines long enough to recover
+  int corners = 0;        ///< corners of those lines
+  int snapped = 0;        ///< output vertices moved onto a line
+  int line_edges = 0;     ///< consecutive samples joined by an output edge (after flips)
+  int missing_edges = 0;  ///< consecutive samples not joined (no vertex near, or no flip joins them)
+  int flips = 0;          ///< flips that made a line edge
+  /// The result made faces cross that did not before, or lowered the smallest angle (see
+  /// CreaseOptions::min_angle_deg): the mesh was restored.
+  bool undone = false;
+};
+
+/// Moves output vertices onto the crease lines of the input `lines` (input positions `V`): each
+/// line resampled at the output's mean edge length between its corners, every sample (corners
+/// first) takes the nearest output vertex within max_snap_spacings, consecutive samples are
+/// joined by an edge (an existing one, or one flip of the edge between them); then the vertices
+/// off the lines are relaxed, flipped (no edge between two line vertices) and polished around
+/// them. Undone as a whole where it makes more face pairs cross than before or lowers the
+/// smallest angle (CreaseOptions::min_angle_deg).
+CreaseStats recover_creases(WorkingMesh& mesh, const SurfaceProjector& surface, const Eigen::MatrixX3d& V,
+                            const CreaseLines& lines, const CreaseOptions& options = {});
+
+}  // namespace heatcvt
