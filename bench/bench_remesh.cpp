@@ -11,6 +11,7 @@
 // that of the last run (the one compared), not of the search.
 //
 // Usage: bench_remesh [--sizes 1000,3000,10000] [--only spot,torus] [--threads T] [--samples S]
+//                     [--no-features] (heatcvt without the crease stage, as meshcvt --no-features)
 // Inputs that are not edge manifolds or not orientable are skipped with the reason printed.
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
@@ -118,9 +119,10 @@ Row run_cgal(const TriangleMesh& input, int n, const SurfaceDescription& desc, i
   return measure(out, seconds, input, desc, loops, diagonal, samples);
 }
 
-Row run_heatcvt(const TriangleMesh& input, int n, int threads, const SurfaceDescription& desc, int loops,
-                double diagonal, int samples) {
+Row run_heatcvt(const TriangleMesh& input, int n, int threads, bool features, const SurfaceDescription& desc,
+                int loops, double diagonal, int samples) {
   RemeshOptions opt;
+  opt.creases.enabled = features;
   opt.cvt.sites = n;
   opt.cvt.threads = threads;
   const double t0 = bench::now_seconds();
@@ -160,6 +162,7 @@ int main(int argc, char** argv) {
   std::vector<int> sizes = {1000, 3000, 10000};
   std::vector<std::string> only;
   int threads = 0, samples = 20000;
+  bool features = true;
   for (int i = 1; i < argc; ++i) {
     auto next = [&]() -> std::string {
       if (i + 1 >= argc) {
@@ -175,6 +178,8 @@ int main(int argc, char** argv) {
       only = split_list(next());
     } else if (!std::strcmp(argv[i], "--threads")) {
       threads = std::atoi(next().c_str());
+    } else if (!std::strcmp(argv[i], "--no-features")) {
+      features = false;
     } else if (!std::strcmp(argv[i], "--samples")) {
       samples = std::atoi(next().c_str());
     } else {
@@ -219,7 +224,7 @@ int main(int argc, char** argv) {
     const int loops = validate_triangle_mesh(input.V, input.F, io).boundary_loops;
     const double diagonal = (input.V.colwise().maxCoeff() - input.V.colwise().minCoeff()).norm();
     for (int n : sizes) {
-      const Row h = run_heatcvt(input, n, threads, desc, loops, diagonal, samples);
+      const Row h = run_heatcvt(input, n, threads, features, desc, loops, diagonal, samples);
       const Row c = run_cgal(input, n, desc, loops, diagonal, samples);
       std::printf("| %s | %d | %d | %s | %s |\n", name.c_str(), static_cast<int>(input.V.rows()), n, cell(h).c_str(),
                   cell(c).c_str());

@@ -261,7 +261,8 @@ void keep_creases(const TriangleMesh& input, const RemeshOptions& options, Remes
   if (!out.creases.undone) {
     TriangleMesh result = compact_mesh(work);
     ValidationReport checks = check_result(result, out.input, true);
-    bool keeps = true;
+    // Snapping a tip's vertex onto a short crease near it would cut the tip off.
+    bool keeps = farthest_input_vertex(input, result) <= options.max_crease_gap_growth * farthest_input_vertex(input, out.mesh);
     for (const MeshCheck& c : out.checks.checks) {
       const MeshCheck* now = checks.find(c.name);
       if (c.ran && c.passed && !(now && now->ran && now->passed)) keeps = false;

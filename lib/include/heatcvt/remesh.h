@@ -108,6 +108,10 @@ struct RemeshOptions {
   /// run where post_cvt_stages is false (the output is then the dual itself). threads:
   /// cvt.threads is used.
   CreaseOptions creases;
+  /// ... and undone where the input vertex farthest from the result is more than this many times
+  /// farther than from the mesh before (snapping a tip's vertex onto a short crease near the tip
+  /// of an organic shape cuts the tip off). Default 1.1.
+  double max_crease_gap_growth = 1.1;
 };
 
 /// Result of remesh_cvt().

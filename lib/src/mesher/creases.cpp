@@ -318,21 +318,23 @@ class CreaseRecovery {
     flip_between_lines();
   }
 
-  // The smallest angle between two line edges at a vertex: no triangle between them can have a
-  // larger smallest angle (π where no two line edges meet).
-  double narrowest_corner() const {
-    std::map<int, std::vector<int>> at;
-    for (const auto& [a, b] : line_edges_) at[a].push_back(b), at[b].push_back(a);
-    double narrowest = M_PI;
-    for (const auto& [v, others] : at)
-      for (std::size_t i = 0; i < others.size(); ++i)
-        for (std::size_t j = i + 1; j < others.size(); ++j) {
-          const Eigen::Vector3d e1 = (mesh_.V.row(others[i]) - mesh_.V.row(v)).transpose();
-          const Eigen::Vector3d e2 = (mesh_.V.row(others[j]) - mesh_.V.row(v)).transpose();
-          if (e1.norm() > 0 && e2.norm() > 0)
-            narrowest = std::min(narrowest, std::acos(std::clamp(e1.normalized().dot(e2.normalized()), -1.0, 1.0)));
-        }
-    return narrowest;
+  // The faces below `floor` that the lines do not excuse. A face is excused where its smallest
+  // angle is at a corner between two line edges (two crease lines meeting at that angle bound
+  // every triangle between them), or where its three corners are on lines (two lines closer than
+  // the spacing) and its smallest angle is at least half of `floor`.
+  int unexcused_below(double floor) const {
+    int count = 0;
+    for (const MeshFace& f : mesh_.faces()) {
+      const double smallest = face_min_angle(mesh_, f);
+      if (smallest >= floor) continue;
+      int k = 0;
+      for (int q = 1; q < 3; ++q)
+        if (corner_angle(mesh_, f, q) < corner_angle(mesh_, f, k)) k = q;
+      const bool at_corner = on_line(f[k], f[(k + 1) % 3]) && on_line(f[k], f[(k + 2) % 3]);
+      const bool between_lines = taken_[f[0]] && taken_[f[1]] && taken_[f[2]] && smallest >= 0.5 * floor;
+      if (!at_corner && !between_lines) ++count;
+    }
+    return count;
   }
 
   CreaseStats stats;
@@ -426,10 +428,10 @@ CreaseStats recover_creases(WorkingMesh& mesh, const SurfaceProjector& surface, 
   recovery.join_samples(recovery.snap_samples());
   recovery.polish();
   CreaseStats stats = recovery.stats;
-  // Kept where nothing crosses that did not and the smallest angle stays at or above the lowest
-  // of its value before, min_angle_deg and the narrowest corner between two lines.
-  const double floor = std::min({min_before, options.min_angle_deg * kDegree, recovery.narrowest_corner()});
-  if (self_intersecting_pairs(mesh) > crossing_before || mesh_min_angle(mesh) < floor - 1e-9) {
+  // Kept where nothing crosses that did not and no face falls below the lower of the smallest
+  // angle before and min_angle_deg, except at a corner between two lines.
+  const double floor = std::min(min_before, options.min_angle_deg * kDegree) - 1e-9;
+  if (self_intersecting_pairs(mesh) > crossing_before || recovery.unexcused_below(floor) > 0) {
     mesh.rollback(before);
     stats.undone = true;
   }

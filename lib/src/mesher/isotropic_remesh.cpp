@@ -410,12 +410,25 @@ class Sizer {
     adjust_count(o_.long_factor * length);
     attempt([&] { return final_polish(); });
     local_ = false;
-    // Slivers the polish could not open: flipped over creases and folds, those flat along the
-    // border, the sliver ears and the slivers across ribbons one triangle wide trimmed, the
-    // others' shortest edges collapsed (border edges and interior vertices into border ones
-    // too); the pieces they cut off removed, the count restored and polished once more; repeated
-    // while slivers are left, as each polish can expose new ones. Each pass starts with only the
-    // regions around faces crossing now frozen.
+    sliver_passes(length);
+  }
+
+ private:
+  // Slivers the polish could not open: flipped over creases and folds, those flat along the
+  // border, the sliver ears, spikes and the slivers across ribbons one triangle wide trimmed, the
+  // others' shortest edges collapsed (border edges and interior vertices into border ones too);
+  // the pieces they cut off removed, the count restored and polished once more; repeated while
+  // slivers are left, as each polish can expose new ones. Each pass starts with only the regions
+  // around faces crossing now frozen. A later pass may end with a smaller φmin than an earlier
+  // one: the state with the largest φmin (among those with the count within count_aim) is kept.
+  void sliver_passes(double length) {
+    struct State {
+      WorkingMesh::Checkpoint mesh;
+      MesherStats stats;
+      std::vector<int> crossings;
+      double min_angle;
+    };
+    State best{mesh_.checkpoint(), stats_, crossings_, smallest_angle()};
     for (int pass = 0; pass < o_.sliver_passes && figures_below_target(); ++pass) {
       thaw();
       // Each kind of edit is its own attempt: a collapse that makes faces cross costs neither
@@ -440,10 +453,27 @@ class Sizer {
       if (changed == 0) break;
       adjust_count(o_.long_factor * length);
       attempt([&] { return final_polish(); });
+      const double now = smallest_angle();
+      if (now > best.min_angle && count_within_aim()) best = {mesh_.checkpoint(), stats_, crossings_, now};
+    }
+    if (smallest_angle() < best.min_angle) {
+      mesh_.rollback(best.mesh);
+      stats_ = best.stats;
+      crossings_ = best.crossings;
     }
   }
 
- private:
+  double smallest_angle() const {
+    double m = M_PI;
+    for (const MeshFace& f : mesh_.faces()) m = std::min(m, face_min_angle(mesh_, f));
+    return m;
+  }
+
+  bool count_within_aim() const {
+    const int slack = std::max(0, static_cast<int>(std::floor(o_.count_aim * o_.count_tolerance * o_.target_vertices)));
+    return std::abs(vertices_in_faces(mesh_) - o_.target_vertices) <= slack;
+  }
+
   bool figures_below_target() const {
     for (const MeshFace& f : mesh_.faces())
       if (face_min_angle(mesh_, f) < o_.min_angle_deg * kDegree) return true;

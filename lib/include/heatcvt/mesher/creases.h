@@ -32,9 +32,10 @@ struct CreaseOptions {
   /// the vertices off the lines within polish_rings rings of one on a line. Defaults 4 and 2.
   int polish_rounds = 4;
   int polish_rings = 2;
-  /// The recovery is undone where the smallest angle of the mesh falls below the lowest of its
-  /// value before, this, and the narrowest angle between two lines at a corner (which bounds
-  /// it). Default 25°.
+  /// The recovery is undone where a face falls below the lower of the mesh's smallest angle
+  /// before and this, unless that smallest angle is at a corner between two line edges (two
+  /// crease lines meeting at that angle bound every triangle between them) or the face's three
+  /// corners are on lines (two lines closer than the spacing) and it keeps half of it. Default 25°.
   double min_angle_deg = 25;
   int threads = 0;  ///< 0 = all cores; the result does not depend on it.
 };
