@@ -414,10 +414,11 @@ class Sizer {
   }
 
  private:
-  // Slivers the polish could not open: flipped over creases and folds, those flat along the
-  // border, the sliver ears, spikes and the slivers across ribbons one triangle wide trimmed, the
-  // others' shortest edges collapsed (border edges and interior vertices into border ones too);
-  // the pieces they cut off removed, the count restored and polished once more; repeated while
+  // Slivers the polish could not open: flipped over creases and folds, the notches of the border
+  // closed (where surface may be added), those flat along the border, the sliver ears, spikes
+  // and the slivers across ribbons one triangle wide trimmed, the others' shortest edges
+  // collapsed (border edges and interior vertices into border ones too); the pieces they cut off
+  // removed, the count restored and polished once more; repeated while
   // slivers are left, as each polish can expose new ones. Each pass starts with only the regions
   // around faces crossing now frozen. A later pass may end with a smaller φmin than an earlier
   // one: the state with the largest φmin (among those with the count within count_aim) is kept.
@@ -438,6 +439,7 @@ class Sizer {
         stats_.flipped_edges += flipped;
         return flipped;
       });
+      if (o_.fill_notches) changed += attempt([&] { return fill_notches(mesh_, o_, frozen()); });
       changed += attempt([&] {
         const int trimmed = trim_boundary_slivers(mesh_, o_.border_slivers);
         stats_.trimmed_faces += trimmed;

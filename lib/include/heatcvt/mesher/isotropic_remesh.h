@@ -169,8 +169,9 @@ bool sizing_reshapes(const WorkingMesh& mesh, const SurfaceProjector& surface, c
 /// met and the count is off by at most reshape_count_error) the count is brought within
 /// count_aim × count_tolerance of the target by splitting the longest or collapsing the shortest edges,
 /// angle polish + max-min-angle flips follow, and the slivers left are flipped over creases,
-/// trimmed (flat along the border, or ears) or collapsed before the count is restored and polished once more, up to
-/// sliver_passes times.
+/// the border's notches closed (fill_notches), slivers trimmed (flat along the border, ears,
+/// spikes) or collapsed before the count is restored and polished once more, up to
+/// sliver_passes times; the pass with the largest φmin is kept.
 /// Faces keep a consistent orientation and the genus of each piece is kept (splits, collapses
 /// with the link condition and flips do not change it; the border cleaning moves borders by less
 /// than a face and may close a three-edge hole; pieces cut off by the sliver collapses are removed
