@@ -252,9 +252,11 @@ int main(int argc, char** argv) {
     rep["output_vertices"] = res.mesh.V.rows();
     rep["post_cvt_kept"] = res.post_cvt_kept;
     if (!res.post_cvt_refusal.empty()) rep["post_cvt_refusal"] = res.post_cvt_refusal;
-    rep["creases"] = {{"lines", res.creases.lines}, {"corners", res.creases.corners},
+    rep["creases"] = {{"lines", res.creases.lines}, {"skipped_lines", res.creases.skipped_lines},
+                      {"corners", res.creases.corners},
                       {"snapped_vertices", res.creases.snapped}, {"line_edges", res.creases.line_edges},
-                      {"missing_edges", res.creases.missing_edges}, {"undone", res.creases.undone}};
+                      {"missing_edges", res.creases.missing_edges}, {"undone", res.creases.undone},
+                      {"undone_reason", res.creases.undone_reason}};
     rep["refinement_levels"] = res.refinement_levels;
     rep["cvt_vertices"] = res.cvt_vertices;
     rep["repair_rounds"] = res.repair_rounds;
@@ -291,11 +293,15 @@ int main(int argc, char** argv) {
       std::printf("\n");
       if (!no_post && !res.post_cvt_kept)
         std::printf("  post-CVT stages: %s; the dual is written\n", res.post_cvt_refusal.c_str());
-      if (res.creases.lines > 0)
-        std::printf("  creases: %d lines, %d corners, %d vertices moved onto them, %d of %d line edges made%s\n",
-                    res.creases.lines, res.creases.corners, res.creases.snapped, res.creases.line_edges,
-                    res.creases.line_edges + res.creases.missing_edges,
-                    res.creases.undone ? "; undone (the result failed a check), not kept" : "");
+      if (res.creases.lines + res.creases.skipped_lines > 0)
+        std::printf("  creases: %d lines%s, %d corners, %d vertices moved onto them, %d of %d line edges made%s\n",
+                    res.creases.lines,
+                    res.creases.skipped_lines > 0
+                        ? (" (" + std::to_string(res.creases.skipped_lines) + " more left out: their snap made faces cross)").c_str()
+                        : "",
+                    res.creases.corners, res.creases.snapped,
+                    res.creases.line_edges, res.creases.line_edges + res.creases.missing_edges,
+                    res.creases.undone ? ("; not kept: " + res.creases.undone_reason).c_str() : "");
       if (res.repair_rounds)
         std::printf("  %d sites added, %d dropped in %d closed-ball repair rounds\n", res.repair_sites,
                     res.repair_dropped_sites, res.repair_rounds);

@@ -262,16 +262,19 @@ void keep_creases(const TriangleMesh& input, const RemeshOptions& options, Remes
     TriangleMesh result = compact_mesh(work);
     ValidationReport checks = check_result(result, out.input, true);
     // Snapping a tip's vertex onto a short crease near it would cut the tip off.
-    bool keeps = farthest_input_vertex(input, result) <= options.max_crease_gap_growth * farthest_input_vertex(input, out.mesh);
+    std::string refusal;
+    if (farthest_input_vertex(input, result) > options.max_crease_gap_growth * farthest_input_vertex(input, out.mesh))
+      refusal = "an input vertex would be farther from the output";
     for (const MeshCheck& c : out.checks.checks) {
       const MeshCheck* now = checks.find(c.name);
-      if (c.ran && c.passed && !(now && now->ran && now->passed)) keeps = false;
+      if (c.ran && c.passed && !(now && now->ran && now->passed)) refusal = "it would fail " + c.name;
     }
-    if (keeps) {
+    if (refusal.empty()) {
       out.mesh = std::move(result);
       out.checks = std::move(checks);
     } else {
       out.creases.undone = true;
+      out.creases.undone_reason = refusal;
     }
   }
   out.stage_seconds.emplace_back("creases", seconds_since(t));

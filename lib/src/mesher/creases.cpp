@@ -8,6 +8,7 @@
 #include <limits>
 #include <map>
 #include <set>
+#include <string>
 #include <utility>
 
 #include "heatcvt/mesher/angle_polish.h"
@@ -223,73 +224,76 @@ class CreaseRecovery {
       for (int v : f) in_faces_[v] = 1;
   }
 
-  // Every line long enough resampled at the spacing; corners first (shared by the lines that end
-  // there), then the samples between them, each onto the nearest free vertex. Returns, per line,
-  // its samples' vertices (−1 where none was near) and the line's index.
-  std::vector<std::pair<int, std::vector<int>>> snap_samples() {
-    std::vector<std::pair<int, std::vector<Eigen::Vector3d>>> samples;
+  // Every line long enough resampled at the spacing: its corners first (shared by the lines
+  // that end there) all at once, then line by line its other samples, each onto the nearest free
+  // vertex, and joined. A line whose snap makes faces cross is undone alone (a crease along a
+  // part thinner than the spacing); so are the corners, all of them, where they do.
+  void recover_lines(long crossing_before) {
+    std::vector<int> kept;
     std::map<int, int> corner_vertex;
-    for (int l = 0; l < static_cast<int>(lines_.lines.size()); ++l) {
-      const double length = lines_.length(V_, l);
-      if (length < o_.min_line_spacings * spacing_) continue;
-      const int segments = std::max(1, static_cast<int>(std::lround(length / spacing_)));
-      samples.emplace_back(l, resample(V_, lines_.lines[l], segments));
+    for (int l = 0; l < static_cast<int>(lines_.lines.size()); ++l)
+      if (lines_.length(V_, l) >= o_.min_line_spacings * spacing_) kept.push_back(l);
+    const Transaction corners = begin();
+    for (int l : kept)
       for (int end : {lines_.lines[l].front(), lines_.lines[l].back()})
         if (lines_.corner[end] && !corner_vertex.count(end)) corner_vertex[end] = snap(V_.row(end).transpose());
-    }
-    stats.lines = static_cast<int>(samples.size());
     stats.corners = static_cast<int>(corner_vertex.size());
-    std::vector<std::pair<int, std::vector<int>>> chains;
-    for (const auto& [l, points] : samples) {
-      const std::vector<int>& line = lines_.lines[l];
-      std::vector<int> chain;
-      for (std::size_t s = 0; s < points.size(); ++s) {
-        const int end = s == 0 ? line.front() : line.back();
-        const bool at_corner = (s == 0 || s + 1 == points.size()) && lines_.corner[end];
-        chain.push_back(at_corner ? corner_vertex[end] : snap(points[s]));
-      }
-      chains.emplace_back(l, std::move(chain));
+    if (self_intersecting_pairs(mesh_) > crossing_before) {
+      undo(corners);
+      return;
     }
-    return chains;
+    for (int l : kept) {
+      const Transaction line = begin();
+      recover_line(l, corner_vertex);
+      if (self_intersecting_pairs(mesh_) > crossing_before) undo(line), ++stats.skipped_lines;
+      else ++stats.lines;
+    }
   }
 
-  // Consecutive samples joined by an edge, by a flip, or through a common neighbour moved onto
-  // the line.
-  // A line whose samples are all joined is then an edge path; its vertices are spread evenly
-  // along the line (a bridge vertex sits between two samples).
-  void join_samples(const std::vector<std::pair<int, std::vector<int>>>& chains) {
-    for (const auto& [l, c] : chains) {
-      std::vector<std::vector<int>> vf = mesh_.vertex_faces();
-      std::vector<int> path{c.front()};
-      bool whole = true;
-      for (std::size_t s = 1; s < c.size(); ++s) {
-        const int u = c[s - 1], w = c[s];
-        if (u < 0 || w < 0 || u == w) {
-          ++stats.missing_edges;
-          whole = false;
-          continue;
-        }
-        const int joined = join(mesh_, u, w, vf);
-        if (joined >= 0) {
-          stats.flips += joined;
-          mark(u, w);
-          path.push_back(w);
-          continue;
-        }
-        const int x = bridge(mesh_, u, w, V_, lines_.lines[l], vf, taken_);
-        if (x < 0) {
-          ++stats.missing_edges;
-          whole = false;
-          continue;
-        }
-        ++stats.snapped;
-        mark(u, x);
-        mark(x, w);
-        path.push_back(x);
-        path.push_back(w);
-      }
-      if (whole) spread(lines_.lines[l], path);
+  // Line l resampled, its samples between the corners snapped, consecutive samples joined by an
+  // edge, by a flip, or through a common neighbour moved onto the line; a line whose samples are
+  // all joined is an edge path, its vertices spread evenly along it (a bridge vertex sits between
+  // two samples).
+  void recover_line(int l, std::map<int, int>& corner_vertex) {
+    const std::vector<int>& line = lines_.lines[l];
+    const int segments = std::max(1, static_cast<int>(std::lround(lines_.length(V_, l) / spacing_)));
+    const std::vector<Eigen::Vector3d> points = resample(V_, line, segments);
+    std::vector<int> c;
+    for (std::size_t s = 0; s < points.size(); ++s) {
+      const int end = s == 0 ? line.front() : line.back();
+      const bool at_corner = (s == 0 || s + 1 == points.size()) && lines_.corner[end];
+      c.push_back(at_corner ? corner_vertex[end] : snap(points[s]));
     }
+    std::vector<std::vector<int>> vf = mesh_.vertex_faces();
+    std::vector<int> path{c.front()};
+    bool whole = true;
+    for (std::size_t s = 1; s < c.size(); ++s) {
+      const int u = c[s - 1], w = c[s];
+      if (u < 0 || w < 0 || u == w) {
+        ++stats.missing_edges;
+        whole = false;
+        continue;
+      }
+      const int joined = join(mesh_, u, w, vf);
+      if (joined >= 0) {
+        stats.flips += joined;
+        mark(u, w);
+        path.push_back(w);
+        continue;
+      }
+      const int x = bridge(mesh_, u, w, V_, line, vf, taken_);
+      if (x < 0) {
+        ++stats.missing_edges;
+        whole = false;
+        continue;
+      }
+      ++stats.snapped;
+      mark(u, x);
+      mark(x, w);
+      path.push_back(x);
+      path.push_back(w);
+    }
+    if (whole) spread(line, path);
   }
 
   // The vertices off the lines relaxed, flipped and polished around them; slivers whose corners
@@ -341,17 +345,23 @@ class CreaseRecovery {
 
  private:
   // The nearest vertex of the mesh not taken yet within max_snap_spacings, moved onto x.
+  // Only a vertex on the same side of the surface as the line (its normal within 90° of the
+  // surface's normal at x, about the bisector of the crease's two faces) qualifies: across a
+  // plate thinner than the spacing the nearest vertex may be on the other side.
   int snap(const Eigen::Vector3d& x) {
+    Eigen::Vector3d pos, nrm;
+    int hint = -1;
+    surface_.project(x, hint, pos, nrm);
+    const bool sided = nrm.allFinite() && nrm.norm() > 0;
     int best = -1;
     double best_d = o_.max_snap_spacings * spacing_;
     for (int v = 0; v < mesh_.num_vertices(); ++v) {
-      if (!in_faces_[v] || taken_[v]) continue;
+      if (!in_faces_[v] || taken_[v] || (sided && !(mesh_.N.row(v).dot(nrm.transpose()) > 0))) continue;
       const double d = (mesh_.V.row(v).transpose() - x).norm();
       if (d < best_d) best_d = d, best = v;
     }
     if (best < 0) return -1;
-    Eigen::Vector3d pos, nrm;
-    surface_.project(x, mesh_.anchor[best], pos, nrm);
+    mesh_.anchor[best] = hint;
     mesh_.V.row(best) = x.transpose();
     if (nrm.allFinite()) mesh_.N.row(best) = nrm.transpose();
     taken_[best] = 1;
@@ -369,6 +379,23 @@ class CreaseRecovery {
       mesh_.V.row(path[i]) = at[i].transpose();
       if (nrm.allFinite()) mesh_.N.row(path[i]) = nrm.transpose();
     }
+  }
+
+  // Everything a line's recovery changes, to undo it.
+  struct Transaction {
+    WorkingMesh::Checkpoint mesh;
+    std::vector<char> taken;
+    std::set<std::pair<int, int>> line_edges;
+    CreaseStats stats;
+  };
+  Transaction begin() const { return {mesh_.checkpoint(), taken_, line_edges_, stats}; }
+  void undo(const Transaction& t) {
+    mesh_.rollback(t.mesh, true);
+    taken_ = t.taken;
+    line_edges_ = t.line_edges;
+    const int skipped = stats.skipped_lines;
+    stats = t.stats;
+    stats.skipped_lines = skipped;
   }
 
   void mark(int a, int b) {
@@ -425,15 +452,20 @@ CreaseStats recover_creases(WorkingMesh& mesh, const SurfaceProjector& surface, 
   const long crossing_before = self_intersecting_pairs(mesh);
   const double min_before = mesh_min_angle(mesh);
   CreaseRecovery recovery(mesh, surface, V, lines, options, spacing);
-  recovery.join_samples(recovery.snap_samples());
+  recovery.recover_lines(crossing_before);
   recovery.polish();
   CreaseStats stats = recovery.stats;
   // Kept where nothing crosses that did not and no face falls below the lower of the smallest
   // angle before and min_angle_deg, except at a corner between two lines.
   const double floor = std::min(min_before, options.min_angle_deg * kDegree) - 1e-9;
-  if (self_intersecting_pairs(mesh) > crossing_before || recovery.unexcused_below(floor) > 0) {
+  const long crossing = self_intersecting_pairs(mesh);
+  const int below = recovery.unexcused_below(floor);
+  if (crossing > crossing_before || below > 0) {
     mesh.rollback(before);
     stats.undone = true;
+    stats.undone_reason = crossing > crossing_before
+                              ? std::to_string(crossing - crossing_before) + " more face pairs crossed"
+                              : std::to_string(below) + " faces fell below the smallest angle";
   }
   return stats;
 }

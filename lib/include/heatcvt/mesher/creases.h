@@ -6,6 +6,7 @@
 /// centroidal Voronoi tessellation of the line), the nearest output vertices moved onto the
 /// samples and joined by edges along the line, and the rest of the mesh relaxed around them.
 #include <Eigen/Core>
+#include <string>
 #include <vector>
 
 #include "heatcvt/mesh.h"
@@ -54,7 +55,8 @@ CreaseLines detect_creases(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
 
 /// What recover_creases() did.
 struct CreaseStats {
-  int lines = 0;          ///< lines long enough to recover
+  int lines = 0;          ///< lines recovered (long enough, and their snap made no faces cross)
+  int skipped_lines = 0;  ///< lines long enough whose snap made faces cross: left out (a part thinner than the spacing)
   int corners = 0;        ///< corners of those lines
   int snapped = 0;        ///< output vertices moved onto a line
   int line_edges = 0;     ///< consecutive samples joined by an output edge (after flips)
@@ -63,14 +65,16 @@ struct CreaseStats {
   /// The result made faces cross that did not before, or lowered the smallest angle (see
   /// CreaseOptions::min_angle_deg): the mesh was restored.
   bool undone = false;
+  std::string undone_reason;  ///< why, in words (empty when kept)
 };
 
 /// Moves output vertices onto the crease lines of the input `lines` (input positions `V`): each
 /// line resampled at the output's mean edge length between its corners, every sample (corners
 /// first) takes the nearest output vertex within max_snap_spacings, consecutive samples are
-/// joined by an edge (an existing one, or one flip of the edge between them); then the vertices
-/// off the lines are relaxed, flipped (no edge between two line vertices) and polished around
-/// them. Undone as a whole where it makes more face pairs cross than before or lowers the
+/// joined by an edge (an existing one, one flip of the edge between them, or through a common
+/// neighbour moved onto the line); a line whose snap makes faces cross is left out; then the
+/// vertices off the lines are relaxed, flipped (no edge between two line vertices) and polished
+/// around them. Undone as a whole where it makes more face pairs cross than before or lowers the
 /// smallest angle (CreaseOptions::min_angle_deg).
 CreaseStats recover_creases(WorkingMesh& mesh, const SurfaceProjector& surface, const Eigen::MatrixX3d& V,
                             const CreaseLines& lines, const CreaseOptions& options = {});
