@@ -36,24 +36,54 @@ void WorkingMesh::add_vertices(const Eigen::MatrixX3d& positions, const Eigen::M
   valence_.resize(V.rows(), 0);
 }
 
+WorkingMesh::StarEntry* WorkingMesh::find(Star& star, int to) {
+  for (StarEntry& e : star)
+    if (e.to == to) return &e;
+  return nullptr;
+}
+
+const WorkingMesh::StarEntry* WorkingMesh::find(const Star& star, int to) {
+  for (const StarEntry& e : star)
+    if (e.to == to) return &e;
+  return nullptr;
+}
+
+void WorkingMesh::grow_stars() {
+  const size_t n = static_cast<size_t>(V.rows());
+  if (valence_.size() < n) valence_.resize(n, 0);
+  if (out_.size() < n) out_.resize(n);
+  if (edges_.size() < n) edges_.resize(n);
+}
+
 void WorkingMesh::index_face(int f) {
-  if (valence_.size() < static_cast<size_t>(V.rows())) valence_.resize(V.rows(), 0);
+  grow_stars();
   const MeshFace& t = faces_[f];
   for (int k = 0; k < 3; ++k) {
     const int a = t[k], b = t[(k + 1) % 3];
-    half_edges_[edge_key(a, b)] = f;
-    if (++edges_[edge_key(std::min(a, b), std::max(a, b))] == 1) ++valence_[a], ++valence_[b];
+    if (StarEntry* e = find(out_[a], b)) e->value = f;
+    else out_[a].push_back({b, f});
+    Star& star = edges_[std::min(a, b)];
+    if (StarEntry* e = find(star, std::max(a, b))) {
+      ++e->value;
+    } else {
+      star.push_back({std::max(a, b), 1});
+      ++valence_[a], ++valence_[b];
+    }
   }
 }
 
 void WorkingMesh::unindex_face(int f) {
   const MeshFace& t = faces_[f];
+  auto erase = [](Star& star, StarEntry* e) {
+    *e = star.back();
+    star.pop_back();
+  };
   for (int k = 0; k < 3; ++k) {
     const int a = t[k], b = t[(k + 1) % 3];
-    if (auto it = half_edges_.find(edge_key(a, b)); it != half_edges_.end() && it->second == f) half_edges_.erase(it);
-    auto it = edges_.find(edge_key(std::min(a, b), std::max(a, b)));
-    if (it != edges_.end() && --it->second == 0) {
-      edges_.erase(it);
+    if (StarEntry* e = find(out_[a], b); e && e->value == f) erase(out_[a], e);
+    Star& star = edges_[std::min(a, b)];
+    if (StarEntry* e = find(star, std::max(a, b)); e && --e->value == 0) {
+      erase(star, e);
       --valence_[a], --valence_[b];
     }
   }
@@ -87,8 +117,8 @@ int WorkingMesh::remove_faces(const std::vector<char>& drop) {
     if (next != f) {
       faces_[next] = faces_[f];
       for (int k = 0; k < 3; ++k) {  // re-point the half-edges the moved face holds
-        auto it = half_edges_.find(edge_key(faces_[next][k], faces_[next][(k + 1) % 3]));
-        if (it != half_edges_.end() && it->second == f) it->second = next;
+        StarEntry* e = find(out_[faces_[next][k]], faces_[next][(k + 1) % 3]);
+        if (e && e->value == f) e->value = next;
       }
     }
     ++next;
@@ -99,8 +129,8 @@ int WorkingMesh::remove_faces(const std::vector<char>& drop) {
 
 void WorkingMesh::set_faces(std::vector<MeshFace> faces) {
   faces_ = std::move(faces);
-  half_edges_.clear();
-  edges_.clear();
+  out_.assign(V.rows(), {});
+  edges_.assign(V.rows(), {});
   valence_.assign(V.rows(), 0);
   for (int f = 0; f < num_faces(); ++f) index_face(f);
 }
@@ -115,13 +145,16 @@ void WorkingMesh::flip(int f1, int k, int f2) {
 }
 
 int WorkingMesh::half_edge_face(int a, int b) const {
-  auto it = half_edges_.find(edge_key(a, b));
-  return it == half_edges_.end() ? -1 : it->second;
+  if (a < 0 || a >= static_cast<int>(out_.size())) return -1;
+  const StarEntry* e = find(out_[a], b);
+  return e ? e->value : -1;
 }
 
 int WorkingMesh::edge_face_count(int a, int b) const {
-  auto it = edges_.find(edge_key(std::min(a, b), std::max(a, b)));
-  return it == edges_.end() ? 0 : it->second;
+  const int lo = std::min(a, b);
+  if (lo < 0 || lo >= static_cast<int>(edges_.size())) return 0;
+  const StarEntry* e = find(edges_[lo], std::max(a, b));
+  return e ? e->value : 0;
 }
 
 std::vector<std::vector<int>> WorkingMesh::vertex_faces() const {

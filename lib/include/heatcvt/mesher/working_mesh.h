@@ -6,7 +6,6 @@
 /// result self-intersects".
 #include <Eigen/Core>
 #include <array>
-#include <unordered_map>
 #include <vector>
 
 #include "heatcvt/disjoint_sets.h"
@@ -20,7 +19,8 @@ using MeshFace = std::array<int, 3>;
 ///
 /// Faces are kept in a vector whose order is part of the state: stages visit faces in that order
 /// (so results are deterministic), removal keeps the order of the remaining faces, additions go
-/// to the end. The edge index maps each directed edge (half-edge) a→b to the face that holds it
+/// to the end. The edge index (per-vertex stars, a few entries each, so a lookup scans a short
+/// contiguous list) maps each directed edge (half-edge) a→b to the face that holds it
 /// (when several do, an orientation conflict, the one indexed last) and each undirected edge to the number of faces on it;
 /// the valence of a vertex is the number of distinct undirected edges at it. Every face operation
 /// below updates the index; positions and normals are public and may be written directly.
@@ -89,11 +89,20 @@ class WorkingMesh {
   static long long edge_key(int a, int b) { return (static_cast<long long>(a) << 32) | static_cast<unsigned>(b); }
 
  private:
+  /// One entry of a vertex's star: the other end of an edge and a value (the face holding the
+  /// half-edge, or the number of faces on the undirected edge).
+  struct StarEntry {
+    int to, value;
+  };
+  using Star = std::vector<StarEntry>;
   void index_face(int f);
   void unindex_face(int f);
+  void grow_stars();
+  static StarEntry* find(Star& star, int to);
+  static const StarEntry* find(const Star& star, int to);
   std::vector<MeshFace> faces_;
-  std::unordered_map<long long, int> half_edges_;  // a→b -> face
-  std::unordered_map<long long, int> edges_;       // {min, max} -> face count
+  std::vector<Star> out_;    // out_[a]: half-edges a→b with the face holding each
+  std::vector<Star> edges_;  // edges_[min(a, b)]: undirected edges to max(a, b) with their face counts
   std::vector<int> valence_;
 };
 
