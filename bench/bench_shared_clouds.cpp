@@ -4,10 +4,11 @@
 // PCL's greedy projection triangulation (the usual PCL mesher of open scans) on the cloud voxel-
 // downsampled to about the same number of vertices.
 //
-// Usage: bench_shared_clouds [N = 2000] [--no-peer] [--threads T]
+// Usage: bench_shared_clouds [N = 2000] [--no-peer] [--threads T] [--mean-tolerance T]
 #include <pcl/filters/voxel_grid.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -82,11 +83,22 @@ void print(const char* method, const Row& r, int n) {
 int main(int argc, char** argv) {
   int n = 2000, threads = 0;
   bool peer = true;
+  ReconstructionOptions defaults;
+  double mean_tolerance = defaults.lloyd_mean_tolerance;
   for (int a = 1; a < argc; ++a) {
     const std::string s = argv[a];
     if (s == "--no-peer") peer = false;
     else if (s == "--threads" && a + 1 < argc) threads = std::atoi(argv[++a]);
-    else n = std::atoi(argv[a]);
+    else if (s == "--mean-tolerance" && a + 1 < argc) mean_tolerance = std::atof(argv[++a]);
+    else if (!s.empty() && std::isdigit(static_cast<unsigned char>(s[0]))) n = std::atoi(s.c_str());
+    else {
+      std::fprintf(stderr, "usage: bench_shared_clouds [N = 2000] [--no-peer] [--threads T] [--mean-tolerance T]\n");
+      return 2;
+    }
+  }
+  if (n < 1) {
+    std::fprintf(stderr, "bench_shared_clouds: N must be >= 1\n");
+    return 2;
   }
   const std::filesystem::path dir = std::filesystem::path(HEATCVT_DATA_DIR) / "clouds";
   if (!std::filesystem::is_directory(dir)) {
@@ -115,6 +127,7 @@ int main(int argc, char** argv) {
     ReconstructionOptions o;
     o.sites = n;
     o.threads = threads;
+    o.lloyd_mean_tolerance = mean_tolerance;
     const double t0 = bench::now_seconds();
     std::printf("| %s ", f.filename().c_str());
     try {

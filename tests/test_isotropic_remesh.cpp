@@ -184,7 +184,7 @@ TEST(IsotropicRemesh, InsetBorderIsMovedOntoTheSurfacesBorder) {
 }
 
 // The rule that keeps or refuses a sizing result, on figures built by hand (target 1,000).
-TEST(IsotropicRemesh, ResultIsKeptOnlyWhenNoWorseOnAnyTarget) {
+TEST(IsotropicRemesh, ResultIsKeptOnlyWhenNoWorseOnAnyTargetOrBetterOnMore) {
   const IsotropicRemeshOptions o = sized_to(1000);
   const double deg = M_PI / 180;
   auto figures = [&](int vertices, double min_deg, double mean_deg, double below, double gap) {
@@ -214,6 +214,11 @@ TEST(IsotropicRemesh, ResultIsKeptOnlyWhenNoWorseOnAnyTarget) {
   EXPECT_TRUE(sizing_no_worse(figures(1000, 24.5, 51.5, 0.001, 0), figures(1000, 30, 53, 0, 2.5), o));
   EXPECT_FALSE(sizing_no_worse(figures(1000, 23.5, 53, 0.001, 0), figures(1000, 30, 53, 0, 2.5), o));
   EXPECT_FALSE(sizing_no_worse(figures(1000, 30, 53, 0, 0.5), good, o));
+  // More of the three targets met (count and φm against φmin alone): kept while φmin stays at
+  // least traded_min_angle_deg (20°).
+  EXPECT_TRUE(sizing_no_worse(figures(1000, 22, 52.5, 0.002, 0), figures(970, 25.5, 49, 0, 0), o));
+  EXPECT_FALSE(sizing_no_worse(figures(1000, 19, 52.5, 0.002, 0), figures(970, 25.5, 49, 0, 0), o));
+  EXPECT_FALSE(sizing_no_worse(figures(1000, 22, 51.5, 0.002, 0), figures(970, 25.5, 49, 0, 0), o));
 }
 
 // The bridge of FlyingFacesAcrossADepthJumpAreRemoved with the upper sheet shifted by `shift` in x.

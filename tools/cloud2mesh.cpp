@@ -68,6 +68,8 @@ void check_options(const ReconstructionOptions& opt) {
     throw InvalidInputError("--points-per-site must be 0 (every point) or at least 3");
   if (!(opt.lloyd_relaxation >= 1 && opt.lloyd_relaxation < 2)) throw InvalidInputError("--relaxation must be in [1, 2)");
   if (!(opt.lloyd_tolerance >= 0) || !std::isfinite(opt.lloyd_tolerance)) throw InvalidInputError("--tolerance must be >= 0");
+  if (!(opt.lloyd_mean_tolerance >= 0) || !std::isfinite(opt.lloyd_mean_tolerance))
+    throw InvalidInputError("--mean-tolerance must be >= 0");
   if (opt.max_hole_edges < 0) throw InvalidInputError("--max-hole-edges must be >= 0");
   if (opt.relaxation_iterations < 0) throw InvalidInputError("--polish-iterations must be >= 0");
   if (opt.denoise_neighbors < 2) throw InvalidInputError("--denoise-k must be >= 2");
@@ -126,6 +128,7 @@ cli::Json make_report(const std::string& cloud_path, const std::vector<std::stri
   j["factor_s"] = res.factor_seconds;
   j["cvt_s"] = res.cvt_seconds;
   j["per_iteration_s"] = per_iter;
+  j["iteration_mean_move_spacings"] = res.iteration_moves;
   j["reconstruct_s"] = res.total_seconds;
   j["total_s"] = total_s;
   return j;
@@ -258,6 +261,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--tolerance", opt.lloyd_tolerance,
                  "stop the heat Lloyd iterations when no site moves more than TOL * sqrt(area / sites); 0 = run all")
+      ->capture_default_str();
+  app.add_option("--mean-tolerance", opt.lloyd_mean_tolerance,
+                 "stop the heat Lloyd iterations when the mean site move is below TOL * sqrt(area / sites); 0 = run all")
       ->capture_default_str();
   app.add_option("--max-hole-edges", opt.max_hole_edges,
                  "fill boundary loops of up to this many edges (longer ones under the conditions of reconstruct.h)")

@@ -37,7 +37,8 @@ void validate_cvt_inputs(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, c
     throw InvalidInputError("centroidal_voronoi: the Laplacian has " + std::to_string(laplacian.num_vertices()) +
                             " vertices but the mesh has " + std::to_string(n));
   if (options.iterations < 0) throw InvalidInputError("centroidal_voronoi: iterations must be >= 0");
-  if (!(options.tolerance >= 0)) throw InvalidInputError("centroidal_voronoi: tolerance must be >= 0");
+  if (!(options.tolerance >= 0) || !(options.mean_move_tolerance >= 0))
+    throw InvalidInputError("centroidal_voronoi: tolerance and mean_move_tolerance must be >= 0");
   if (options.voronoi_rings < 0 || options.centroid_rings < 0 || options.voronoi_rings_settled < 0)
     throw InvalidInputError("centroidal_voronoi: ring counts must be >= 0");
   if (options.quality_every < 0) throw InvalidInputError("centroidal_voronoi: quality_every must be >= 0");
@@ -193,7 +194,9 @@ void heat_iterations(const CvtOptions& options, double spacing, LloydState& lloy
       result.stalled = true;
       return;
     }
-    if (options.tolerance > 0 && st.max_move < options.tolerance * spacing && st.inserted_sites == 0) {
+    const bool small_max = options.tolerance > 0 && st.max_move < options.tolerance * spacing;
+    const bool small_mean = options.mean_move_tolerance > 0 && st.mean_move < options.mean_move_tolerance * spacing;
+    if ((small_max || small_mean) && st.inserted_sites == 0) {
       result.converged = true;
       return;
     }

@@ -43,6 +43,7 @@ void check_options(const ReconstructionOptions& o) {
   auto bad = [](const std::string& m) { throw InvalidInputError("reconstruct_surface: " + m); };
   if (o.sites < 4) bad("sites = " + std::to_string(o.sites) + " (need at least 4)");
   if (o.iterations < 0) bad("iterations = " + std::to_string(o.iterations) + " (must be >= 0)");
+  if (!(o.lloyd_mean_tolerance >= 0) || !std::isfinite(o.lloyd_mean_tolerance)) bad("lloyd_mean_tolerance must be >= 0");
   if (o.neighbors < o.min_neighbors || o.neighbors > o.max_neighbors)
     bad("neighbors = " + std::to_string(o.neighbors) + " (must be in [" + std::to_string(o.min_neighbors) + ", " +
         std::to_string(o.max_neighbors) + "])");
@@ -350,6 +351,7 @@ CvtOptions reconstruction_cvt_options(const ReconstructionOptions& options) {
   }
   copt.relaxation = options.lloyd_relaxation;
   copt.tolerance = options.lloyd_tolerance;
+  copt.mean_move_tolerance = options.lloyd_mean_tolerance;
   if (options.surface_lloyd_iterations > 0) {
     copt.initialization = CvtInitialization::farthest_point;
     copt.surface_lloyd_iterations = options.surface_lloyd_iterations;
@@ -442,7 +444,12 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   res.factor_seconds = cvt.factor_seconds;
   res.iterations = static_cast<int>(cvt.iterations.size());
   double iteration_sum = 0;
-  for (const auto& st : cvt.iterations) res.iteration_seconds.push_back(st.seconds), iteration_sum += st.seconds;
+  const double site_spacing = std::sqrt(surface_area(cp.PC, T) / options.sites);
+  for (const auto& st : cvt.iterations) {
+    res.iteration_seconds.push_back(st.seconds);
+    res.iteration_moves.push_back(st.mean_move / site_spacing);
+    iteration_sum += st.seconds;
+  }
   res.stage_seconds.emplace_back("cvt start and final diagram", since(stage.t) - iteration_sum);
   res.stage_seconds.emplace_back("cvt iterations", iteration_sum);
   stage.t = Clock::now();

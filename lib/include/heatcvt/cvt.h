@@ -75,6 +75,11 @@ struct CvtOptions {
   /// Stop early when no site moved more than `tolerance · spacing`, spacing = sqrt(area / sites).
   /// 0 = always run all iterations. Default 0.
   double tolerance = 0.0;
+  /// Stop early when the mean site move of an iteration is below `mean_move_tolerance · spacing`:
+  /// the sites are centroids of their heat cells up to noise (over-relaxed steps on a noisy
+  /// sampling keep a few sites moving, so the mean and not the largest move decides).
+  /// 0 = off. Default 0.
+  double mean_move_tolerance = 0.0;
   /// Seed of the random initialisation. Default 1.
   std::uint32_t seed = 1;
   /// Initial sampling when no initial sites are given. Default random (as in the paper).

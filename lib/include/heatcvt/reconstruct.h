@@ -96,6 +96,12 @@ struct ReconstructionOptions {
   /// Stop the Lloyd iterations early when no site moved more than this fraction of the site
   /// spacing sqrt(area / sites); 0 = always run `iterations`. Default 0.
   double lloyd_tolerance = 0.0;
+  /// Stop the heat Lloyd iterations once the mean site move of one is below this fraction of
+  /// the site spacing (CvtOptions::mean_move_tolerance): after the surface-Lloyd start the
+  /// sites of a clean sampling are already heat centroids up to a few percent of the spacing,
+  /// and further steps only move them by the noise of the sampling; 0 = run `iterations`.
+  /// Default 0.05.
+  double lloyd_mean_tolerance = 0.05;
   /// Iterations of the cheap surface Lloyd (CvtOptions::surface_lloyd_iterations, ω = 1.5) on
   /// farthest-point start sites, run while the Cholesky factor is computed; 0 = off (the start
   /// is then `farthest_point_start`'s). Default 40.
@@ -146,6 +152,8 @@ struct ReconstructionResult {
   int points_denoised = 0;         ///< removed by the outlier filter
   int points_voxel_removed = 0;    ///< removed by voxel-grid downsampling (input − output count)
   std::vector<double> iteration_seconds;  ///< wall time of each Lloyd iteration
+  /// Mean site move of each Lloyd iteration, in site spacings sqrt(area / sites).
+  std::vector<double> iteration_moves;
   int candidate_triangles = 0;     ///< distinct dual triangles witnessed by the point triangles
   int rejected_triangles = 0;      ///< candidates not kept (non-manifold or orientation conflict)
   int removed_triangles = 0;       ///< kept, then removed to make vertices manifold / drop tiny pieces

@@ -284,7 +284,8 @@ int fill_pass(WorkingMesh& mesh, const SurfaceProjector& surface, const HoleFill
     // Only the fill of what looks like the border of a piece, from its sites' side, is taken out
     // when it cuts through the mesh: a gap of the extraction, or a loop around the tip of a thin
     // part, is filled and untangled after.
-    rejectable.push_back(open_surface && L > o.max_hole_edges &&
+    // Under HolePolicy::fill every fill stays (a watertight mesh is asked for).
+    rejectable.push_back(o.policy != HolePolicy::fill && open_surface && L > o.max_hole_edges &&
                          (with_sites.shape == LoopShape::outer_border || with_sites.shape == LoopShape::not_simple));
   }
   return add_fills_without_intersections(mesh, added, fill_of, fill_sizes, rejectable, o, sizes);

@@ -740,7 +740,14 @@ bool sizing_no_worse(const SizingFigures& after, const SizingFigures& before, co
                                                                     : after.below <= before.below);
   const bool mean_angle = after.mean_angle >= std::min(before.mean_angle, o.mean_angle_deg * kDegree) - slack - 1e-12;
   const bool border = after.border_gap <= std::max(before.border_gap, o.border_tolerance);
-  return count && min_angle && mean_angle && border;
+  if (count && min_angle && mean_angle && border) return true;
+  // A result that meets more of the three targets (count, φmin, φm) than before is kept as long
+  // as its φmin stays above traded_min_angle_deg and the border is no farther off.
+  auto targets_met = [&](const SizingFigures& q, int err) {
+    return (err <= count_slack) + (q.min_angle >= target) + (q.mean_angle >= o.mean_angle_deg * kDegree);
+  };
+  return border && targets_met(after, err_after) > targets_met(before, err_before) &&
+         after.min_angle >= o.traded_min_angle_deg * kDegree;
 }
 
 bool sizing_reshapes(const WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options) {

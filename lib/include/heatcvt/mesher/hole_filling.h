@@ -69,7 +69,8 @@ struct HoleFillingOptions {
   /// piece, as between the fragments of a cluttered scan) or whose projection crosses itself, and
   /// whose triangles cut through the mesh, is taken out again, leaving the loop open. Other fills
   /// (gaps of the extraction, caps over the tips of thin parts, the holes of a nearly closed
-  /// surface) are kept and untangled after. Default true.
+  /// surface) are kept and untangled after, and so is every fill under HolePolicy::fill.
+  /// Default true.
   bool reject_intersecting_fills = true;
   /// The surface counts as open when more than this fraction of its edges are on its boundary.
   /// Default 0.05.

@@ -49,6 +49,11 @@ struct IsotropicRemeshOptions {
   /// (the dual left most sites out): a result nearer the count is kept even where φmin drops
   /// (φm may not). Default 0.25.
   double count_first_error = 0.25;
+  /// A result that meets more of the three targets (count within count_tolerance, φmin ≥
+  /// min_angle_deg, φm ≥ mean_angle_deg) than the mesh before is kept even where it is worse
+  /// on the other, as long as its φmin is at least this (and its border no farther from the
+  /// surface's). Default 20°.
+  double traded_min_angle_deg = 20;
   /// A mesh that meets the shape targets and whose count is off by at most this fraction of the
   /// target only has its count adjusted (no remeshing rounds). Default 0.05.
   double reshape_count_error = 0.05;
@@ -137,7 +142,8 @@ SizingFigures sizing_figures(const WorkingMesh& mesh, const SurfaceProjector& su
 /// did, else the share of faces below it is no larger; φm meets its target or is no lower than
 /// before (both less border_fit_angle_slack_deg where the border was brought onto the surface's
 /// own; φmin not at all where the count was off by more than count_first_error); the border is on
-/// the surface's border within border_tolerance or no farther off than before.
+/// the surface's border within border_tolerance or no farther off than before. Or: it meets more
+/// of the three targets than before with φmin ≥ traded_min_angle_deg, the border no farther off.
 bool sizing_no_worse(const SizingFigures& after, const SizingFigures& before, const IsotropicRemeshOptions& options);
 
 /// Whether the mesh misses the targets of `options` (count, smallest angle, φm, border), i.e.
