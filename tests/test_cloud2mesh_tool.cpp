@@ -253,6 +253,8 @@ TEST(Cloud2MeshTool, NonsenseOptions) {
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--threads -1"), {"--threads"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--relaxation 2"), {"--relaxation"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--surface-lloyd -1"), {"--surface-lloyd"}, dir, 1);
+  expect_clean_failure(test::run_tool("cloud2mesh", base + "--mean-tolerance -1"), {"--mean-tolerance"}, dir, 1);
+  expect_clean_failure(test::run_tool("cloud2mesh", base + "--mean-tolerance nan"), {"--mean-tolerance"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--points-per-site 2"), {"--points-per-site"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--points-per-site nan"), {"--points-per-site"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--bogus"), {"bogus"}, dir, 1);

@@ -564,7 +564,7 @@ TEST(Hardening, Cloud2meshHelpShowsEveryReconstructionOption) {
         std::string("--denoise-stddev"), std::string("--voxel"), std::string("--t-coef"), std::string("--seed"),
         std::string("--threads"), "--max-hole-edges INT=" + std::to_string(d.max_hole_edges),
         "--polish-iterations INT=" + std::to_string(d.relaxation_iterations), std::string("--fast-start"),
-        std::string("--relaxation"), std::string("--tolerance"),
+        std::string("--relaxation"), std::string("--tolerance"), std::string("--mean-tolerance"),
         "--surface-lloyd INT=" + std::to_string(d.surface_lloyd_iterations), std::string("--points-per-site"),
         std::string("--no-smooth-cvt-points")})
     EXPECT_NE(r.out.find(needle), std::string::npos) << needle;

@@ -167,6 +167,29 @@ TEST(Reconstruct, DeterministicForSeedAndThreads) {
   EXPECT_EQ(a.validation.genus, 1) << a.validation.summary();
 }
 
+// The heat Lloyd iterations stop at the first whose mean site move is below
+// lloyd_mean_tolerance spacings (the last one reported is), and run all `iterations` with 0.
+TEST(Reconstruct, HeatIterationsStopWhenTheSitesSettle) {
+  const TriangleMesh sphere = test::icosphere(5);
+  const Eigen::MatrixX3d P = sample_surface(sphere.V, sphere.F, 20000, 3);
+  ReconstructionOptions opt;
+  opt.sites = 1000;
+  opt.iterations = 6;
+  const ReconstructionResult settled = reconstruct_surface(P, opt);
+  ASSERT_EQ(settled.iteration_moves.size(), static_cast<size_t>(settled.iterations));
+  ASSERT_GE(settled.iterations, 1);
+  EXPECT_LT(settled.iterations, opt.iterations);
+  EXPECT_LT(settled.iteration_moves.back(), opt.lloyd_mean_tolerance);
+  for (int it = 0; it + 1 < settled.iterations; ++it) EXPECT_GE(settled.iteration_moves[it], opt.lloyd_mean_tolerance);
+  EXPECT_EQ(settled.validation.boundary_loops, 0);
+  EXPECT_EQ(settled.validation.genus, 0);
+  opt.lloyd_mean_tolerance = 0;
+  const ReconstructionResult all = reconstruct_surface(P, opt);
+  EXPECT_EQ(all.iterations, opt.iterations);
+  opt.lloyd_mean_tolerance = -1;
+  EXPECT_THROW(reconstruct_surface(P, opt), InvalidInputError);
+}
+
 // The CVT runs on a voxel subset of about cvt_points_per_site points per site, while the
 // vertices are fitted to every point: on a clean unit sphere they stay on it; with 0 every point
 // is a CVT point. The stage timings account for the whole run.
