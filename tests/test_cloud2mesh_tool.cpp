@@ -241,6 +241,17 @@ TEST(Cloud2MeshTool, MoreSitesThanPoints) {
                        {"600", "500"}, dir, 1);
 }
 
+// The summary notes a cloud with fewer than 3 usable points per requested site, and only then.
+TEST(Cloud2MeshTool, SummaryNotesAnUndersampledCloud) {
+  test::ScratchDir dir("c2m");
+  write_sphere_cloud(dir.path("s.xyz"), 500);
+  const auto sparse = test::run_tool("cloud2mesh", dir.path("s.xyz") + " -n 200 -o " + dir.path("a.ply"));
+  EXPECT_NE(sparse.out.find("undersampled for -n 200"), std::string::npos) << sparse.out;
+  const auto dense = test::run_tool("cloud2mesh", dir.path("s.xyz") + " -n 50 -o " + dir.path("b.ply"));
+  ASSERT_EQ(dense.exit_code, 0) << dense.err;
+  EXPECT_EQ(dense.out.find("undersampled"), std::string::npos) << dense.out;
+}
+
 TEST(Cloud2MeshTool, NonsenseOptions) {
   test::ScratchDir dir("c2m");
   write_sphere_cloud(dir.path("s.xyz"), 500);

@@ -31,6 +31,10 @@ using namespace heatcvt;
 using Clock = std::chrono::steady_clock;
 
 namespace {
+
+// Below this many usable points per requested site the summary notes that the cloud is
+// undersampled for -n.
+constexpr double kFewPointsPerSite = 3.0;
 // Far outliers: when a few points set the bounding box (the normalisation frame) and the bulk of
 // the cloud spans less than `ratio` of it, the bulk collapses below the precision of the
 // normalised coordinates. The bulk is the 1 %-99 % quantile box per axis.
@@ -381,6 +385,13 @@ int main(int argc, char** argv) {
                   res.flying_faces, res.sized ? ", sized to -n" : "");
       std::printf("  quality: phi_min %.2f deg (boundary triangles %.2f deg), phi_m %.2f deg\n", res.min_angle_deg,
                   res.boundary_min_angle_deg, res.mean_min_angle_deg);
+      // The point Laplacian resolves a heat cell from about 10 points (ReconstructionOptions::
+      // cvt_points_per_site); far fewer leave holes and slivers the mesher can only patch.
+      const double points_per_site = static_cast<double>(res.points_used) / opt.sites;
+      if (!stream && points_per_site < kFewPointsPerSite)
+        std::printf("  note: only %.1f points per site; the surface is undersampled for -n %d (about 10 per site "
+                    "give a clean mesh): a smaller -n gives a better one\n",
+                    points_per_site, opt.sites);
       if (stream)
         std::printf("  streamed: %ld points in %d passes into voxels of %g, reconstructed from %ld voxel points\n",
                     static_cast<long>(streamed.points_read), streamed.passes, streamed.voxel_size,
