@@ -13,6 +13,7 @@
 #include "heatcvt/closest_point.h"
 #include "heatcvt/mesh.h"
 #include "heatcvt/mesh_io.h"
+#include "heatcvt/mesher/compaction.h"
 #include "heatcvt/mesher/creases.h"
 #include "heatcvt/mesher/mesh_checks.h"
 #include "heatcvt/mesher/projector.h"
@@ -208,15 +209,7 @@ TEST(Creases, LinesAlongThinPartsAreLeftOutAlone) {
   o.creases.enabled = false;
   const RemeshResult plain = remesh_cvt(input, o);
   const MeshSurfaceProjector surface(input.V, input.F);
-  WorkingMesh work(plain.mesh.V, Eigen::MatrixX3d::Zero(plain.mesh.V.rows(), 3), std::vector<int>(plain.mesh.V.rows(), -1));
-  for (int v = 0; v < work.num_vertices(); ++v) {
-    Eigen::Vector3d pos, nrm;
-    surface.project(work.V.row(v).transpose(), work.anchor[v], pos, nrm);
-    work.N.row(v) = nrm.transpose();
-  }
-  std::vector<MeshFace> faces;
-  for (Eigen::Index f = 0; f < plain.mesh.F.rows(); ++f) faces.push_back({plain.mesh.F(f, 0), plain.mesh.F(f, 1), plain.mesh.F(f, 2)});
-  work.set_faces(faces);
+  WorkingMesh work = working_mesh_of(plain.mesh, surface);
   const long crossing_before = self_intersecting_pairs(work);
   CreaseOptions co;
   co.min_angle_deg = 0;

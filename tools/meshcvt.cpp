@@ -241,9 +241,6 @@ int main(int argc, char** argv) {
     rep["inserted_sites"] = r.inserted_sites;
     rep["graph_lloyd_iterations"] = r.graph_lloyd_iterations;
     rep["surface_lloyd_iterations"] = r.surface_lloyd_iterations;
-    rep["surface_lloyd_s"] = r.surface_lloyd_seconds;
-    rep["start_rounds"] = r.start_rounds;
-    rep["start_quality_s"] = r.start_quality_seconds;
     rep["triangles"] = q.triangles;
     rep["phi_min_deg"] = q.min_angle_deg;
     rep["phi_mean_deg"] = q.mean_min_angle_deg;

@@ -246,15 +246,7 @@ void keep_creases(const TriangleMesh& input, const RemeshOptions& options, Remes
   if (lines.lines.empty()) return;
   const auto t = Clock::now();
   const MeshSurfaceProjector surface(input.V, input.F);
-  WorkingMesh work(out.mesh.V, Eigen::MatrixX3d::Zero(out.mesh.V.rows(), 3), std::vector<int>(out.mesh.V.rows(), -1));
-  for (int v = 0; v < work.num_vertices(); ++v) {
-    Eigen::Vector3d pos, nrm;
-    surface.project(work.V.row(v).transpose(), work.anchor[v], pos, nrm);
-    work.N.row(v) = nrm.transpose();
-  }
-  std::vector<MeshFace> faces(out.mesh.F.rows());
-  for (Eigen::Index f = 0; f < out.mesh.F.rows(); ++f) faces[f] = {out.mesh.F(f, 0), out.mesh.F(f, 1), out.mesh.F(f, 2)};
-  work.set_faces(std::move(faces));
+  WorkingMesh work = working_mesh_of(out.mesh, surface);
   CreaseOptions co = options.creases;
   co.threads = options.cvt.threads;
   out.creases = recover_creases(work, surface, input.V, lines, co);

@@ -22,4 +22,18 @@ TriangleMesh compact_mesh(const WorkingMesh& mesh, int* unused) {
   return out;
 }
 
+WorkingMesh working_mesh_of(const TriangleMesh& mesh, const SurfaceProjector& surface) {
+  const Eigen::Index nv = mesh.V.rows();
+  WorkingMesh work(mesh.V, Eigen::MatrixX3d::Zero(nv, 3), std::vector<int>(nv, -1));
+  for (int v = 0; v < work.num_vertices(); ++v) {
+    Eigen::Vector3d pos, nrm;
+    surface.project(work.V.row(v).transpose(), work.anchor[v], pos, nrm);
+    work.N.row(v) = nrm.transpose();
+  }
+  std::vector<MeshFace> faces(mesh.F.rows());
+  for (Eigen::Index f = 0; f < mesh.F.rows(); ++f) faces[f] = {mesh.F(f, 0), mesh.F(f, 1), mesh.F(f, 2)};
+  work.set_faces(std::move(faces));
+  return work;
+}
+
 }  // namespace heatcvt

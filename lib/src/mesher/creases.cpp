@@ -4,6 +4,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -219,9 +220,15 @@ class CreaseRecovery {
   CreaseRecovery(WorkingMesh& mesh, const SurfaceProjector& surface, const Eigen::MatrixX3d& V,
                  const CreaseLines& lines, const CreaseOptions& o, double spacing)
       : mesh_(mesh), surface_(surface), V_(V), lines_(lines), o_(o), spacing_(spacing),
-        in_faces_(mesh.num_vertices(), 0), taken_(mesh.num_vertices(), 0) {
+        taken_(mesh.num_vertices(), 0) {
+    // The vertices a sample may take, binned in cells of the snap radius: a vertex not taken
+    // keeps its place until polish() (an undo restores the places with the taken flags).
+    std::vector<char> in_faces(mesh.num_vertices(), 0);
     for (const MeshFace& f : mesh.faces())
-      for (int v : f) in_faces_[v] = 1;
+      for (int v : f) in_faces[v] = 1;
+    cell_size_ = std::max(o_.max_snap_spacings * spacing_, 1e-300);
+    for (int v = 0; v < mesh.num_vertices(); ++v)
+      if (in_faces[v]) grid_[cell_of(mesh.V.row(v).transpose())].push_back(v);
   }
 
   // Every line long enough resampled at the spacing: its corners first (shared by the lines
@@ -314,7 +321,9 @@ class CreaseRecovery {
     flips.valence_mode = false;
     for (int round = 0; round < o_.polish_rounds; ++round) {
       flip_between_lines();
-      tangential_relaxation(mesh_, surface_, o_.threads, RelaxationBorder{true, 40}, &fixed);
+      RelaxationBorder border;
+      border.slide = true;
+      tangential_relaxation(mesh_, surface_, o_.threads, border, &fixed);
       flip_edges(mesh_, flips, &movable);
       angle_polish(mesh_, surface_, 2, fixed, {}, o_.threads);
       flip_edges(mesh_, flips, &movable);
@@ -355,11 +364,18 @@ class CreaseRecovery {
     const bool sided = nrm.allFinite() && nrm.norm() > 0;
     int best = -1;
     double best_d = o_.max_snap_spacings * spacing_;
-    for (int v = 0; v < mesh_.num_vertices(); ++v) {
-      if (!in_faces_[v] || taken_[v] || (sided && !(mesh_.N.row(v).dot(nrm.transpose()) > 0))) continue;
-      const double d = (mesh_.V.row(v).transpose() - x).norm();
-      if (d < best_d) best_d = d, best = v;
-    }
+    const Cell c = cell_of(x);
+    for (int i = -1; i <= 1; ++i)
+      for (int j = -1; j <= 1; ++j)
+        for (int k = -1; k <= 1; ++k) {
+          const auto it = grid_.find({c[0] + i, c[1] + j, c[2] + k});
+          if (it == grid_.end()) continue;
+          for (int v : it->second) {
+            if (taken_[v] || (sided && !(mesh_.N.row(v).dot(nrm.transpose()) > 0))) continue;
+            const double d = (mesh_.V.row(v).transpose() - x).norm();
+            if (d < best_d || (d == best_d && best >= 0 && v < best)) best_d = d, best = v;
+          }
+        }
     if (best < 0) return -1;
     mesh_.anchor[best] = hint;
     mesh_.V.row(best) = x.transpose();
@@ -405,9 +421,9 @@ class CreaseRecovery {
   bool on_line(int a, int b) const { return line_edges_.count({std::min(a, b), std::max(a, b)}) > 0; }
 
   // Max-min-angle flips of the edges between two line vertices that do not run along a line (the
-  // vertex flips above leave them alone), in slivers only.
+  // vertex flips above leave them alone), in faces below min_angle_deg only.
   void flip_between_lines() {
-    const double sliver = 25 * kDegree;
+    const double sliver = o_.min_angle_deg * kDegree;
     for (int f1 = 0; f1 < mesh_.num_faces(); ++f1) {
       if (face_min_angle(mesh_, mesh_.face(f1)) >= sliver) continue;
       for (int k = 0; k < 3; ++k) {
@@ -438,8 +454,15 @@ class CreaseRecovery {
   const CreaseLines& lines_;
   const CreaseOptions& o_;
   const double spacing_;
-  std::vector<char> in_faces_, taken_;
+  std::vector<char> taken_;
   std::set<std::pair<int, int>> line_edges_;
+  using Cell = std::array<long, 3>;
+  Cell cell_of(const Eigen::Vector3d& x) const {
+    return {static_cast<long>(std::floor(x[0] / cell_size_)), static_cast<long>(std::floor(x[1] / cell_size_)),
+            static_cast<long>(std::floor(x[2] / cell_size_))};
+  }
+  double cell_size_ = 1;
+  std::map<Cell, std::vector<int>> grid_;  // vertices in faces by cell of side max_snap_spacings · spacing
 };
 
 }  // namespace

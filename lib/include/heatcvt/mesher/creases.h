@@ -36,7 +36,8 @@ struct CreaseOptions {
   /// The recovery is undone where a face falls below the lower of the mesh's smallest angle
   /// before and this, unless that smallest angle is at a corner between two line edges (two
   /// crease lines meeting at that angle bound every triangle between them) or the face's three
-  /// corners are on lines (two lines closer than the spacing) and it keeps half of it. Default 25°.
+  /// corners are on lines (two lines closer than the spacing) and it keeps half of it. Faces
+  /// below it are also where the polish flips edges between two line vertices. Default 25°.
   double min_angle_deg = 25;
   int threads = 0;  ///< 0 = all cores; the result does not depend on it.
 };
