@@ -8,11 +8,14 @@
 // The peer, PCL Poisson (depth 8) + CGAL isotropic remeshing to the same vertex count on the
 // whole cloud in memory (normals by PCA + MST), runs the same way on clouds up to --peer-max
 // points. Prints a markdown table: time, the time spent reading, peak memory, the points the
-// reconstruction ran on, vertices and the mesh checks (closed, genus, φmin, φm).
+// reconstruction ran on, vertices, the mesh checks (closed, genus, φmin, φm) and the distances to
+// armadillo.obj.
 //
 // Usage: bench_scale [--sizes 100000,1000000,10000000] [--huge] [--density-max 1000000]
 //                    [--peer-max 1000000] [--sites 3000] [--keep-dir DIR] [--fine F] [--plain-means]
-// (--fine: StreamOptions::fine_voxel_factor; --plain-means: project_to_surface = false)
+//                    [--plain-fit]
+// (--fine: StreamOptions::fine_voxel_factor; --plain-means: project_to_surface = false;
+//  --plain-fit: the 3×3×3 voxel plane fit only, VoxelSurfaceFit max_levels = shift_steps = 0)
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -62,13 +65,24 @@ void write_sampled_ply(const std::string& path, const TriangleMesh& mesh, std::i
   if (!out) throw std::runtime_error("cannot write " + path);
 }
 
+// "mean=… hausdorff=…": two-sided distances between `m` and the source mesh, in ‰ of its diagonal.
+std::string distance_keys(const TriangleMesh& m) {
+  const TriangleMesh source = read_mesh(std::string(HEATCVT_DATA_DIR) + "/meshes/armadillo.obj");
+  const double diag = (source.V.colwise().maxCoeff() - source.V.colwise().minCoeff()).norm();
+  const SurfaceDistance d = surface_distance(source.V, source.F, m.V, m.F, 20000);
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "mean=%.3f hausdorff=%.2f", 1000 * d.mean / diag, 1000 * d.hausdorff / diag);
+  return buf;
+}
+
 // Child: reconstruct one file, print one line "key=value ...".
-int run_child(const std::string& path, int sites, double fine_factor, bool project) {
+int run_child(const std::string& path, int sites, double fine_factor, bool project, bool plain_fit) {
   ReconstructionOptions options;
   options.sites = sites;
   StreamOptions stream;
   stream.fine_voxel_factor = fine_factor;
   stream.project_to_surface = project;
+  if (plain_fit) stream.surface_fit.max_levels = stream.surface_fit.shift_steps = 0;
   const double t0 = bench::now_seconds();
   double t_stream = -1;
   const auto progress = [&](const std::string&, double) {
@@ -77,13 +91,13 @@ int run_child(const std::string& path, int sites, double fine_factor, bool proje
   const StreamedReconstruction r = reconstruct_surface_streamed(path, options, stream, progress);
   const double total = bench::now_seconds() - t0;
   rusage ru{};
-  getrusage(RUSAGE_SELF, &ru);
+  getrusage(RUSAGE_SELF, &ru);  // before the distance below, which is not part of the run
   const auto& v = r.result.validation;
   std::printf("time=%.2f stream=%.2f peak_mb=%.0f used=%lld summarised=%d voxel=%.6g vertices=%ld boundary=%d genus=%d "
-              "phimin=%.1f phim=%.1f\n",
+              "phimin=%.1f phim=%.1f %s\n",
               total, t_stream, static_cast<double>(ru.ru_maxrss) / 1024.0, static_cast<long long>(r.cloud.P.rows()),
               r.summarised ? 1 : 0, r.voxel_size, static_cast<long>(r.result.mesh.V.rows()), v.boundary_loops, v.genus,
-              r.result.min_angle_deg, r.result.mean_min_angle_deg);
+              r.result.min_angle_deg, r.result.mean_min_angle_deg, distance_keys(r.result.mesh).c_str());
   return 0;
 }
 
@@ -104,9 +118,10 @@ int run_peer_child(const std::string& path, int sites) {
   const ValidationReport rep = validate_triangle_mesh(m.V, m.F, vo);
   const TriangleQuality q = triangle_quality(m.V, m.F);
   std::printf("time=%.2f stream=%.2f peak_mb=%.0f used=%lld summarised=0 voxel=- vertices=%ld boundary=%d genus=%d "
-              "phimin=%.1f phim=%.1f\n",
+              "phimin=%.1f phim=%.1f %s\n",
               total, t_read, static_cast<double>(ru.ru_maxrss) / 1024.0, static_cast<long long>(cloud.P.rows()),
-              static_cast<long>(m.V.rows()), rep.boundary_loops, rep.genus, q.min_angle_deg, q.mean_min_angle_deg);
+              static_cast<long>(m.V.rows()), rep.boundary_loops, rep.genus, q.min_angle_deg, q.mean_min_angle_deg,
+              distance_keys(m).c_str());
   return 0;
 }
 
@@ -145,24 +160,25 @@ void print_row(std::int64_t points, int n, const char* method, const std::string
   }
   const long vertices = std::stol(value_of(line, "vertices"));
   const bool closed = value_of(line, "boundary") == "0";
-  std::printf("| %lld | %d | %s | %s | %s | %s | %s%s | %s | %ld | %+.1f %% | %s | %s | %s | %s |\n",
+  std::printf("| %lld | %d | %s | %s | %s | %s | %s%s | %s | %ld | %+.1f %% | %s | %s | %s | %s | %s | %s |\n",
               static_cast<long long>(points), n, method, value_of(line, "time").c_str(), value_of(line, "stream").c_str(),
               value_of(line, "peak_mb").c_str(), value_of(line, "used").c_str(),
               value_of(line, "summarised") == "1" ? " means" : " raw", value_of(line, "voxel").c_str(), vertices,
               100.0 * (static_cast<double>(vertices) - n) / n, closed ? "yes" : "no", value_of(line, "genus").c_str(),
-              value_of(line, "phimin").c_str(), value_of(line, "phim").c_str());
+              value_of(line, "phimin").c_str(), value_of(line, "phim").c_str(), value_of(line, "mean").c_str(),
+              value_of(line, "hausdorff").c_str());
   std::fflush(stdout);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc == 6 && std::string(argv[1]) == "--child")
-    return run_child(argv[2], std::atoi(argv[3]), std::atof(argv[4]), std::atoi(argv[5]) != 0);
+  if (argc == 7 && std::string(argv[1]) == "--child")
+    return run_child(argv[2], std::atoi(argv[3]), std::atof(argv[4]), std::atoi(argv[5]) != 0, std::atoi(argv[6]) != 0);
   if (argc == 4 && std::string(argv[1]) == "--peer-child") return run_peer_child(argv[2], std::atoi(argv[3]));
   const StreamOptions defaults;
   double fine_factor = defaults.fine_voxel_factor;
-  bool project = defaults.project_to_surface;
+  bool project = defaults.project_to_surface, plain_fit = false;
   std::vector<std::int64_t> sizes = {100000, 1000000, 10000000};
   std::int64_t density_max = 1000000;
   std::int64_t peer_max = 1000000;
@@ -178,6 +194,7 @@ int main(int argc, char** argv) {
     else if (a == "--keep-dir" && i + 1 < argc) keep_dir = argv[++i];
     else if (a == "--fine" && i + 1 < argc) fine_factor = std::stod(argv[++i]);
     else if (a == "--plain-means") project = false;
+    else if (a == "--plain-fit") plain_fit = true;
     else {
       std::fprintf(stderr, "bench_scale: error: %s: unknown option\n", a.c_str());
       return 2;
@@ -188,7 +205,7 @@ int main(int argc, char** argv) {
   const fs::path dir = keep_dir.empty() ? fs::temp_directory_path() / ("heatcvt_bench_scale_" + std::to_string(::getpid())) : fs::path(keep_dir);
   fs::create_directories(dir);
   std::printf("| points | -n | method | time s | read s | peak MB | points reconstructed | voxel | V | V vs -n | closed | "
-              "genus | phi_min | phi_m |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+              "genus | phi_min | phi_m | mean dist ‰ | Hausdorff ‰ |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   std::fflush(stdout);
   // popen runs through the shell: /proc/self/exe would be the shell, so name this binary.
   const std::string self = fs::read_symlink("/proc/self/exe").string();
@@ -208,7 +225,7 @@ int main(int argc, char** argv) {
             "'" + self + "' " +
             (peer ? "--peer-child '" + file.string() + "' " + std::to_string(n)
                   : "--child '" + file.string() + "' " + std::to_string(n) + " " + std::to_string(fine_factor) + " " +
-                        (project ? "1" : "0")) +
+                        (project ? "1" : "0") + (plain_fit ? " 1" : " 0")) +
             " 2>&1";
         print_row(points, n, peer ? "PCL Poisson + CGAL remesh" : "heatcvt", run_command(command));
       }
@@ -218,7 +235,8 @@ int main(int argc, char** argv) {
               "points; time = wall time of the child process's work (heatcvt: reconstruct_surface_streamed, both read passes "
               "included; peer: read_cloud, PCA/MST normals, PCL Poisson depth 8, CGAL isotropic remeshing to -n), read = "
               "until the first reconstruction stage (heatcvt) or until the cloud is in memory (peer); peak MB = "
-              "ru_maxrss of the child process. The peer runs on clouds up to --peer-max points.\n",
+              "ru_maxrss of the child process (taken before the distances); mean dist and Hausdorff: two-sided, "
+              "between the output and armadillo.obj (20,000 samples each way), in ‰ of its bbox diagonal. The peer runs on clouds up to --peer-max points.\n",
               100 * kNoiseFraction, static_cast<long long>(kWriteChunk));
   return 0;
 }

@@ -1,6 +1,7 @@
 // Voxel summary, voxel size chooser and the streamed reconstruction (voxel_summary.h,
 // reconstruct_stream.h), on shapes built in code.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
@@ -179,6 +180,49 @@ TEST(VoxelSummary, SurfacePointsRemoveTheNoiseLayersAndHitTheTarget) {
     EXPECT_LE(thin.rows(), target);
     EXPECT_GE(thin.rows(), target * 9 / 10);
   }
+}
+
+TEST(VoxelSummary, WideFitTakesTheNormalWhereTheNoiseBandFillsTheVoxelNeighbourhood) {
+  // Unit sphere, voxels of h = 0.02, noise σ = 0.6 h: a 3×3×3 voxel neighbourhood (3h wide) is
+  // about as thick as it is wide (λ0/λ1 ≈ σ²/(0.75 h²) ≈ 0.5), so its normal is mostly noise.
+  const double h = 0.02, sigma = 0.6 * h;
+  const TriangleMesh sphere = test::icosphere(5);
+  const Eigen::MatrixX3d P = sample_surface(sphere.V, sphere.F, 400000, 7, sigma);
+  VoxelSummary s(h);
+  s.add(P);
+  auto rms_off = [](const Eigen::MatrixX3d& Q, double radius) {
+    return std::sqrt((Q.rowwise().norm().array() - radius).square().mean());
+  };
+  VoxelSurfaceFit plain;  // the 3×3×3 voxel fit only
+  plain.max_levels = 0;
+  plain.shift_steps = 0;
+  const double narrow = rms_off(s.surface_points(0, nullptr, nullptr, plain), 1.0);
+  const Eigen::MatrixX3d fitted = s.surface_points(0);
+  const double wide = rms_off(fitted, 1.0);
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const Eigen::MatrixX3d serial = s.surface_points(0);
+  omp_set_num_threads(threads);
+  EXPECT_TRUE(identical(serial, fitted)) << "the thread count changed the surface points";
+  std::printf("rms off the sphere: voxel fit %.5f, widened normal and mean shift %.5f (sigma %.5f)\n", narrow, wide, sigma);
+  EXPECT_LT(wide, 0.75 * narrow);
+
+  // Two concentric spheres 5 h apart, same noise: the widened normal still goes through the local
+  // mean, so no point is pulled into the gap between the two sheets.
+  const Eigen::MatrixX3d Q = sample_surface(sphere.V, sphere.F, 200000, 8, sigma);
+  Eigen::MatrixX3d shells(2 * Q.rows(), 3);
+  shells << Q, 1.1 * Q.rowwise().normalized() + (Q - Q.rowwise().normalized());
+  VoxelSummary two(h);
+  two.add(shells);
+  auto in_gap = [&](const Eigen::MatrixX3d& out) {
+    Eigen::Index count = 0;
+    for (Eigen::Index i = 0; i < out.rows(); ++i) count += std::abs(out.row(i).norm() - 1.05) < h;
+    return count;
+  };
+  const Eigen::Index gap_plain = in_gap(two.surface_points(0, nullptr, nullptr, plain));
+  const Eigen::Index gap_wide = in_gap(two.surface_points(0));
+  std::printf("points in the gap: %ld plain, %ld widened\n", static_cast<long>(gap_plain), static_cast<long>(gap_wide));
+  EXPECT_LE(gap_wide, gap_plain);
 }
 
 TEST(VoxelSizeChooser, AreaOfASphereAndVoxelCountNearTarget) {

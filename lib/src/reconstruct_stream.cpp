@@ -2,6 +2,7 @@
 #include "heatcvt/reconstruct_stream.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <memory>
 #include <random>
@@ -112,9 +113,12 @@ StreamedReconstruction reconstruct_surface_from_summary(const VoxelSummary& summ
                                                         const StreamOptions& stream, const ReconstructionCallback& progress) {
   if (summary.voxels() == 0) throw InvalidInputError("reconstruct_surface_from_summary: the summary holds no point");
   StreamedReconstruction out;
+  if (progress) progress("preprocess", 0.0);
+  const auto t0 = std::chrono::steady_clock::now();
   if (stream.project_to_surface) {
     const double target = static_cast<double>(options.sites) * stream.voxel.points_per_site;
-    out.cloud.P = summary.surface_points(static_cast<Eigen::Index>(std::ceil(target)), nullptr, &out.cloud.C);
+    out.cloud.P = summary.surface_points(static_cast<Eigen::Index>(std::ceil(target)), nullptr, &out.cloud.C,
+                                         stream.surface_fit);
   } else {
     out.cloud.P = summary.points();
     out.cloud.N = summary.normals();
@@ -122,7 +126,9 @@ StreamedReconstruction reconstruct_surface_from_summary(const VoxelSummary& summ
   }
   ReconstructionOptions subset = options;
   subset.cvt_points_per_site = 0;  // the voxel means already are the uniform subset
+  const double summary_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   out.result = reconstruct_surface(out.cloud.P, subset, progress);
+  out.result.stage_seconds.insert(out.result.stage_seconds.begin(), {"voxel surface points", summary_seconds});
   out.summarised = true;
   out.voxel_size = summary.voxel_size();
   out.points_read = summary.points_added() + summary.non_finite_skipped();

@@ -40,11 +40,30 @@ Cell cell_of(double x, double y, double z, double inv_h) {
   return {static_cast<std::int64_t>(c[0]), static_cast<std::int64_t>(c[1]), static_cast<std::int64_t>(c[2])};
 }
 
+// Occupied cells of size h: the cells as 63-bit keys (21 bits per axis, relative to the smallest
+// cell) sorted and counted, or a hash set when the cloud spans more than 2^21 cells on an axis.
 Eigen::Index occupied_voxels(const Eigen::MatrixX3d& P, double h) {
-  std::unordered_set<Cell, CellHash> cells;
-  cells.reserve(static_cast<std::size_t>(P.rows()));
   const double inv_h = 1.0 / h;
-  for (Eigen::Index i = 0; i < P.rows(); ++i) cells.insert(cell_of(P(i, 0), P(i, 1), P(i, 2), inv_h));
+  const Eigen::Index n = P.rows();
+  if (n == 0) return 0;
+  const Eigen::RowVector3d lo = P.colwise().minCoeff(), hi = P.colwise().maxCoeff();
+  const Cell c0 = cell_of(lo(0), lo(1), lo(2), inv_h), c1 = cell_of(hi(0), hi(1), hi(2), inv_h);
+  constexpr std::int64_t kAxis = std::int64_t{1} << 21;
+  if (c1[0] - c0[0] < kAxis && c1[1] - c0[1] < kAxis && c1[2] - c0[2] < kAxis) {
+    std::vector<std::uint64_t> keys(static_cast<std::size_t>(n));
+#pragma omp parallel for schedule(static)
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Cell c = cell_of(P(i, 0), P(i, 1), P(i, 2), inv_h);
+      keys[static_cast<std::size_t>(i)] = static_cast<std::uint64_t>(c[0] - c0[0]) << 42 |
+                                          static_cast<std::uint64_t>(c[1] - c0[1]) << 21 |
+                                          static_cast<std::uint64_t>(c[2] - c0[2]);
+    }
+    std::sort(keys.begin(), keys.end());
+    return static_cast<Eigen::Index>(std::unique(keys.begin(), keys.end()) - keys.begin());
+  }
+  std::unordered_set<Cell, CellHash> cells;
+  cells.reserve(static_cast<std::size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) cells.insert(cell_of(P(i, 0), P(i, 1), P(i, 2), inv_h));
   return static_cast<Eigen::Index>(cells.size());
 }
 
@@ -83,39 +102,43 @@ void VoxelSummary::add(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& C) { a
 
 void VoxelSummary::add_weighted(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& C, std::int64_t weight) {
   const bool colours = C.rows() == P.rows() && P.rows() > 0;
-  const double w = static_cast<double>(weight);
-  const double inv_h = 1.0 / h_;
+  impl_->order_valid = false;
+  for (Eigen::Index i = 0; i < P.rows(); ++i) {
+    const double c[3] = {colours ? C(i, 0) : 0.0, colours ? C(i, 1) : 0.0, colours ? C(i, 2) : 0.0};
+    add_point(P(i, 0), P(i, 1), P(i, 2), colours ? c : nullptr, weight);
+  }
+}
+
+void VoxelSummary::add_point(double x, double y, double z, const double* colour, std::int64_t weight) {
+  if (!(std::isfinite(x) && std::isfinite(y) && std::isfinite(z))) {
+    skipped_ += weight;
+    return;
+  }
   Impl& m = *impl_;
   m.order_valid = false;
-  for (Eigen::Index i = 0; i < P.rows(); ++i) {
-    const double x = P(i, 0), y = P(i, 1), z = P(i, 2);
-    if (!(std::isfinite(x) && std::isfinite(y) && std::isfinite(z))) {
-      skipped_ += weight;
-      continue;
-    }
-    const Cell key = cell_of(x, y, z, inv_h);
-    auto [it, inserted] = m.index.try_emplace(key, static_cast<std::uint32_t>(m.moments.size()));
-    if (inserted) {
-      m.cell.push_back(key);
-      m.moments.emplace_back();
-    }
-    Moments& v = m.moments[it->second];
-    const double d[3] = {x - static_cast<double>(key[0]) * h_, y - static_cast<double>(key[1]) * h_,
-                         z - static_cast<double>(key[2]) * h_};
-    v.count += weight;
-    for (int k = 0; k < 3; ++k) v.s[k] += w * d[k];
-    v.ss[0] += w * d[0] * d[0];
-    v.ss[1] += w * d[0] * d[1];
-    v.ss[2] += w * d[0] * d[2];
-    v.ss[3] += w * d[1] * d[1];
-    v.ss[4] += w * d[1] * d[2];
-    v.ss[5] += w * d[2] * d[2];
-    if (colours) {
-      for (int k = 0; k < 3; ++k) v.c[k] += w * C(i, k);
-      coloured_ += weight;
-    }
-    added_ += weight;
+  const double w = static_cast<double>(weight);
+  const Cell key = cell_of(x, y, z, 1.0 / h_);
+  auto [it, inserted] = m.index.try_emplace(key, static_cast<std::uint32_t>(m.moments.size()));
+  if (inserted) {
+    m.cell.push_back(key);
+    m.moments.emplace_back();
   }
+  Moments& v = m.moments[it->second];
+  const double d[3] = {x - static_cast<double>(key[0]) * h_, y - static_cast<double>(key[1]) * h_,
+                       z - static_cast<double>(key[2]) * h_};
+  v.count += weight;
+  for (int k = 0; k < 3; ++k) v.s[k] += w * d[k];
+  v.ss[0] += w * d[0] * d[0];
+  v.ss[1] += w * d[0] * d[1];
+  v.ss[2] += w * d[0] * d[2];
+  v.ss[3] += w * d[1] * d[1];
+  v.ss[4] += w * d[1] * d[2];
+  v.ss[5] += w * d[2] * d[2];
+  if (colour) {
+    for (int k = 0; k < 3; ++k) v.c[k] += w * colour[k];
+    coloured_ += weight;
+  }
+  added_ += weight;
 }
 
 // Second eigenvalue / largest at or below which a voxel's points count as collinear (no normal).
@@ -196,69 +219,249 @@ Eigen::Matrix<std::int64_t, Eigen::Dynamic, 3> VoxelSummary::cells() const {
 
 namespace {
 
-// Moments of a neighbourhood, relative to one origin `o` (the centre voxel's corner).
+// Moments of a neighbourhood, relative to one origin `o` (a cell corner).
 struct MergedMoments {
   double n = 0;
   Eigen::Vector3d s = Eigen::Vector3d::Zero();
   Eigen::Matrix3d ss = Eigen::Matrix3d::Zero();
-  // Adds voxel moments taken relative to a corner displaced by d from o: p − o = (p − c) + d.
-  void add(const Moments& v, const Eigen::Vector3d& d) {
-    const double k = static_cast<double>(v.count);
-    const Eigen::Vector3d vs(v.s[0], v.s[1], v.s[2]);
-    Eigen::Matrix3d vss;
-    vss << v.ss[0], v.ss[1], v.ss[2], v.ss[1], v.ss[3], v.ss[4], v.ss[2], v.ss[4], v.ss[5];
+  // Adds moments (k points, Σ(p − c), Σ(p − c)(p − c)ᵀ) taken relative to a corner c displaced
+  // by d from o: p − o = (p − c) + d.
+  void add(double k, const Eigen::Vector3d& vs, const Eigen::Matrix3d& vss, const Eigen::Vector3d& d) {
     n += k;
     s += vs + k * d;
     ss += vss + vs * d.transpose() + d * vs.transpose() + k * d * d.transpose();
   }
+  void add(const Moments& v, const Eigen::Vector3d& d) {
+    Eigen::Matrix3d vss;
+    vss << v.ss[0], v.ss[1], v.ss[2], v.ss[1], v.ss[3], v.ss[4], v.ss[2], v.ss[4], v.ss[5];
+    add(static_cast<double>(v.count), Eigen::Vector3d(v.s[0], v.s[1], v.s[2]), vss, d);
+  }
+  void add(const MergedMoments& v, const Eigen::Vector3d& d) { add(v.n, v.s, v.ss, d); }
 };
+
+// The cell of `c` at a level with cells 2^level times larger (floor division).
+Cell coarse_cell(const Cell& c, int level) { return {c[0] >> level, c[1] >> level, c[2] >> level}; }
+
+// The plane fitted to merged moments: mean μ and unit normal (smallest-eigenvalue eigenvector),
+// with λ0/λ1 as `ratio`. False when there are < 3 points or they lie on a line.
+bool fit_plane(const MergedMoments& nb, Eigen::Vector3d& mu, Eigen::Vector3d& normal, double& ratio) {
+  if (nb.n < 3) return false;
+  mu = nb.s / nb.n;
+  const Eigen::Matrix3d cov = nb.ss / nb.n - mu * mu.transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  const Eigen::Vector3d lambda = eig.eigenvalues();
+  if (!(lambda(1) > kCollinearRatio * lambda(2))) return false;
+  normal = eig.eigenvectors().col(0);
+  ratio = std::max(0.0, lambda(0)) / lambda(1);
+  return true;
+}
+
+// Moments of the 3×3×3 voxels around cell `centre`, relative to the corner of cell `origin`.
+using CellIndex = std::unordered_map<Cell, std::uint32_t, CellHash>;
+MergedMoments voxel_neighbourhood(const CellIndex& index, const std::vector<Moments>& moments, double h,
+                                  const Cell& centre, const Cell& origin) {
+  MergedMoments nb;
+  for (int dx = -1; dx <= 1; ++dx)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dz = -1; dz <= 1; ++dz) {
+        const Cell n = {centre[0] + dx, centre[1] + dy, centre[2] + dz};
+        const auto it = index.find(n);
+        if (it == index.end()) continue;
+        const Eigen::Vector3d d(static_cast<double>(n[0] - origin[0]), static_cast<double>(n[1] - origin[1]),
+                                static_cast<double>(n[2] - origin[2]));
+        nb.add(moments[it->second], h * d);
+      }
+  return nb;
+}
 
 }  // namespace
 
-// Each voxel mean projected on the plane fitted to its 3×3×3 neighbourhood (absolute
-// coordinates), with its point count and mean colour.
-void VoxelSummary::project_means(Eigen::MatrixX3d& P, Eigen::VectorXd& w, Eigen::MatrixX3d& C) const {
+namespace {
+
+// Calls visit(i, j) for every i in [begin, end) and every j whose cell lies in the 3×3×3 block
+// around cells[i]. `cells` is sorted lexicographically and unique: the block's 9 (dx, dy) columns
+// are contiguous runs, and as i advances each column's start only moves forward (lexicographic
+// order is translation invariant), so one forward pointer per column replaces 27 hash lookups.
+template <class Visit>
+void for_each_block_neighbour(const std::vector<Cell>& cells, std::size_t begin, std::size_t end, Visit&& visit) {
+  const std::size_t n = cells.size();
+  if (begin >= end) return;
+  std::size_t ptr[9];
+  for (int q = 0; q < 9; ++q) {
+    const Cell& c = cells[begin];
+    const Cell lo = {c[0] + q / 3 - 1, c[1] + q % 3 - 1, c[2] - 1};
+    ptr[q] = static_cast<std::size_t>(std::lower_bound(cells.begin(), cells.end(), lo) - cells.begin());
+  }
+  for (std::size_t i = begin; i < end; ++i) {
+    const Cell& c = cells[i];
+    for (int q = 0; q < 9; ++q) {
+      const Cell lo = {c[0] + q / 3 - 1, c[1] + q % 3 - 1, c[2] - 1};
+      const Cell hi = {lo[0], lo[1], c[2] + 1};
+      while (ptr[q] < n && cells[ptr[q]] < lo) ++ptr[q];
+      for (std::size_t j = ptr[q]; j < n && !(hi < cells[j]); ++j) visit(i, j);
+    }
+  }
+}
+
+// The plane fit of every cell's 3×3×3 block of `merged` moments (each relative to its own cell's
+// corner, cells of size `size`), in the order of `cells`; normal and λ0/λ1 per cell, ok = false
+// where fit_plane() fails. Also the block mean relative to the cell's corner (where it has points).
+struct BlockFits {
+  std::vector<Eigen::Vector3d> mu, normal;
+  std::vector<double> ratio;
+  std::vector<char> ok;
+};
+// `moments_of(j)`: the moments of cell j (Moments or MergedMoments).
+template <class MomentsOf>
+BlockFits block_fits(const std::vector<Cell>& cells, const MomentsOf& moments_of, double size) {
+  const std::size_t n = cells.size();
+  BlockFits out;
+  out.mu.assign(n, Eigen::Vector3d::Zero());
+  out.normal.assign(n, Eigen::Vector3d::Zero());
+  out.ratio.assign(n, 0.0);
+  out.ok.assign(n, 0);
+  constexpr std::size_t kChunk = 4096;
+  const auto chunks = static_cast<std::int64_t>((n + kChunk - 1) / kChunk);
+#pragma omp parallel for schedule(dynamic, 1)
+  for (std::int64_t k = 0; k < chunks; ++k) {
+    const std::size_t begin = static_cast<std::size_t>(k) * kChunk, end = std::min(n, begin + kChunk);
+    MergedMoments nb;
+    std::size_t current = begin;
+    auto finish = [&](std::size_t i) {
+      out.ok[i] = fit_plane(nb, out.mu[i], out.normal[i], out.ratio[i]);
+      if (!out.ok[i] && nb.n > 0) out.mu[i] = nb.s / nb.n;
+      nb = MergedMoments();
+    };
+    for_each_block_neighbour(cells, begin, end, [&](std::size_t i, std::size_t j) {
+      if (i != current) finish(current), current = i;
+      const Eigen::Vector3d d(static_cast<double>(cells[j][0] - cells[i][0]), static_cast<double>(cells[j][1] - cells[i][1]),
+                              static_cast<double>(cells[j][2] - cells[i][2]));
+      nb.add(moments_of(j), size * d);
+    });
+    finish(current);
+  }
+  return out;
+}
+
+// Level `level` of the voxels (cells 2^level voxels wide): the coarse cells (sorted, unique),
+// their merged moments (relative to their own corner) and the coarse cell of each voxel.
+struct CoarseGrid {
+  std::vector<Cell> cells;
+  std::vector<MergedMoments> merged;
+  std::vector<std::uint32_t> of_voxel;  // by position in the sorted voxel order
+};
+template <class MomentsOf>
+CoarseGrid coarse_grid(const std::vector<Cell>& voxels, const MomentsOf& moments_of, double h, int level) {
+  const std::size_t n = voxels.size();
+  std::vector<std::uint32_t> by_coarse(n);
+  std::iota(by_coarse.begin(), by_coarse.end(), 0u);
+  std::vector<Cell> coarse(n);
+  for (std::size_t r = 0; r < n; ++r) coarse[r] = coarse_cell(voxels[r], level);
+  // stable: voxels of one coarse cell are merged in their sorted order, whatever the sort does
+  std::stable_sort(by_coarse.begin(), by_coarse.end(), [&](std::uint32_t a, std::uint32_t b) { return coarse[a] < coarse[b]; });
+  CoarseGrid g;
+  g.of_voxel.resize(n);
+  const std::int64_t scale = std::int64_t{1} << level;
+  for (const std::uint32_t r : by_coarse) {
+    const Cell& cc = coarse[r];
+    if (g.cells.empty() || g.cells.back() != cc) g.cells.push_back(cc), g.merged.emplace_back();
+    const Cell& c = voxels[r];
+    const Eigen::Vector3d d(static_cast<double>(c[0] - cc[0] * scale), static_cast<double>(c[1] - cc[1] * scale),
+                            static_cast<double>(c[2] - cc[2] * scale));
+    g.merged.back().add(moments_of(r), h * d);
+    g.of_voxel[r] = static_cast<std::uint32_t>(g.cells.size() - 1);
+  }
+  return g;
+}
+
+}  // namespace
+
+// Each voxel mean projected on the plane fitted to its 3×3×3 neighbourhood (with the normal of
+// the finest level where the neighbourhood is a plane), then mean-shifted along that normal where
+// the noise band is thick; absolute coordinates, with its point count and mean colour.
+void VoxelSummary::project_means(const VoxelSurfaceFit& fit, Eigen::MatrixX3d& P, Eigen::VectorXd& w,
+                                 Eigen::MatrixX3d& C) const {
   const Impl& m = *impl_;
   const auto& ord = order();
-  const auto rows = static_cast<Eigen::Index>(ord.size());
+  const std::size_t n = ord.size();
+  const auto rows = static_cast<Eigen::Index>(n);
   const bool with_colours = has_colours();
   P.resize(rows, 3);
   w.resize(rows);
   C.resize(with_colours ? rows : 0, 3);
-  for (Eigen::Index r = 0; r < rows; ++r) {
-    const std::uint32_t vi = ord[static_cast<std::size_t>(r)];
-    const Cell& c = m.cell[vi];
-    const Moments& v = m.moments[vi];
-    MergedMoments nb;
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          const auto it = m.index.find({c[0] + dx, c[1] + dy, c[2] + dz});
-          if (it != m.index.end()) nb.add(m.moments[it->second], h_ * Eigen::Vector3d(dx, dy, dz));
-        }
+  // The voxels in sorted order (position r), and r of each voxel index.
+  std::vector<Cell> cells(n);
+  std::vector<std::uint32_t> rank(n);
+  for (std::size_t r = 0; r < n; ++r) {
+    cells[r] = m.cell[ord[r]];
+    rank[ord[r]] = static_cast<std::uint32_t>(r);
+  }
+  const auto voxel_moments = [&](std::size_t r) -> const Moments& { return m.moments[ord[r]]; };
+  const BlockFits local = block_fits(cells, voxel_moments, h_);
+  std::vector<CoarseGrid> grids;
+  std::vector<BlockFits> wide;
+  for (int level = 1; level <= fit.max_levels; ++level) {
+    grids.push_back(coarse_grid(cells, voxel_moments, h_, level));
+    const CoarseGrid& g = grids.back();
+    wide.push_back(block_fits(g.cells, [&](std::size_t j) -> const MergedMoments& { return g.merged[j]; },
+                              h_ * static_cast<double>(std::int64_t{1} << level)));
+  }
+#pragma omp parallel for schedule(dynamic, 4096)
+  for (Eigen::Index ri = 0; ri < rows; ++ri) {
+    const auto r = static_cast<std::size_t>(ri);
+    const Cell& c = cells[r];
+    const Moments& v = m.moments[ord[r]];
     const double k = static_cast<double>(v.count);
     Eigen::Vector3d mean(v.s[0] / k, v.s[1] / k, v.s[2] / k);  // relative to the corner
-    if (nb.n >= 3) {
-      const Eigen::Vector3d mu = nb.s / nb.n;
-      const Eigen::Matrix3d cov = nb.ss / nb.n - mu * mu.transpose();
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-      if (eig.eigenvalues()(1) > kCollinearRatio * eig.eigenvalues()(2)) {
-        const Eigen::Vector3d normal = eig.eigenvectors().col(0);
-        mean -= (mean - mu).dot(normal) * normal;
+    const bool have = local.ok[r] != 0;
+    Eigen::Vector3d normal = local.normal[r];
+    const bool thick = have && local.ratio[r] > fit.planarity;
+    // Only the wide normal is taken: μ stays local (a wide plane's μ would merge the two sides of
+    // a thin part).
+    for (int level = 1; thick && level <= fit.max_levels; ++level) {
+      const BlockFits& f = wide[static_cast<std::size_t>(level - 1)];
+      const std::uint32_t g = grids[static_cast<std::size_t>(level - 1)].of_voxel[r];
+      if (f.ok[g] && f.ratio[g] <= fit.planarity) {
+        normal = f.normal[g];
+        break;
       }
     }
-    for (int a = 0; a < 3; ++a) P(r, a) = static_cast<double>(c[static_cast<std::size_t>(a)]) * h_ + mean(a);
-    w(r) = k;
+    if (have) mean -= (mean - local.mu[r]).dot(normal) * normal;
+    // In a thick noise band the local μ still leans to the voxel's side of the band: shift along
+    // the normal to the mean of the voxel neighbourhood around the projected point, which moves
+    // it towards the middle of the band (a mean shift with a box kernel 3 voxels wide).
+    for (int step = 0; thick && step < fit.shift_steps; ++step) {
+      const Cell off = {static_cast<std::int64_t>(std::floor(mean(0) / h_)),
+                        static_cast<std::int64_t>(std::floor(mean(1) / h_)),
+                        static_cast<std::int64_t>(std::floor(mean(2) / h_))};
+      const Cell at = {c[0] + off[0], c[1] + off[1], c[2] + off[2]};
+      Eigen::Vector3d around;  // neighbourhood mean of `at`, relative to c's corner
+      const auto it = m.index.find(at);
+      if (it != m.index.end()) {
+        around = local.mu[rank[it->second]] + h_ * Eigen::Vector3d(static_cast<double>(off[0]),
+                                                                  static_cast<double>(off[1]),
+                                                                  static_cast<double>(off[2]));
+      } else {
+        const MergedMoments nb = voxel_neighbourhood(m.index, m.moments, h_, at, c);
+        if (nb.n < 3) break;
+        around = nb.s / nb.n;
+      }
+      mean -= (mean - around).dot(normal) * normal;
+    }
+    for (int a = 0; a < 3; ++a) P(ri, a) = static_cast<double>(c[static_cast<std::size_t>(a)]) * h_ + mean(a);
+    w(ri) = k;
     if (with_colours)
-      for (int a = 0; a < 3; ++a) C(r, a) = v.c[a] / k;
+      for (int a = 0; a < 3; ++a) C(ri, a) = v.c[a] / k;
   }
 }
 
 Eigen::MatrixX3d VoxelSummary::surface_points(Eigen::Index target_points, Eigen::VectorXi* weights,
-                                              Eigen::MatrixX3d* colours) const {
+                                              Eigen::MatrixX3d* colours, const VoxelSurfaceFit& fit) const {
+  if (!(fit.planarity >= 0) || fit.max_levels < 0 || fit.max_levels > 16)
+    throw InvalidInputError("VoxelSummary::surface_points: planarity must be >= 0 and max_levels in [0, 16]");
   Eigen::MatrixX3d P, C;
   Eigen::VectorXd w;
-  project_means(P, w, C);
+  project_means(fit, P, w, C);
   // The rebinning size: the voxel size, or the smallest multiple of it (bisection in log scale)
   // whose occupied cells are at most target_points.
   double size = h_;
@@ -272,9 +475,10 @@ Eigen::MatrixX3d VoxelSummary::surface_points(Eigen::Index target_points, Eigen:
     size = hi;
   }
   VoxelSummary rebinned(size);
-  for (Eigen::Index r = 0; r < P.rows(); ++r)
-    rebinned.add_weighted(P.row(r), C.rows() ? Eigen::MatrixX3d(C.row(r)) : Eigen::MatrixX3d(0, 3),
-                          static_cast<std::int64_t>(w(r)));
+  for (Eigen::Index r = 0; r < P.rows(); ++r) {
+    const double c[3] = {C.rows() ? C(r, 0) : 0.0, C.rows() ? C(r, 1) : 0.0, C.rows() ? C(r, 2) : 0.0};
+    rebinned.add_point(P(r, 0), P(r, 1), P(r, 2), C.rows() ? c : nullptr, static_cast<std::int64_t>(w(r)));
+  }
   if (weights) *weights = rebinned.counts();
   if (colours) *colours = rebinned.colours();
   return rebinned.points();

@@ -33,10 +33,13 @@ struct StreamOptions {
   /// Size of the uniform reservoir sample (first pass) the voxel size is chosen from. Default 100000.
   std::int64_t sample_points = 100000;
   /// Reconstruct from VoxelSummary::surface_points(sites × voxel.points_per_site) (means
-  /// projected on the plane fitted to their 3×3×3 voxel neighbourhood, then thinned to at most
+  /// projected on the plane fitted to their voxel neighbourhood, then thinned to at most
   /// that many points) instead of the plain voxel means: removes the double layer of means where
   /// the noise band spans two voxel layers, and hits the points-per-site target. Default true.
   bool project_to_surface = true;
+  /// The plane fit of each voxel mean under project_to_surface (widened where the noise band is
+  /// as thick as the 3×3×3 voxel neighbourhood). Defaults as VoxelSurfaceFit.
+  VoxelSurfaceFit surface_fit;
   /// With project_to_surface and a chosen voxel size h, the summary is built at h / f, so that
   /// the thinning has points to spare (about f² times more voxels in memory), where
   /// f = min(fine_voxel_factor, max(1, sqrt(points per voxel at h / min_points_per_fine_voxel))):

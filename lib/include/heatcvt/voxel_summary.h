@@ -14,6 +14,21 @@
 
 namespace heatcvt {
 
+/// Options of VoxelSummary::surface_points(): the plane fit of each voxel mean.
+struct VoxelSurfaceFit {
+  /// Smallest / middle eigenvalue of a neighbourhood's covariance up to which it counts as a
+  /// plane. A flat patch 3 voxels wide with Gaussian noise σ along the normal has λ0/λ1 ≈
+  /// σ² / (0.75 h²): 0.2 is reached at σ ≈ 0.4 h. Default 0.2.
+  double planarity = 0.2;
+  /// Coarser levels tried (cells 2^1 … 2^max_levels voxels); 0 = the 3×3×3 voxel fit only. Default 2.
+  int max_levels = 2;
+  /// Where the voxel neighbourhood is no plane (a noise band as thick as it is wide), the
+  /// projected mean is then moved along the normal this many times to the mean of the voxels
+  /// around it (a mean shift with a box kernel of 3 voxels, towards the middle of the band).
+  /// Default 4.
+  int shift_steps = 4;
+};
+
 /// Per-voxel moments of a streamed cloud.
 ///
 /// Determinism: each voxel accumulates its points in the order they are added, and the outputs
@@ -66,23 +81,32 @@ class VoxelSummary {
   ///  1. each voxel's moments are merged with those of its 3×3×3 neighbourhood; the merged mean μ
   ///     and the smallest-eigenvalue eigenvector n of the merged covariance (a plane fit to every
   ///     point of the neighbourhood) give the local surface, and the voxel mean m is projected on
-  ///     it: m − ((m − μ)·n) n (kept as is when the neighbourhood has < 3 points or lies on a line);
+  ///     it: m − ((m − μ)·n) n (kept as is when the neighbourhood has < 3 points or lies on a line).
+  ///     Where the noise band is as thick as that neighbourhood is wide, its covariance is no
+  ///     plane (λ0/λ1 above `fit.planarity`) and its normal is noise: the normal is then taken
+  ///     from the 3×3×3 neighbourhood of cells 2, 4, … 2^fit.max_levels times the voxel size, the
+  ///     first that is a plane (moments merged per coarse cell once per level), still through the
+  ///     local μ (a wide plane's μ would merge the two sides of a thin part); where none is (a
+  ///     crease, a corner), the voxel neighbourhood's normal is kept;
   ///  2. the projected means are binned again, each weighted by its point count, and each cell's
   ///     weighted mean is one output point (cell-key order). The cells are of the voxel size when
   ///     target_points is 0 (or not exceeded), else of the smallest size (within 0.02 %, found by
   ///     bisection) at which at most target_points cells are occupied: the projected means lie on
   ///     a thin surface, so the count hits the target without the noise of the raw points.
   /// `weights` (optional) receives the point count behind each output point; `colours` (optional)
-  /// the count-weighted mean colour (0 rows unless has_colours()).
+  /// the count-weighted mean colour (0 rows unless has_colours()). Runs on all OpenMP threads;
+  /// the result does not depend on their number.
   Eigen::MatrixX3d surface_points(Eigen::Index target_points = 0, Eigen::VectorXi* weights = nullptr,
-                                  Eigen::MatrixX3d* colours = nullptr) const;
+                                  Eigen::MatrixX3d* colours = nullptr, const VoxelSurfaceFit& fit = {}) const;
   /// #voxels by 3 integer cells, in the same order.
   Eigen::Matrix<std::int64_t, Eigen::Dynamic, 3> cells() const;
 
  private:
   struct Impl;
   const std::vector<std::uint32_t>& order() const;  // voxel indices in cell-key order (cached)
-  void project_means(Eigen::MatrixX3d& P, Eigen::VectorXd& w, Eigen::MatrixX3d& C) const;
+  // One point of `weight` coincident copies (colour: 3 values or null).
+  void add_point(double x, double y, double z, const double* colour, std::int64_t weight);
+  void project_means(const VoxelSurfaceFit& fit, Eigen::MatrixX3d& P, Eigen::VectorXd& w, Eigen::MatrixX3d& C) const;
   double h_;
   std::int64_t added_ = 0, skipped_ = 0, coloured_ = 0;
   std::unique_ptr<Impl> impl_;
