@@ -418,19 +418,24 @@ void VoxelSummary::project_means(const VoxelSurfaceFit& fit, Eigen::MatrixX3d& P
     const bool thick = have && local.ratio[r] > fit.planarity;
     // Only the wide normal is taken: μ stays local (a wide plane's μ would merge the two sides of
     // a thin part).
+    bool widened = false;
     for (int level = 1; thick && level <= fit.max_levels; ++level) {
       const BlockFits& f = wide[static_cast<std::size_t>(level - 1)];
       const std::uint32_t g = grids[static_cast<std::size_t>(level - 1)].of_voxel[r];
       if (f.ok[g] && f.ratio[g] <= fit.planarity) {
         normal = f.normal[g];
+        widened = true;
         break;
       }
     }
     if (have) mean -= (mean - local.mu[r]).dot(normal) * normal;
-    // In a thick noise band the local μ still leans to the voxel's side of the band: shift along
-    // the normal to the mean of the voxel neighbourhood around the projected point, which moves
-    // it towards the middle of the band (a mean shift with a box kernel 3 voxels wide).
-    for (int step = 0; thick && step < fit.shift_steps; ++step) {
+    // In a thick noise band on a surface that is a plane at the wider scale, the local μ still
+    // leans to the voxel's side of the band: shift along the normal to the mean of the voxel
+    // neighbourhood around the projected point, which moves it towards the middle of the band (a
+    // mean shift with a box kernel 3 voxels wide). Not where no wider level is a plane (tips,
+    // thin parts, creases): there the neighbourhood mean lies inside the bend and the shift
+    // would shrink the part.
+    for (int step = 0; widened && step < fit.shift_steps; ++step) {
       const Cell off = {static_cast<std::int64_t>(std::floor(mean(0) / h_)),
                         static_cast<std::int64_t>(std::floor(mean(1) / h_)),
                         static_cast<std::int64_t>(std::floor(mean(2) / h_))};

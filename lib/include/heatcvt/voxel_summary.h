@@ -22,10 +22,10 @@ struct VoxelSurfaceFit {
   double planarity = 0.2;
   /// Coarser levels tried (cells 2^1 … 2^max_levels voxels); 0 = the 3×3×3 voxel fit only. Default 2.
   int max_levels = 2;
-  /// Where the voxel neighbourhood is no plane (a noise band as thick as it is wide), the
-  /// projected mean is then moved along the normal this many times to the mean of the voxels
-  /// around it (a mean shift with a box kernel of 3 voxels, towards the middle of the band).
-  /// Default 4.
+  /// Where the voxel neighbourhood is no plane (a noise band as thick as it is wide) but a wider
+  /// level is, the projected mean is then moved along the wider normal this many times to the
+  /// mean of the voxels around it (a mean shift with a box kernel of 3 voxels, towards the middle
+  /// of the band). Default 4.
   int shift_steps = 4;
 };
 
