@@ -207,6 +207,12 @@ TEST(VoxelSummary, WideFitTakesTheNormalWhereTheNoiseBandFillsTheVoxelNeighbourh
   std::printf("rms off the sphere: voxel fit %.5f, widened normal and mean shift %.5f (sigma %.5f)\n", narrow, wide, sigma);
   EXPECT_LT(wide, 0.75 * narrow);
 
+  // A band thinner than the voxels (σ = 0.1 h): few neighbourhoods are thick, and every voxel
+  // keeps its 3×3×3 fit, bit for bit.
+  VoxelSummary thin(h);
+  thin.add(sample_surface(sphere.V, sphere.F, 200000, 9, 0.1 * h));
+  EXPECT_TRUE(identical(thin.surface_points(0), thin.surface_points(0, nullptr, nullptr, plain)));
+
   // Two concentric spheres 5 h apart, same noise: the widened normal still goes through the local
   // mean, so no point is pulled into the gap between the two sheets.
   const Eigen::MatrixX3d Q = sample_surface(sphere.V, sphere.F, 200000, 8, sigma);

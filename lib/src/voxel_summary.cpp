@@ -398,9 +398,15 @@ void VoxelSummary::project_means(const VoxelSurfaceFit& fit, Eigen::MatrixX3d& P
   }
   const auto voxel_moments = [&](std::size_t r) -> const Moments& { return m.moments[ord[r]]; };
   const BlockFits local = block_fits(cells, voxel_moments, h_);
+  // Widen only in a noise regime: where most neighbourhoods are no plane. Where few are, they are
+  // edges, clutter and depth steps, which a wider plane does not describe.
+  std::size_t thick_voxels = 0;
+  for (std::size_t r = 0; r < n; ++r) thick_voxels += local.ok[r] && local.ratio[r] > fit.planarity;
+  const int levels =
+      static_cast<double>(thick_voxels) >= fit.min_thick_fraction * static_cast<double>(n) ? fit.max_levels : 0;
   std::vector<CoarseGrid> grids;
   std::vector<BlockFits> wide;
-  for (int level = 1; level <= fit.max_levels; ++level) {
+  for (int level = 1; level <= levels; ++level) {
     grids.push_back(coarse_grid(cells, voxel_moments, h_, level));
     const CoarseGrid& g = grids.back();
     wide.push_back(block_fits(g.cells, [&](std::size_t j) -> const MergedMoments& { return g.merged[j]; },
@@ -419,7 +425,7 @@ void VoxelSummary::project_means(const VoxelSurfaceFit& fit, Eigen::MatrixX3d& P
     // Only the wide normal is taken: μ stays local (a wide plane's μ would merge the two sides of
     // a thin part).
     bool widened = false;
-    for (int level = 1; thick && level <= fit.max_levels; ++level) {
+    for (int level = 1; thick && level <= levels; ++level) {
       const BlockFits& f = wide[static_cast<std::size_t>(level - 1)];
       const std::uint32_t g = grids[static_cast<std::size_t>(level - 1)].of_voxel[r];
       if (f.ok[g] && f.ratio[g] <= fit.planarity) {
@@ -462,8 +468,10 @@ void VoxelSummary::project_means(const VoxelSurfaceFit& fit, Eigen::MatrixX3d& P
 
 Eigen::MatrixX3d VoxelSummary::surface_points(Eigen::Index target_points, Eigen::VectorXi* weights,
                                               Eigen::MatrixX3d* colours, const VoxelSurfaceFit& fit) const {
-  if (!(fit.planarity >= 0) || fit.max_levels < 0 || fit.max_levels > 16)
-    throw InvalidInputError("VoxelSummary::surface_points: planarity must be >= 0 and max_levels in [0, 16]");
+  if (!(fit.planarity >= 0) || fit.max_levels < 0 || fit.max_levels > 16 || fit.shift_steps < 0 ||
+      !(fit.min_thick_fraction >= 0 && fit.min_thick_fraction <= 1))
+    throw InvalidInputError("VoxelSummary::surface_points: planarity must be >= 0, max_levels in [0, 16], shift_steps "
+                            ">= 0 and min_thick_fraction in [0, 1]");
   Eigen::MatrixX3d P, C;
   Eigen::VectorXd w;
   project_means(fit, P, w, C);
