@@ -274,10 +274,6 @@ MergedMoments voxel_neighbourhood(const CellIndex& index, const std::vector<Mome
   return nb;
 }
 
-}  // namespace
-
-namespace {
-
 // Calls visit(i, j) for every i in [begin, end) and every j whose cell lies in the 3×3×3 block
 // around cells[i]. `cells` is sorted lexicographically and unique: the block's 9 (dx, dy) columns
 // are contiguous runs, and as i advances each column's start only moves forward (lexicographic
