@@ -114,7 +114,6 @@ StreamedReconstruction reconstruct_surface_from_summary(const VoxelSummary& summ
   if (summary.voxels() == 0) throw InvalidInputError("reconstruct_surface_from_summary: the summary holds no point");
   StreamedReconstruction out;
   if (progress) progress("preprocess", 0.0);
-
   const auto t0 = std::chrono::steady_clock::now();
   if (stream.project_to_surface) {
     const double target = static_cast<double>(options.sites) * stream.voxel.points_per_site;

@@ -88,7 +88,7 @@ struct VoxelSummary::Impl {
   mutable bool order_valid = false;
 };
 
-VoxelSummary::VoxelSummary(double voxel_size) : h_(voxel_size), impl_(std::make_unique<Impl>()) {
+VoxelSummary::VoxelSummary(double voxel_size) : h_(voxel_size), inv_h_(1.0 / voxel_size), impl_(std::make_unique<Impl>()) {
   if (!(std::isfinite(voxel_size) && voxel_size > 0))
     throw InvalidInputError("VoxelSummary: voxel_size must be finite and > 0 (got " + std::to_string(voxel_size) + ")");
 }
@@ -117,7 +117,7 @@ void VoxelSummary::add_point(double x, double y, double z, const double* colour,
   Impl& m = *impl_;
   m.order_valid = false;
   const double w = static_cast<double>(weight);
-  const Cell key = cell_of(x, y, z, 1.0 / h_);
+  const Cell key = cell_of(x, y, z, inv_h_);
   auto [it, inserted] = m.index.try_emplace(key, static_cast<std::uint32_t>(m.moments.size()));
   if (inserted) {
     m.cell.push_back(key);

@@ -116,7 +116,7 @@ class VoxelSummary {
   // One point of `weight` coincident copies (colour: 3 values or null).
   void add_point(double x, double y, double z, const double* colour, std::int64_t weight);
   void project_means(const VoxelSurfaceFit& fit, Eigen::MatrixX3d& P, Eigen::VectorXd& w, Eigen::MatrixX3d& C) const;
-  double h_;
+  double h_, inv_h_;  // voxel size and its inverse (cells are floor(p · inv_h_))
   std::int64_t added_ = 0, skipped_ = 0, coloured_ = 0;
   std::unique_ptr<Impl> impl_;
 };
