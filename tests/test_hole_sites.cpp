@@ -175,6 +175,89 @@ TEST(HoleSites, TheBorderOfAFragmentIsNotClosedIntoAPillow) {
   EXPECT_EQ(w.num_faces(), faces);
 }
 
+// A finger: a cylinder of radius 0.1 over 0 <= z <= 1 with a hemispherical base and a cone of
+// height 0.05 on top (the tip), `around` vertices on each ring and rings about 2π·0.1/around
+// apart. Outward oriented; the open ring at z = 1 is vertex ring `top_ring`.
+TriangleMesh finger(int around, int* top_ring = nullptr) {
+  const double r = 0.1, spacing = 2 * M_PI * r / around;
+  std::vector<std::pair<double, double>> rings;  // (radius, z), bottom to top, poles excluded
+  const int base = std::max(2, static_cast<int>(0.5 * M_PI * r / spacing));
+  for (int i = 1; i <= base; ++i) {
+    const double a = 0.5 * M_PI * i / base;
+    rings.push_back({r * std::sin(a), -r * std::cos(a)});
+  }
+  const int side = static_cast<int>(1.0 / spacing);
+  for (int i = 1; i <= side; ++i) rings.push_back({r, static_cast<double>(i) / side});
+  if (top_ring) *top_ring = static_cast<int>(rings.size()) - 1;
+  const int cone = std::max(1, static_cast<int>(0.05 / spacing));
+  for (int i = 1; i < cone; ++i) rings.push_back({r * (1.0 - static_cast<double>(i) / cone), 1.0 + 0.05 * i / cone});
+  const int nr = static_cast<int>(rings.size());
+  TriangleMesh m;
+  m.V.resize(nr * around + 2, 3);
+  for (int k = 0; k < nr; ++k)
+    for (int j = 0; j < around; ++j) {
+      const double t = 2 * M_PI * j / around;
+      m.V.row(k * around + j) << rings[k].first * std::cos(t), rings[k].first * std::sin(t), rings[k].second;
+    }
+  const int bottom = nr * around, top = bottom + 1;
+  m.V.row(bottom) << 0, 0, -r;
+  m.V.row(top) << 0, 0, 1.05;
+  std::vector<Eigen::Vector3i> F;
+  for (int j = 0; j < around; ++j) {
+    const int j1 = (j + 1) % around;
+    F.push_back({bottom, j1, j});
+    F.push_back({top, (nr - 1) * around + j, (nr - 1) * around + j1});
+    for (int k = 0; k + 1 < nr; ++k) {
+      const int a = k * around + j, b = k * around + j1, c = a + around, d = b + around;
+      F.push_back({a, b, d});
+      F.push_back({a, d, c});
+    }
+  }
+  m.F.resize(static_cast<Eigen::Index>(F.size()), 3);
+  for (size_t f = 0; f < F.size(); ++f) m.F.row(static_cast<Eigen::Index>(f)) = F[f].transpose();
+  return m;
+}
+
+TEST(HoleFilling, TheOpenEndOfASampledTipIsCappedAndAnUnsampledOneStaysOpen) {
+  // The finger's mesh without the faces above its top ring: a loop around the thin part whose
+  // sites' normals cancel out (no plane to see the hole from), with the blunt tip too far above
+  // the loop's edges for the surrounded-hole test. The cloud is a finer finger: with the tip (the
+  // extraction lost the cells of a sampled tip) or ending at the loop (the open end of a
+  // scanned tube).
+  int top_ring = 0;
+  const TriangleMesh coarse = finger(24, &top_ring), fine = finger(96);
+  double volume = 0;
+  for (Eigen::Index f = 0; f < coarse.F.rows(); ++f)
+    volume += coarse.V.row(coarse.F(f, 0)).dot(coarse.V.row(coarse.F(f, 1)).cross(coarse.V.row(coarse.F(f, 2)))) / 6;
+  ASSERT_GT(volume, 0) << "outward";
+  const Eigen::MatrixX3d fine_normals = vertex_normals(fine.V, fine.F);
+  const HoleFillingOptions o;
+  for (bool tip_sampled : {true, false}) {
+    WorkingMesh w = working(coarse);
+    std::vector<char> drop(w.num_faces(), 0);
+    for (int f = 0; f < w.num_faces(); ++f)
+      for (int v : w.face(f)) drop[f] |= w.V(v, 2) > 1.0;
+    w.remove_faces(drop);
+    const std::vector<std::vector<int>> loops = boundary_loops(w);
+    ASSERT_EQ(loops.size(), 1u);
+    const int L = static_cast<int>(loops[0].size());
+    ASSERT_GT(L, o.max_hole_edges);
+    ASSERT_LE(L, o.surrounded_hole_factor * o.max_hole_edges);
+    // The loop's sites have the normals of the cylinder they were fitted on: radial, cancelling out.
+    for (int v : loops[0]) w.N.row(v) = Eigen::RowVector3d(w.V(v, 0), w.V(v, 1), 0).normalized();
+    std::vector<int> kept;
+    for (int i = 0; i < fine.V.rows(); ++i)
+      if (tip_sampled || fine.V(i, 2) <= 1.0) kept.push_back(i);
+    const CloudSurfaceProjector surface(fine.V(kept, Eigen::all), fine_normals(kept, Eigen::all));
+    int removed = 0;
+    EXPECT_EQ(fill_holes(w, surface, o, {}, removed), tip_sampled ? 1 : 0) << "tip sampled " << tip_sampled;
+    const ValidationReport r = validate(w, tip_sampled);
+    EXPECT_TRUE(r.ok()) << r.summary();
+    EXPECT_EQ(r.boundary_loops, tip_sampled ? 0 : 1);
+    EXPECT_EQ(r.components, 1);
+  }
+}
+
 TEST(StarCandidates, JitteredPlanarSitesGiveAConsistentTriangulation) {
   // Sites of a jittered 20 x 20 grid on z = 0 with normals +z: every interior triangle of their
   // Delaunay triangulation is in the stars of its three corners, and the stars alone give a

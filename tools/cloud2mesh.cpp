@@ -55,6 +55,13 @@ void reject_far_outliers(const Eigen::MatrixX3d& P, const std::string& path) {
                             "): remove these outliers");
 }
 
+// An angle as the summary prints it ("28.24 deg").
+std::string format_angle(double degrees) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2f deg", degrees);
+  return buf;
+}
+
 // Option checks before any work (the library checks them again), naming the option at fault.
 void check_options(const ReconstructionOptions& opt) {
   if (opt.sites < 4) throw InvalidInputError("-n must be at least 4 (got " + std::to_string(opt.sites) + ")");
@@ -383,8 +390,9 @@ int main(int argc, char** argv) {
                   static_cast<long>(res.mesh.V.rows()), static_cast<long>(res.mesh.F.rows()), val.components,
                   val.boundary_loops, val.genus, res.holes_filled, res.unused_sites, res.pieces_removed,
                   res.flying_faces, res.sized ? ", sized to -n" : "");
-      std::printf("  quality: phi_min %.2f deg (boundary triangles %.2f deg), phi_m %.2f deg\n", res.min_angle_deg,
-                  res.boundary_min_angle_deg, res.mean_min_angle_deg);
+      const std::string boundary = val.boundary_loops > 0 ? format_angle(res.boundary_min_angle_deg) : "none";
+      std::printf("  quality: phi_min %.2f deg (boundary triangles %s), phi_m %.2f deg\n", res.min_angle_deg,
+                  boundary.c_str(), res.mean_min_angle_deg);
       // The point Laplacian resolves a heat cell from about 10 points (ReconstructionOptions::
       // cvt_points_per_site); far fewer leave holes and slivers the mesher can only patch.
       const double points_per_site = static_cast<double>(res.points_used) / opt.sites;

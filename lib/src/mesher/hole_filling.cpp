@@ -37,16 +37,25 @@ bool is_sampled_hole(const WorkingMesh& mesh, const SurfaceProjector& surface, c
   return true;
 }
 
-// Where the surface's own border is known (an input mesh): whether every vertex of the loop is
-// farther than interior_hole_clearance·h from it (always, on a closed surface), i.e. the loop is
-// a hole inside the surface.
+// Whether every vertex of the loop is farther than sample_border_clearance·h from the border of
+// the samples (a cloud's scan edge), i.e. the loop is a hole in sampled surface.
+bool is_away_from_sample_border(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop,
+                                double h, const HoleFillingOptions& o) {
+  for (int v : loop)
+    if (!(surface.distance_to_sample_border(mesh.V.row(v).transpose()) > o.sample_border_clearance * h)) return false;
+  return true;
+}
+
+// Whether the loop is a hole inside the surface: where the surface's own border is known (an
+// input mesh), every vertex of the loop is farther than interior_hole_clearance·h from it (always,
+// on a closed surface); where the border of the samples is, farther than sample_border_clearance·h.
 bool is_inside_surface(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop,
                        const HoleFillingOptions& o) {
-  if (!surface.border_known()) return false;
-  if (!surface.has_border()) return true;
   double h = 0;
   for (size_t i = 0; i < loop.size(); ++i) h += (mesh.V.row(loop[i]) - mesh.V.row(loop[(i + 1) % loop.size()])).norm();
   h /= static_cast<double>(loop.size());
+  if (!surface.border_known()) return is_away_from_sample_border(mesh, surface, loop, h, o);
+  if (!surface.has_border()) return true;
   for (int v : loop) {
     Eigen::Vector3d pos, nrm;
     const Eigen::Vector3d x = mesh.V.row(v);
@@ -78,6 +87,32 @@ bool is_surrounded_hole(const WorkingMesh& mesh, const SurfaceProjector& surface
   return sampled >= o.surrounded_fraction * L;
 }
 
+// The loop is the open end of a tube whose tip is sampled: walking from the loop's centroid along
+// the way its fill would face (against the loop's direction), the sampled surface comes within
+// sample_gap·h before tip_reach loop radii.
+bool is_sampled_tube_end(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop,
+                         const HoleFillingOptions& o) {
+  const int L = static_cast<int>(loop.size());
+  Eigen::Vector3d g = Eigen::Vector3d::Zero(), area = Eigen::Vector3d::Zero();
+  double h = 0, radius = 0;
+  for (int v : loop) g += mesh.V.row(v).transpose();
+  g /= L;
+  for (int i = 0; i < L; ++i) {
+    const Eigen::Vector3d a = mesh.V.row(loop[i]).transpose() - g, b = mesh.V.row(loop[(i + 1) % L]).transpose() - g;
+    area += a.cross(b);
+    h += (b - a).norm();
+    radius += a.norm();
+  }
+  h /= L;
+  radius /= L;
+  if (!(area.norm() > 0) || !(h > 0)) return false;
+  const Eigen::Vector3d axis = -area.normalized();  // the fill's triangles run against the loop
+  const double step = 0.5 * o.sample_gap * h;
+  for (double t = step; t <= o.tip_reach * radius; t += step)
+    if (surface.distance_to_samples(g + t * axis) < o.sample_gap * h) return true;
+  return false;
+}
+
 // A 3-loop that is the back of an existing face (its reversed half-edges all on one face).
 bool is_back_of_face(const WorkingMesh& mesh, const std::vector<int>& loop) {
   const int f0 = mesh.half_edge_face(loop[1], loop[0]), f1 = mesh.half_edge_face(loop[2], loop[1]),
@@ -85,18 +120,20 @@ bool is_back_of_face(const WorkingMesh& mesh, const std::vector<int>& loop) {
   return f0 >= 0 && f1 >= 0 && f2 >= 0 && f0 == f1 && f1 == f2;
 }
 
-// Whether the policy closes the simple loop `loop`.
-bool selected(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop,
-              const HoleFillingOptions& o) {
+// Whether the policy closes the simple loop `loop`, of the shape `shape` seen from its sites'
+// normals, on a surface that is open or nearly closed.
+bool selected(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop, LoopShape shape,
+              bool open_surface, const HoleFillingOptions& o) {
   const int L = static_cast<int>(loop.size());
-  if (L <= o.max_fill_edges && is_inside_surface(mesh, surface, loop, o)) return true;
   switch (o.policy) {
     case HolePolicy::fill: return true;
     case HolePolicy::keep: return L <= o.sampled_hole_factor * o.max_hole_edges && is_sampled_hole(mesh, surface, loop, o);
     case HolePolicy::automatic: break;
   }
   return (L <= o.max_hole_edges && o.fill_short_loops) || (L <= o.sampled_hole_factor * o.max_hole_edges && is_sampled_hole(mesh, surface, loop, o)) ||
-         (L <= o.surrounded_hole_factor * o.max_hole_edges && is_surrounded_hole(mesh, surface, loop, o));
+         (L <= o.surrounded_hole_factor * o.max_hole_edges &&
+          (is_surrounded_hole(mesh, surface, loop, o) ||
+           (!open_surface && shape == LoopShape::unknown && is_sampled_tube_end(mesh, surface, loop, o))));
 }
 
 // Whether the triangles face the way their corners' normals do, on area-weighted average. Filling
@@ -267,9 +304,14 @@ int fill_pass(WorkingMesh& mesh, const SurfaceProjector& surface, const HoleFill
     }
     const bool sampled_by_sites = sites_ok && !with_sites.interior_sites.empty() && L <= o.max_fill_edges &&
                                   with_sites.interior_sites.size() >= o.sites.sampled_fraction * with_sites.expected_sites;
-    if (L > (o.policy == HolePolicy::fill ? o.max_fill_edges : o.surrounded_hole_factor * o.max_hole_edges) && !sampled_by_sites)
+    // A hole inside the surface; from a cloud (the border known only from the samples), not the
+    // outer border of a piece seen from its sites' side (a fragment far from the scan's edge).
+    const bool inside = L <= o.max_fill_edges && (surface.border_known() || with_sites.shape != LoopShape::outer_border) &&
+                        is_inside_surface(mesh, surface, loop, o);
+    if (L > (o.policy == HolePolicy::fill ? o.max_fill_edges : o.surrounded_hole_factor * o.max_hole_edges) &&
+        !sampled_by_sites && !inside)
       continue;
-    if (!sampled_by_sites && !selected(mesh, surface, loop, o)) continue;
+    if (!sampled_by_sites && !inside && !selected(mesh, surface, loop, with_sites.shape, open_surface, o)) continue;
     std::vector<MeshFace> tris;
     if (!triangulate_selected(mesh, loop, with_sites, sites_ok, tris)) continue;
     // Beyond the extraction's own small gaps, a loop is filled only when the fill does not face
@@ -282,10 +324,10 @@ int fill_pass(WorkingMesh& mesh, const SurfaceProjector& surface, const HoleFill
     fill_of.insert(fill_of.end(), tris.size(), static_cast<int>(fill_sizes.size()));
     fill_sizes.push_back(L);
     // Only the fill of what looks like the border of a piece, from its sites' side, is taken out
-    // when it cuts through the mesh: a gap of the extraction, or a loop around the tip of a thin
-    // part, is filled and untangled after.
+    // when it cuts through the mesh: a gap of the extraction, a hole inside the surface, or a
+    // loop around the tip of a thin part, is filled and untangled after.
     // Under HolePolicy::fill every fill stays (a watertight mesh is asked for).
-    rejectable.push_back(o.policy != HolePolicy::fill && open_surface && L > o.max_hole_edges &&
+    rejectable.push_back(o.policy != HolePolicy::fill && !inside && open_surface && L > o.max_hole_edges &&
                          (with_sites.shape == LoopShape::outer_border || with_sites.shape == LoopShape::not_simple));
   }
   return add_fills_without_intersections(mesh, added, fill_of, fill_sizes, rejectable, o, sizes);

@@ -138,9 +138,25 @@ void CloudSurfaceProjector::project(const Eigen::Vector3d& x, int& hint, Eigen::
 }
 
 double CloudSurfaceProjector::distance_to_samples(const Eigen::Vector3d& x) const {
-  double d2 = std::numeric_limits<double>::infinity();
-  for (Eigen::Index i = 0; i < P_.rows(); ++i) d2 = std::min(d2, (P_.row(i).transpose() - x).squaredNorm());
-  return std::sqrt(d2);
+  std::call_once(samples_once_, [&] { samples_ = std::make_unique<PointIndex>(P_); });
+  double d = 0;
+  samples_->nearest(x, d);
+  return d;
+}
+
+double CloudSurfaceProjector::distance_to_sample_border(const Eigen::Vector3d& x) const {
+  std::call_once(border_once_, [&] {
+    SampleBorderOptions o = options_.border;
+    o.threads = options_.threads;
+    const std::vector<char> on_border = sample_border_points(P_, N_, knn_, o);
+    std::vector<int> rows;
+    for (int i = 0; i < static_cast<int>(on_border.size()); ++i)
+      if (on_border[i]) rows.push_back(i);
+    border_ = std::make_unique<PointIndex>(P_(rows, Eigen::all));
+  });
+  double d = 0;
+  border_->nearest(x, d);
+  return d;
 }
 
 MeshSurfaceProjector::MeshSurfaceProjector(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F)

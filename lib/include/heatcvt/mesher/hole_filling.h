@@ -29,6 +29,15 @@ struct HoleFillingOptions {
   /// border (every loop, on a closed surface) is a hole inside the surface, not one of its
   /// boundaries: filled under every policy (the surface is there). Default 1.
   double interior_hole_clearance = 1.0;
+  /// Where the border of the samples is known instead (SurfaceProjector::
+  /// distance_to_sample_border(): a cloud's points at the edge of what was scanned), a loop of at
+  /// most max_fill_edges edges whose every vertex is farther than this·h from that border, and
+  /// which is not the outer border of a piece seen from its sites' normals (LoopShape::
+  /// outer_border: a fragment), is a hole the extraction left in sampled surface, not the edge
+  /// of the scan: filled under every policy, and its fill stays even where it cuts through the
+  /// mesh (it is untangled after).
+  /// Default 2.
+  double sample_border_clearance = 2.0;
   /// With HolePolicy::fill: the longest loop triangulated (the triangulation costs O(L³)). Default 600.
   int max_fill_edges = 600;
   /// Boundary loops of at most this many edges are holes of the extraction: filled (without
@@ -52,6 +61,13 @@ struct HoleFillingOptions {
   /// tip find it; across the border of an open scan none does). Default 8.
   int surrounded_hole_factor = 8;
   double surrounded_fraction = 0.3;  ///< Default 0.3.
+  /// On a nearly closed surface (not open, below), loops of up to surrounded_hole_factor·
+  /// max_hole_edges edges whose sites' normals cancel out (LoopShape::unknown: the open end of a
+  /// tube, where the cells at the tip of a thin part gave no triangles) are filled when the sampled surface is met within `sample_gap`·h of the
+  /// loop's axis, at most `tip_reach` loop radii beyond the loop on the side the fill faces: the
+  /// tip is there, and the cap stands for it. Across the open border of a scan (the base of a
+  /// bust, the rim of a cup) nothing is sampled beyond the loop. Default 2.
+  double tip_reach = 2.0;
   /// A loop of more than max_hole_edges edges is filled only when its triangles face the way
   /// their corners' normals do: the area-weighted mean cosine between them is at least this.
   /// Closing the border of a piece of surface would add the piece's back side (mean cosine near

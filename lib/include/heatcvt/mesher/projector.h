@@ -6,8 +6,12 @@
 /// triangle mesh.
 #include <Eigen/Core>
 #include <memory>
+#include <mutex>
 #include <utility>
 #include <vector>
+
+#include "heatcvt/point_index.h"
+#include "heatcvt/sample_border.h"
 
 namespace heatcvt {
 
@@ -23,8 +27,15 @@ class SurfaceProjector {
   /// Distance from `x` to the sampled surface (nearest sample point, or nearest surface point):
   /// hole filling asks whether the surface continues beyond a boundary.
   virtual double distance_to_samples(const Eigen::Vector3d& x) const = 0;
-  /// Whether the surface's border is known (an input mesh's boundary edges, none for a closed
-  /// mesh); a cloud's is not.
+  /// Distance from `x` to the border of the sampled surface (the edge of what was scanned, as
+  /// far as the samples show it), or 0 where it is not known: hole filling closes a hole far from
+  /// every such border, where the surface is sampled all round. Default 0.
+  virtual double distance_to_sample_border(const Eigen::Vector3d& x) const {
+    (void)x;
+    return 0;
+  }
+  /// Whether the surface's border is known exactly (an input mesh's boundary edges, none for a
+  /// closed mesh); a cloud's is not.
   virtual bool border_known() const { return false; }
   /// Whether the border is known and not empty.
   virtual bool has_border() const { return false; }
@@ -56,6 +67,8 @@ struct CloudFitOptions {
   double max_height_bandwidths = 2.0;
   /// Steps of project()'s greedy walk on the kNN graph. Default 1000.
   int max_walk_steps = 1000;
+  /// Which points are on the border of the samples (distance_to_sample_border()).
+  SampleBorderOptions border;
   int threads = 0;  ///< for the kNN search; 0 = all cores. Default 0.
 };
 
@@ -71,7 +84,11 @@ class CloudSurfaceProjector final : public SurfaceProjector {
   CloudSurfaceProjector(Eigen::MatrixX3d P, Eigen::MatrixX3d N, const CloudFitOptions& options = {},
                         Eigen::MatrixXi knn = {});
   void project(const Eigen::Vector3d& x, int& hint, Eigen::Vector3d& position, Eigen::Vector3d& normal) const override;
+  /// Nearest cloud point (kd-tree built on first use).
   double distance_to_samples(const Eigen::Vector3d& x) const override;
+  /// Nearest cloud point on the border of the samples (sample_border_points() with
+  /// `options.border`, found on first use); infinity where there is none.
+  double distance_to_sample_border(const Eigen::Vector3d& x) const override;
 
   /// The fit neighbourhood of cloud point c: c and its nearest points whose normal agrees with
   /// c's (all of them when too few agree).
@@ -93,6 +110,9 @@ class CloudSurfaceProjector final : public SurfaceProjector {
   Eigen::MatrixX3d P_, N_;
   CloudFitOptions options_;
   Eigen::MatrixXi knn_;
+  // Built on first use (hole filling only): every point, and the border points.
+  mutable std::once_flag samples_once_, border_once_;
+  mutable std::unique_ptr<PointIndex> samples_, border_;
 };
 
 class ClosestPointTree;
