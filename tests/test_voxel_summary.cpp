@@ -91,6 +91,24 @@ TEST(VoxelSummary, ChunkSizeDoesNotChangeAnyBit) {
   }
 }
 
+TEST(VoxelSummary, BinningOnOneOrAllThreadsGivesTheSameBits) {
+  // A chunk large enough to be binned on all threads (each thread a residue class of voxels).
+  const PointCloud cloud = torus_cloud(60000, 0.01);
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const VoxelSummary one = summarise(cloud, 0.02, 60000);
+  omp_set_num_threads(std::max(2, threads));
+  const VoxelSummary all = summarise(cloud, 0.02, 60000);
+  omp_set_num_threads(threads);
+  ASSERT_GT(one.voxels(), 5000);
+  EXPECT_TRUE(identical(all.points(), one.points()));
+  EXPECT_TRUE(identical(all.normals(), one.normals()));
+  EXPECT_TRUE(identical(all.colours(), one.colours()));
+  EXPECT_TRUE((all.counts().array() == one.counts().array()).all());
+  // ... and the same as point by point (chunks of one, binned serially).
+  EXPECT_TRUE(identical(summarise(cloud, 0.02, 1).points(), one.points()));
+}
+
 TEST(VoxelSummary, MomentsMatchTheirVoxelsPoints) {
   const PointCloud cloud = torus_cloud(5000, 0.01, 9);
   const double h = 0.1;

@@ -2,16 +2,17 @@
 #include "heatcvt/voxel_summary.h"
 
 #include <Eigen/Eigenvalues>
+#include <omp.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <numeric>
 #include <string>
-#include <unordered_map>
 #include <unordered_set>
 
 #include "heatcvt/errors.h"
+#include "heatcvt/parallel.h"
 
 namespace heatcvt {
 
@@ -29,15 +30,71 @@ struct CellHash {
   }
 };
 
+// Voxel slots by cell: open addressing with linear probing in a power-of-two table kept at most
+// half full. A lookup touches one or two neighbouring entries where a node-based map follows a
+// bucket and a node pointer: the binning of points that arrive in random order is bound by these
+// cache misses. Slots are handed out by the caller (the voxels' insertion order).
+class FlatCellIndex {
+ public:
+  static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
+  FlatCellIndex() { table_.resize(16); mask_ = 15; }
+  // The slot of `key`, or kNone.
+  std::uint32_t find(const Cell& key) const {
+    for (std::size_t i = CellHash()(key) & mask_;; i = (i + 1) & mask_) {
+      const Entry& e = table_[i];
+      if (e.slot == kNone) return kNone;
+      if (e.key == key) return e.slot;
+    }
+  }
+  // The slot of `key`; where absent, `next` is stored for it and `inserted` set.
+  std::uint32_t find_or_insert(const Cell& key, std::uint32_t next, bool& inserted) {
+    inserted = false;
+    for (std::size_t i = CellHash()(key) & mask_;; i = (i + 1) & mask_) {
+      Entry& e = table_[i];
+      if (e.slot != kNone && e.key == key) return e.slot;
+      if (e.slot == kNone) {
+        e = {key, next};
+        inserted = true;
+        if (2 * ++size_ > table_.size()) grow();
+        return next;
+      }
+    }
+  }
+
+ private:
+  struct Entry {
+    Cell key{};
+    std::uint32_t slot = kNone;
+  };
+  void grow() {
+    std::vector<Entry> old(table_.size() * 2);
+    old.swap(table_);
+    mask_ = table_.size() - 1;
+    for (const Entry& e : old)
+      if (e.slot != kNone) {
+        std::size_t i = CellHash()(e.key) & mask_;
+        while (table_[i].slot != kNone) i = (i + 1) & mask_;
+        table_[i] = e;
+      }
+  }
+  std::vector<Entry> table_;
+  std::size_t size_ = 0, mask_ = 0;
+};
+
 // Cells beyond ±2^52 would lose integer exactness in the double → int conversion.
 constexpr double kMaxCell = 4503599627370496.0;
 
+// The cell of a point whose cell is known to be in range (cell_of() has seen it).
+Cell cell_in_range(double x, double y, double z, double inv_h) {
+  return {static_cast<std::int64_t>(std::floor(x * inv_h)), static_cast<std::int64_t>(std::floor(y * inv_h)),
+          static_cast<std::int64_t>(std::floor(z * inv_h))};
+}
+
 Cell cell_of(double x, double y, double z, double inv_h) {
-  const double c[3] = {std::floor(x * inv_h), std::floor(y * inv_h), std::floor(z * inv_h)};
-  for (double v : c)
-    if (!(std::abs(v) < kMaxCell))
+  for (double v : {x * inv_h, y * inv_h, z * inv_h})
+    if (!(std::abs(std::floor(v)) < kMaxCell))
       throw InvalidInputError("VoxelSummary: coordinate / voxel size exceeds the integer cell range (2^52)");
-  return {static_cast<std::int64_t>(c[0]), static_cast<std::int64_t>(c[1]), static_cast<std::int64_t>(c[2])};
+  return cell_in_range(x, y, z, inv_h);
 }
 
 // Occupied cells of size h: the cells as 63-bit keys (21 bits per axis, relative to the smallest
@@ -81,7 +138,7 @@ struct Moments {
 }  // namespace
 
 struct VoxelSummary::Impl {
-  std::unordered_map<Cell, std::uint32_t, CellHash> index;
+  FlatCellIndex index;
   std::vector<Cell> cell;
   std::vector<Moments> moments;
   mutable std::vector<std::uint32_t> order;
@@ -100,32 +157,18 @@ void VoxelSummary::add(const CloudChunk& chunk) { add(chunk.P, chunk.has_colours
 
 void VoxelSummary::add(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& C) { add_weighted(P, C, 1); }
 
-void VoxelSummary::add_weighted(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& C, std::int64_t weight) {
-  const bool colours = C.rows() == P.rows() && P.rows() > 0;
-  impl_->order_valid = false;
-  for (Eigen::Index i = 0; i < P.rows(); ++i) {
-    const double c[3] = {colours ? C(i, 0) : 0.0, colours ? C(i, 1) : 0.0, colours ? C(i, 2) : 0.0};
-    add_point(P(i, 0), P(i, 1), P(i, 2), colours ? c : nullptr, weight);
-  }
-}
+namespace {
 
-void VoxelSummary::add_point(double x, double y, double z, const double* colour, std::int64_t weight) {
-  if (!(std::isfinite(x) && std::isfinite(y) && std::isfinite(z))) {
-    skipped_ += weight;
-    return;
-  }
-  Impl& m = *impl_;
-  m.order_valid = false;
+// Chunks of at least this many points are binned on all threads.
+constexpr Eigen::Index kParallelBinning = 16384;
+
+// Adds `weight` copies of point (x, y, z) of cell `key` (corner key·h) with colour (3 values or
+// null) to the voxel's moments.
+void accumulate(Moments& v, const Cell& key, double h, double x, double y, double z, const double* colour,
+                std::int64_t weight) {
   const double w = static_cast<double>(weight);
-  const Cell key = cell_of(x, y, z, inv_h_);
-  auto [it, inserted] = m.index.try_emplace(key, static_cast<std::uint32_t>(m.moments.size()));
-  if (inserted) {
-    m.cell.push_back(key);
-    m.moments.emplace_back();
-  }
-  Moments& v = m.moments[it->second];
-  const double d[3] = {x - static_cast<double>(key[0]) * h_, y - static_cast<double>(key[1]) * h_,
-                       z - static_cast<double>(key[2]) * h_};
+  const double d[3] = {x - static_cast<double>(key[0]) * h, y - static_cast<double>(key[1]) * h,
+                       z - static_cast<double>(key[2]) * h};
   v.count += weight;
   for (int k = 0; k < 3; ++k) v.s[k] += w * d[k];
   v.ss[0] += w * d[0] * d[0];
@@ -134,10 +177,65 @@ void VoxelSummary::add_point(double x, double y, double z, const double* colour,
   v.ss[3] += w * d[1] * d[1];
   v.ss[4] += w * d[1] * d[2];
   v.ss[5] += w * d[2] * d[2];
-  if (colour) {
+  if (colour)
     for (int k = 0; k < 3; ++k) v.c[k] += w * colour[k];
-    coloured_ += weight;
+}
+
+}  // namespace
+
+std::uint32_t VoxelSummary::slot_of(const Cell& key) {
+  Impl& m = *impl_;
+  bool inserted = false;
+  const std::uint32_t slot = m.index.find_or_insert(key, static_cast<std::uint32_t>(m.moments.size()), inserted);
+  if (inserted) {
+    m.cell.push_back(key);
+    m.moments.emplace_back();
   }
+  return slot;
+}
+
+// In two steps: the voxel of each point, in input order (new voxels are numbered as they appear),
+// then the moments, each thread taking the voxels of one residue class of their numbers and the
+// points of each voxel in input order. Every voxel's sums are those of one loop over the points,
+// whatever the number of threads.
+void VoxelSummary::add_weighted(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& C, std::int64_t weight) {
+  const bool colours = C.rows() == P.rows() && P.rows() > 0;
+  Impl& m = *impl_;
+  m.order_valid = false;
+  const Eigen::Index n = P.rows();
+  std::vector<std::uint32_t> slot(static_cast<std::size_t>(n), FlatCellIndex::kNone);
+  std::int64_t finite = 0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (!(std::isfinite(P(i, 0)) && std::isfinite(P(i, 1)) && std::isfinite(P(i, 2)))) continue;
+    slot[static_cast<std::size_t>(i)] = slot_of(cell_of(P(i, 0), P(i, 1), P(i, 2), inv_h_));
+    ++finite;
+  }
+#pragma omp parallel num_threads(n >= kParallelBinning ? resolve_threads(0) : 1)
+  {
+    const auto t = static_cast<std::uint32_t>(omp_get_thread_num());
+    const auto threads = static_cast<std::uint32_t>(omp_get_num_threads());
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const std::uint32_t s = slot[static_cast<std::size_t>(i)];
+      if (s == FlatCellIndex::kNone || s % threads != t) continue;
+      const double c[3] = {colours ? C(i, 0) : 0.0, colours ? C(i, 1) : 0.0, colours ? C(i, 2) : 0.0};
+      accumulate(m.moments[s], cell_in_range(P(i, 0), P(i, 1), P(i, 2), inv_h_), h_, P(i, 0), P(i, 1), P(i, 2),
+                 colours ? c : nullptr, weight);
+    }
+  }
+  skipped_ += (n - finite) * weight;
+  added_ += finite * weight;
+  if (colours) coloured_ += finite * weight;
+}
+
+void VoxelSummary::add_point(double x, double y, double z, const double* colour, std::int64_t weight) {
+  if (!(std::isfinite(x) && std::isfinite(y) && std::isfinite(z))) {
+    skipped_ += weight;
+    return;
+  }
+  impl_->order_valid = false;
+  const Cell key = cell_of(x, y, z, inv_h_);
+  accumulate(impl_->moments[slot_of(key)], key, h_, x, y, z, colour, weight);
+  if (colour) coloured_ += weight;
   added_ += weight;
 }
 
@@ -257,19 +355,18 @@ bool fit_plane(const MergedMoments& nb, Eigen::Vector3d& mu, Eigen::Vector3d& no
 }
 
 // Moments of the 3×3×3 voxels around cell `centre`, relative to the corner of cell `origin`.
-using CellIndex = std::unordered_map<Cell, std::uint32_t, CellHash>;
-MergedMoments voxel_neighbourhood(const CellIndex& index, const std::vector<Moments>& moments, double h,
+MergedMoments voxel_neighbourhood(const FlatCellIndex& index, const std::vector<Moments>& moments, double h,
                                   const Cell& centre, const Cell& origin) {
   MergedMoments nb;
   for (int dx = -1; dx <= 1; ++dx)
     for (int dy = -1; dy <= 1; ++dy)
       for (int dz = -1; dz <= 1; ++dz) {
         const Cell n = {centre[0] + dx, centre[1] + dy, centre[2] + dz};
-        const auto it = index.find(n);
-        if (it == index.end()) continue;
+        const std::uint32_t slot = index.find(n);
+        if (slot == FlatCellIndex::kNone) continue;
         const Eigen::Vector3d d(static_cast<double>(n[0] - origin[0]), static_cast<double>(n[1] - origin[1]),
                                 static_cast<double>(n[2] - origin[2]));
-        nb.add(moments[it->second], h * d);
+        nb.add(moments[slot], h * d);
       }
   return nb;
 }
@@ -443,9 +540,9 @@ void VoxelSummary::project_means(const VoxelSurfaceFit& fit, Eigen::MatrixX3d& P
                         static_cast<std::int64_t>(std::floor(mean(2) / h_))};
       const Cell at = {c[0] + off[0], c[1] + off[1], c[2] + off[2]};
       Eigen::Vector3d around;  // neighbourhood mean of `at`, relative to c's corner
-      const auto it = m.index.find(at);
-      if (it != m.index.end()) {
-        around = local.mu[rank[it->second]] + h_ * Eigen::Vector3d(static_cast<double>(off[0]),
+      const std::uint32_t slot = m.index.find(at);
+      if (slot != FlatCellIndex::kNone) {
+        around = local.mu[rank[slot]] + h_ * Eigen::Vector3d(static_cast<double>(off[0]),
                                                                   static_cast<double>(off[1]),
                                                                   static_cast<double>(off[2]));
       } else {

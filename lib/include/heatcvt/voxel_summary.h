@@ -6,6 +6,7 @@
 /// proportional to the number of occupied voxels, never to the number of points. Plus the
 /// voxel size chooser that sizes the voxels from the target site count.
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -115,6 +116,8 @@ class VoxelSummary {
   const std::vector<std::uint32_t>& order() const;  // voxel indices in cell-key order (cached)
   // One point of `weight` coincident copies (colour: 3 values or null).
   void add_point(double x, double y, double z, const double* colour, std::int64_t weight);
+  // The number of the voxel of cell `key`, a new one when it has none yet.
+  std::uint32_t slot_of(const std::array<std::int64_t, 3>& key);
   void project_means(const VoxelSurfaceFit& fit, Eigen::MatrixX3d& P, Eigen::VectorXd& w, Eigen::MatrixX3d& C) const;
   double h_, inv_h_;  // voxel size and its inverse (cells are floor(p · inv_h_))
   std::int64_t added_ = 0, skipped_ = 0, coloured_ = 0;

@@ -1,19 +1,24 @@
 #pragma once
 /// \file mesh_checks.h
-/// Validation of the working mesh during meshing (CGAL checks of validate_triangle_mesh() on the
-/// referenced vertices): what the "try, and undo if it self-intersects" stages ask.
+/// Self-intersections of the working mesh during meshing: what the "try, and undo if it
+/// self-intersects" stages ask.
+#include <utility>
 #include <vector>
 
 #include "heatcvt/mesher/working_mesh.h"
-#include "heatcvt/validate.h"
 
 namespace heatcvt {
 
-/// validate_triangle_mesh() of the mesh's faces on the vertices they reference (require_closed =
-/// false; faces keep their indices), listing at most `max_listed` items per check.
-ValidationReport check_working_mesh(const WorkingMesh& mesh, int max_listed);
+/// Pairs (f, g), f < g, ascending, of faces of the mesh that intersect other than along what they
+/// share, by the rule of CGAL's Polygon_mesh_processing::self_intersections(): faces with a
+/// common edge intersect when they are coplanar and on the same side of it (they overlap); faces
+/// with one common vertex when the edge of either opposite it meets the other; other faces when
+/// the triangles meet (exact predicates). Faces whose corners are collinear are skipped, as there.
+/// Candidate pairs come from CGAL's box intersection of the faces' bounding boxes; no topology
+/// is checked, so the cost is that of the boxes alone.
+std::vector<std::pair<int, int>> intersecting_face_pairs(const WorkingMesh& mesh);
 
-/// Faces involved in a self-intersection, ascending.
+/// Faces involved in a self-intersection (intersecting_face_pairs()), ascending.
 std::vector<int> self_intersecting_faces(const WorkingMesh& mesh);
 
 /// Number of intersecting face pairs (0 for an empty mesh).
