@@ -129,6 +129,10 @@ void LocalizedSolver::solve(const std::vector<std::pair<int, double>>& rhs, cons
   double amax = 0.0;
   size_t entries = 0;
   for (int j : ws.reach_) {
+    // Most of the reach is the path up the elimination tree to its root, where nothing arrives
+    // once the drop tolerance has cut the heat off: such a node is passed over without loading
+    // its column.
+    if (a[j] == 0.0) continue;
     const int64_t b = cp[j], e = cp[j + 1];
     const double aj = (a[j] /= val[b]);
     const double mag = std::abs(aj);

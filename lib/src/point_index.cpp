@@ -3,6 +3,7 @@
 
 #include <flann/flann.hpp>
 
+#include <algorithm>
 #include <limits>
 #include <vector>
 
@@ -47,6 +48,22 @@ int PointIndex::nearest(const Eigen::Vector3d& x, double& distance) const {
   if (idx < 0) return -1;
   distance = std::sqrt(d2);
   return idx;
+}
+
+std::vector<int> PointIndex::within(const Eigen::Vector3d& x, double radius) const {
+  std::vector<int> out;
+  if (!impl_->index || !(radius >= 0)) return out;
+  double q[3] = {x.x(), x.y(), x.z()};
+  const flann::Matrix<double> query(q, 1, 3);
+  std::vector<std::vector<int>> indices;
+  std::vector<std::vector<double>> dists;
+  flann::SearchParams params(flann::FLANN_CHECKS_UNLIMITED, 0.0f, false);
+  params.cores = 1;
+  const double r = radius * (1 + 1e-6);
+  impl_->index->radiusSearch(query, indices, dists, static_cast<float>(r * r), params);
+  out = indices[0];
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 }  // namespace heatcvt

@@ -4,6 +4,7 @@
 /// exactly, for the repeated single queries of the mesher (is the surface sampled here?).
 #include <Eigen/Core>
 #include <memory>
+#include <vector>
 
 namespace heatcvt {
 
@@ -19,6 +20,10 @@ class PointIndex {
   /// A row of P nearest x (−1 when P is empty), and its exact distance to x in `distance`
   /// (infinity when P is empty).
   int nearest(const Eigen::Vector3d& x, double& distance) const;
+  /// The rows of P within `radius` of x, ascending. The search compares squared distances in
+  /// single precision, on a radius enlarged by a relative 10⁻⁶: rows that much farther may be
+  /// included, none within `radius` is missed.
+  std::vector<int> within(const Eigen::Vector3d& x, double radius) const;
   Eigen::Index size() const;
 
  private:

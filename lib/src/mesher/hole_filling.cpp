@@ -6,19 +6,46 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <unordered_map>
 #include <utility>
 
 #include "heatcvt/closest_point.h"
+#include "heatcvt/point_index.h"
 #include "heatcvt/mesher/hole_sites.h"
 #include "heatcvt/mesher/mesh_checks.h"
 
 namespace heatcvt {
 namespace {
 
+// The faces of a mesh near a point: a kd-tree over the face centroids (built on first use), searched
+// within the radius plus the largest distance from a centroid to its corners.
+class NearbyFaces {
+ public:
+  explicit NearbyFaces(const WorkingMesh& mesh) : mesh_(mesh) {}
+  // Every face with a point within `radius` of x (and maybe a few farther), ascending.
+  std::vector<int> within(const Eigen::Vector3d& x, double radius) {
+    if (!index_) {
+      Eigen::MatrixX3d centroid(mesh_.num_faces(), 3);
+      for (int f = 0; f < mesh_.num_faces(); ++f) {
+        const MeshFace& t = mesh_.face(f);
+        centroid.row(f) = (mesh_.V.row(t[0]) + mesh_.V.row(t[1]) + mesh_.V.row(t[2])) / 3.0;
+        for (int v : t) reach_ = std::max(reach_, (mesh_.V.row(v) - centroid.row(f)).norm());
+      }
+      index_ = std::make_unique<PointIndex>(centroid);
+    }
+    return index_->within(x, radius + reach_);
+  }
+
+ private:
+  const WorkingMesh& mesh_;
+  std::unique_ptr<PointIndex> index_;
+  double reach_ = 0;
+};
+
 // The loop's centre is away from every triangle (> clearance·h) but near the sampled surface.
 bool is_sampled_hole(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop,
-                     const HoleFillingOptions& o) {
+                     NearbyFaces& nearby, const HoleFillingOptions& o) {
   const Eigen::MatrixX3d& S = mesh.V;
   Eigen::Vector3d g = Eigen::Vector3d::Zero();
   double h = 0;
@@ -29,7 +56,8 @@ bool is_sampled_hole(const WorkingMesh& mesh, const SurfaceProjector& surface, c
   g /= static_cast<double>(loop.size());
   h /= static_cast<double>(loop.size());
   if (!(surface.distance_to_samples(g) < o.sample_gap * h)) return false;
-  for (const MeshFace& f : mesh.faces()) {
+  for (int fi : nearby.within(g, o.clearance * h)) {
+    const MeshFace& f = mesh.face(fi);
     const Eigen::Vector3d a = S.row(f[0]), b = S.row(f[1]), c = S.row(f[2]);
     const Eigen::Vector3d bc = closest_point_barycentric(g, a, b, c);
     if ((bc[0] * a + bc[1] * b + bc[2] * c - g).norm() < o.clearance * h) return false;
@@ -123,14 +151,15 @@ bool is_back_of_face(const WorkingMesh& mesh, const std::vector<int>& loop) {
 // Whether the policy closes the simple loop `loop`, of the shape `shape` seen from its sites'
 // normals, on a surface that is open or nearly closed.
 bool selected(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop, LoopShape shape,
-              bool open_surface, const HoleFillingOptions& o) {
+              bool open_surface, NearbyFaces& nearby, const HoleFillingOptions& o) {
   const int L = static_cast<int>(loop.size());
   switch (o.policy) {
     case HolePolicy::fill: return true;
-    case HolePolicy::keep: return L <= o.sampled_hole_factor * o.max_hole_edges && is_sampled_hole(mesh, surface, loop, o);
+    case HolePolicy::keep:
+      return L <= o.sampled_hole_factor * o.max_hole_edges && is_sampled_hole(mesh, surface, loop, nearby, o);
     case HolePolicy::automatic: break;
   }
-  return (L <= o.max_hole_edges && o.fill_short_loops) || (L <= o.sampled_hole_factor * o.max_hole_edges && is_sampled_hole(mesh, surface, loop, o)) ||
+  return (L <= o.max_hole_edges && o.fill_short_loops) || (L <= o.sampled_hole_factor * o.max_hole_edges && is_sampled_hole(mesh, surface, loop, nearby, o)) ||
          (L <= o.surrounded_hole_factor * o.max_hole_edges &&
           (is_surrounded_hole(mesh, surface, loop, o) ||
            (!open_surface && shape == LoopShape::unknown && is_sampled_tube_end(mesh, surface, loop, o))));
@@ -250,6 +279,7 @@ int add_fills_without_intersections(WorkingMesh& mesh, const std::vector<MeshFac
 int fill_pass(WorkingMesh& mesh, const SurfaceProjector& surface, const HoleFillingOptions& o, std::vector<int>* sizes) {
   const int max_loop = std::max(o.max_fill_edges, o.surrounded_hole_factor * o.max_hole_edges);
   UnusedSites unused(mesh);
+  NearbyFaces nearby(mesh);  // the faces as they are before this pass adds any
   const PieceBoundaries pieces(mesh);
   std::unordered_map<int, std::vector<int>> next;  // boundary half-edge a->b (face side) by start vertex
   std::vector<std::pair<int, int>> bedges;
@@ -311,7 +341,7 @@ int fill_pass(WorkingMesh& mesh, const SurfaceProjector& surface, const HoleFill
     if (L > (o.policy == HolePolicy::fill ? o.max_fill_edges : o.surrounded_hole_factor * o.max_hole_edges) &&
         !sampled_by_sites && !inside)
       continue;
-    if (!sampled_by_sites && !inside && !selected(mesh, surface, loop, with_sites.shape, open_surface, o)) continue;
+    if (!sampled_by_sites && !inside && !selected(mesh, surface, loop, with_sites.shape, open_surface, nearby, o)) continue;
     std::vector<MeshFace> tris;
     if (!triangulate_selected(mesh, loop, with_sites, sites_ok, tris)) continue;
     // Beyond the extraction's own small gaps, a loop is filled only when the fill does not face
