@@ -3,7 +3,7 @@
 
 #include <algorithm>
 #include <map>
-#include <set>
+#include <unordered_set>
 #include <utility>
 
 namespace heatcvt {
@@ -88,7 +88,7 @@ int make_vertices_manifold(WorkingMesh& mesh, const ManifoldOptions& options) {
 
 int add_compatible_candidates(WorkingMesh& mesh, const std::vector<DualCandidate>& first,
                               const std::vector<DualCandidate>& second) {
-  std::set<MeshFace> present;
+  std::unordered_set<MeshFace, MeshFaceHash> present;
   for (const MeshFace& f : mesh.faces()) present.insert(sorted(f));
   std::vector<std::vector<int>> vf = mesh.vertex_faces();
   int added = 0;

@@ -3,7 +3,7 @@
 
 #include "heatcvt/mesher/mesh_checks.h"
 
-#include <set>
+#include <unordered_set>
 
 namespace heatcvt {
 
@@ -34,7 +34,7 @@ void untangle(WorkingMesh& mesh, const SurfaceProjector& surface, const Untangle
   for (int f : bad) drop[f] = 1;
   stats.removed_triangles += mesh.remove_faces(drop);
   stats.removed_triangles += make_vertices_manifold(mesh, manifold);
-  std::set<MeshFace> before;
+  std::unordered_set<MeshFace, MeshFaceHash> before;
   for (MeshFace f : mesh.faces()) before.insert(f);
   stats.holes_filled += fill_holes(mesh, surface, holes, manifold, stats.removed_triangles, &stats.filled_hole_edges);
   bad = self_intersecting_faces(mesh);

@@ -5,7 +5,7 @@
 
 #include <algorithm>
 #include <map>
-#include <set>
+#include <unordered_set>
 
 namespace heatcvt {
 
@@ -15,7 +15,7 @@ int remove_valence3(WorkingMesh& mesh, const Valence3Options& options, const std
   int removed = 0;
   for (int pass = 0; pass < options.passes; ++pass) {
     const std::vector<std::vector<int>> vf = mesh.vertex_faces();
-    std::set<MeshFace> present;
+    std::unordered_set<MeshFace, MeshFaceHash> present;
     for (MeshFace f : mesh.faces()) {
       std::sort(f.begin(), f.end());
       present.insert(f);

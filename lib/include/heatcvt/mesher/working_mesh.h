@@ -6,6 +6,8 @@
 /// result self-intersects".
 #include <Eigen/Core>
 #include <array>
+#include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "heatcvt/disjoint_sets.h"
@@ -14,6 +16,16 @@ namespace heatcvt {
 
 /// A triangle as three vertex indices; its orientation is the order of the corners.
 using MeshFace = std::array<int, 3>;
+
+/// Hash of a face's three vertex indices in their order, for sets of faces.
+struct MeshFaceHash {
+  std::size_t operator()(const MeshFace& f) const noexcept {
+    std::uint64_t h = static_cast<std::uint32_t>(f[0]) * 0x9E3779B97F4A7C15ULL;
+    h ^= static_cast<std::uint32_t>(f[1]) * 0xC2B2AE3D27D4EB4FULL + (h >> 29);
+    h ^= static_cast<std::uint32_t>(f[2]) * 0x165667B19E3779F9ULL + (h >> 32);
+    return static_cast<std::size_t>(h ^ (h >> 31));
+  }
+};
 
 /// Positions, faces and per-vertex attributes of the surface being meshed.
 ///
