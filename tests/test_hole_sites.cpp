@@ -27,14 +27,6 @@
 namespace heatcvt {
 namespace {
 
-WorkingMesh working(const TriangleMesh& m) {
-  WorkingMesh w(m.V, vertex_normals(m.V, m.F), std::vector<int>(m.V.rows(), -1));
-  std::vector<MeshFace> faces;
-  for (Eigen::Index f = 0; f < m.F.rows(); ++f) faces.push_back({m.F(f, 0), m.F(f, 1), m.F(f, 2)});
-  w.set_faces(faces);
-  return w;
-}
-
 int used_vertices(const WorkingMesh& w) {
   std::vector<char> used(w.num_vertices(), 0);
   for (const MeshFace& f : w.faces())
@@ -79,7 +71,7 @@ TEST(HoleSites, ASphereHoleIsClosedWithTheSitesInsideIt) {
   const TriangleMesh s = test::icosphere(3);
   const MeshSurfaceProjector surface(s.V, s.F);
   for (bool with_sites : {true, false}) {
-    WorkingMesh w = working(s);
+    WorkingMesh w = test::working_mesh(s);
     const int left_out = punch(w, Eigen::Vector3d(0, 0, 1), 0.45);
     ASSERT_GE(left_out, 5);
     HoleFillingOptions o;
@@ -96,7 +88,7 @@ TEST(HoleSites, ASphereHoleIsClosedWithTheSitesInsideIt) {
 
 TEST(HoleSites, FillOfAPlaneHoleIsTheConstrainedDelaunayTriangulation) {
   const TriangleMesh g = test::grid(12, 0, 1, 0, 1, true);
-  WorkingMesh w = working(g);
+  WorkingMesh w = test::working_mesh(g);
   const int left_out = punch(w, Eigen::Vector3d(0.5, 0.5, 0), 0.2);
   ASSERT_GE(left_out, 9);
   const std::vector<std::vector<int>> loops = boundary_loops(w);
@@ -157,7 +149,7 @@ TEST(HoleSites, TheBorderOfAFragmentIsNotClosedIntoAPillow) {
   // An open sheet of many fragments (an open surface): a lone strip's border would be closed
   // into its own back side. The strip stays open.
   const TriangleMesh g = test::grid(10, 0, 1, 0, 1, true);
-  WorkingMesh w = working(g);
+  WorkingMesh w = test::working_mesh(g);
   std::vector<char> drop(w.num_faces(), 0);
   for (int f = 0; f < w.num_faces(); ++f) {
     Eigen::Vector3d c = Eigen::Vector3d::Zero();
@@ -233,7 +225,7 @@ TEST(HoleFilling, TheOpenEndOfASampledTipIsCappedAndAnUnsampledOneStaysOpen) {
   const Eigen::MatrixX3d fine_normals = vertex_normals(fine.V, fine.F);
   const HoleFillingOptions o;
   for (bool tip_sampled : {true, false}) {
-    WorkingMesh w = working(coarse);
+    WorkingMesh w = test::working_mesh(coarse);
     std::vector<char> drop(w.num_faces(), 0);
     for (int f = 0; f < w.num_faces(); ++f)
       for (int v : w.face(f)) drop[f] |= w.V(v, 2) > 1.0;
@@ -350,7 +342,7 @@ TEST(BorderGrowth, NoTriangleStandsAcrossADepthJump) {
 
 TEST(BorderGrowth, ANearlyClosedSurfaceIsLeftToTheHoleFilling) {
   const TriangleMesh s = test::icosphere(3);
-  WorkingMesh w = working(s);
+  WorkingMesh w = test::working_mesh(s);
   punch(w, Eigen::Vector3d(0, 0, 1), 0.3);
   const int faces = w.num_faces();
   EXPECT_EQ(grow_borders(w, {}), 0);

@@ -46,12 +46,6 @@ std::vector<MeshFace> faces_of(const Eigen::MatrixX3i& F) {
   return out;
 }
 
-// A working mesh of (V, F) with the surface's vertex normals and no anchors.
-WorkingMesh working(const TriangleMesh& m) {
-  WorkingMesh w(m.V, vertex_normals(m.V, m.F), std::vector<int>(m.V.rows(), -1));
-  w.set_faces(faces_of(m.F));
-  return w;
-}
 
 Eigen::MatrixX3i face_matrix(const WorkingMesh& w) {
   Eigen::MatrixX3i F(w.num_faces(), 3);
@@ -108,7 +102,7 @@ void cut_cap(WorkingMesh& w, double z) {
 
 TEST(WorkingMesh, EdgeIndexFollowsEveryOperation) {
   const TriangleMesh s = test::icosphere(2);
-  WorkingMesh w = working(s);
+  WorkingMesh w = test::working_mesh(s);
   EXPECT_EQ(w.num_faces(), s.F.rows());
   for (int v = 0; v < w.num_vertices(); ++v) EXPECT_GE(w.valence(v), 5);
   // Flip the first edge, remove every third face, add one back, replace another.
@@ -147,7 +141,7 @@ TEST(WorkingMesh, FlipTurnsTheSharedEdge) {
 
 TEST(WorkingMesh, RollbackRestoresExactly) {
   const TriangleMesh s = test::icosphere(2);
-  WorkingMesh w = working(s);
+  WorkingMesh w = test::working_mesh(s);
   for (int v = 0; v < w.num_vertices(); ++v) w.anchor[v] = v;
   const WorkingMesh::Checkpoint c = w.checkpoint();
   const std::vector<MeshFace> faces = w.faces();
@@ -331,7 +325,7 @@ TEST(ManifoldExtraction, SecondPassAddsOnlyWhatKeepsVerticesManifold) {
 TEST(HoleFilling, ClosesASphereWithACutOutCap) {
   const TriangleMesh s = test::icosphere(3);
   const MeshSurfaceProjector surface(s.V, s.F);
-  WorkingMesh w = working(s);
+  WorkingMesh w = test::working_mesh(s);
   cut_cap(w, 0.93);
   ASSERT_FALSE(validate(w, true).ok());
   HoleFillingOptions o;  // a loop of 15 edges: filled as a hole in sampled surface
@@ -346,7 +340,7 @@ TEST(HoleFilling, ClosesASphereWithACutOutCap) {
 TEST(HoleFilling, KeepsTheGenusOfATorus) {
   const TriangleMesh t = test::torus(48, 24);
   const MeshSurfaceProjector surface(t.V, t.F);
-  WorkingMesh w = working(t);
+  WorkingMesh w = test::working_mesh(t);
   // Cut out the faces around one vertex on the outer equator (a hole of 6 edges... and its ring).
   std::vector<char> drop(w.num_faces(), 0);
   const Eigen::Vector3d centre(1.4, 0, 0);
@@ -366,7 +360,7 @@ TEST(HoleFilling, KeepsTheGenusOfATorus) {
 TEST(HoleFilling, KeepsTheBorderOfAnOpenSheet) {
   const TriangleMesh g = test::grid(7);  // boundary loop of 28 edges, nothing sampled beyond it
   const MeshSurfaceProjector surface(g.V, g.F);
-  WorkingMesh w = working(g);
+  WorkingMesh w = test::working_mesh(g);
   int removed = 0;
   EXPECT_EQ(fill_holes(w, surface, {}, {}, removed), 0);
   EXPECT_EQ(w.num_faces(), g.F.rows());
@@ -379,7 +373,7 @@ TEST(HoleFilling, HolesInsideAnInputMeshAreFilledAndItsBorderKept) {
   const MeshSurfaceProjector surface(g.V, g.F);
   ASSERT_TRUE(surface.has_border());
   auto with_hole = [&] {
-    WorkingMesh w = working(g);
+    WorkingMesh w = test::working_mesh(g);
     std::vector<char> drop(w.num_faces(), 0);  // the two triangles of the cell [3/8, 4/8]²
     for (int f = 0; f < w.num_faces(); ++f) {
       Eigen::Vector3d c = Eigen::Vector3d::Zero();
@@ -410,7 +404,7 @@ TEST(HoleFilling, EveryHoleOfAClosedInputMeshIsFilled) {
   const MeshSurfaceProjector surface(s.V, s.F);
   ASSERT_TRUE(surface.border_known());
   ASSERT_FALSE(surface.has_border());
-  WorkingMesh w = working(s);
+  WorkingMesh w = test::working_mesh(s);
   cut_cap(w, 0.8);
   HoleFillingOptions o;
   o.policy = HolePolicy::keep;
@@ -442,7 +436,7 @@ TEST(HoleFilling, ShortLoopsOfTheSurfaceItselfAreKeptOnRequest) {
   annulus.F = F;
   HoleFillingOptions keep;
   keep.fill_short_loops = false;
-  WorkingMesh w = working(annulus);
+  WorkingMesh w = test::working_mesh(annulus);
   int removed = 0;
   EXPECT_EQ(fill_holes(w, surface, keep, {}, removed), 0);
   EXPECT_EQ(w.num_faces(), 16);
@@ -472,7 +466,7 @@ TEST(Untangle, RemovesASpikeThroughTheSphereAndRefillsTheHoles) {
   // The top vertex of a sphere pulled through the bottom: its fan crosses the bottom faces.
   const TriangleMesh s = test::icosphere(3);
   const MeshSurfaceProjector surface(s.V, s.F);
-  WorkingMesh w = working(s);
+  WorkingMesh w = test::working_mesh(s);
   int top = 0;
   for (int v = 0; v < w.num_vertices(); ++v)
     if (w.V(v, 2) > w.V(top, 2)) top = v;
@@ -493,7 +487,7 @@ TEST(Untangle, RemovesASpikeThroughTheSphereAndRefillsTheHoles) {
 
 TEST(Valence3Removal, RemovesAVertexInsertedInAFace) {
   const TriangleMesh s = test::icosphere(2);
-  WorkingMesh w = working(s);
+  WorkingMesh w = test::working_mesh(s);
   const MeshFace f = w.face(7);
   const Eigen::Vector3d c = (w.V.row(f[0]) + w.V.row(f[1]) + w.V.row(f[2])).transpose() / 3.0;
   const int m = w.add_vertex(c.normalized(), c.normalized(), -1);
@@ -515,7 +509,7 @@ TEST(EdgeFlips, MaxMinAngleFlipsMakeDelaunayPairs) {
   // A sheared grid whose diagonals all go the wrong way (every pair fails the Delaunay test).
   TriangleMesh g = test::grid(6, 0, 1, 0, 1, false);
   g.V.col(0) += 0.7 * g.V.col(1);
-  WorkingMesh w = working(g);
+  WorkingMesh w = test::working_mesh(g);
   auto delaunay = [&](int a, int b) {  // opposite angles of the pair on edge (a, b) sum to <= pi
     const int f1 = w.half_edge_face(a, b), f2 = w.half_edge_face(b, a);
     double sum = 0;
@@ -552,7 +546,7 @@ TEST(EdgeFlips, MaxMinAngleFlipsMakeDelaunayPairs) {
 TEST(EdgeFlips, ValenceFlipsBringValencesTowardsSix) {
   // Grid with all diagonals one way: interior valences 6; flip nothing. Alternating diagonals:
   // valences 4 and 8; valence flips equalise them on the flat sheet.
-  WorkingMesh w = working(test::grid(8, 0, 1, 0, 1, true));
+  WorkingMesh w = test::working_mesh(test::grid(8, 0, 1, 0, 1, true));
   const std::vector<char> boundary = w.boundary_vertices();
   auto deviation = [&]() {
     long d = 0;
@@ -574,7 +568,7 @@ TEST(EdgeFlips, ValenceFlipsBringValencesTowardsSix) {
 
 // A coarse sphere with its vertices moved tangentially (seeded), on a fine sphere as surface.
 WorkingMesh jittered_sphere(const TriangleMesh& coarse, double amount) {
-  WorkingMesh w = working(coarse);
+  WorkingMesh w = test::working_mesh(coarse);
   for (int v = 0; v < w.num_vertices(); ++v) {
     const Eigen::Vector3d x = w.V.row(v);
     const Eigen::Vector3d t = x.unitOrthogonal(), u = x.cross(t);
@@ -626,7 +620,7 @@ TEST(Polish, AnglePolishDoesNotDependOnTheThreadCount) {
 TEST(SliverCollapse, CollapsesTheShortEdgeOfSlivers) {
   const TriangleMesh fine = test::icosphere(5);
   const MeshSurfaceProjector surface(fine.V, fine.F);
-  WorkingMesh w = working(test::icosphere(2));
+  WorkingMesh w = test::working_mesh(test::icosphere(2));
   // Move vertex 0 most of the way to a neighbour: its short edge makes slivers.
   const MeshFace f = w.face(w.vertex_faces()[0][0]);
   const int nb = f[0] == 0 ? f[1] : f[0];
@@ -649,7 +643,7 @@ TEST(EdgeSplit, SplitsTheLongEdgesOfSliversAcrossAFilledHole) {
   const int n = 12;
   const TriangleMesh g = test::grid(n);
   const MeshSurfaceProjector surface(g.V, g.F);
-  WorkingMesh w = working(g);
+  WorkingMesh w = test::working_mesh(g);
   std::vector<char> drop(w.num_faces(), 0);
   for (int f = 0; f < w.num_faces(); ++f) {
     Eigen::Vector3d c = Eigen::Vector3d::Zero();
@@ -693,7 +687,7 @@ TEST(EdgeSplit, SplitsTheLongEdgesOfSliversAcrossAFilledHole) {
 TEST(Orientation, TurnsAnInsideOutClosedMeshOutward) {
   TriangleMesh s = test::icosphere(2);
   s.F.col(1).swap(s.F.col(2));
-  WorkingMesh w = working(s);
+  WorkingMesh w = test::working_mesh(s);
   EXPECT_EQ(orient_closed_pieces_outward(w), s.F.rows());
   double volume = 0;
   for (const MeshFace& f : w.faces())
@@ -705,7 +699,7 @@ TEST(Orientation, TurnsAnInsideOutClosedMeshOutward) {
 TEST(Orientation, OpenPiecesKeepTheirOrientation) {
   TriangleMesh g = test::grid(4);
   g.F.col(1).swap(g.F.col(2));
-  WorkingMesh w = working(g);
+  WorkingMesh w = test::working_mesh(g);
   EXPECT_EQ(orient_closed_pieces_outward(w), 0);
   EXPECT_TRUE(w.faces() == faces_of(g.F));
 }

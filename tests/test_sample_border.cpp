@@ -61,14 +61,6 @@ TEST(SampleBorder, TheEdgeOfAPlanarScanAndNoPointOfAClosedOne) {
   EXPECT_EQ(sample_border_points(P, N, k_nearest_neighbors(P, 16), one), b);
 }
 
-WorkingMesh working(const TriangleMesh& m) {
-  WorkingMesh w(m.V, vertex_normals(m.V, m.F), std::vector<int>(m.V.rows(), -1));
-  std::vector<MeshFace> faces;
-  for (Eigen::Index f = 0; f < m.F.rows(); ++f) faces.push_back({m.F(f, 0), m.F(f, 1), m.F(f, 2)});
-  w.set_faces(faces);
-  return w;
-}
-
 // Boundary loops and their lengths.
 std::vector<int> loop_lengths(const WorkingMesh& w) {
   std::map<int, int> next;
@@ -96,13 +88,13 @@ TEST(HoleFilling, AHoleInSampledSurfaceIsClosedUnderEveryPolicyAndTheEdgeOfAScan
   const HoleFillingOptions defaults;
   for (bool sampled : {true, false})
     for (HolePolicy policy : {HolePolicy::automatic, HolePolicy::keep}) {
-      WorkingMesh cut = working(coarse);
+      WorkingMesh cut = test::working_mesh(coarse);
       std::vector<char> drop(cut.num_faces(), 0);
       double loop_bottom = 1;
       for (int f = 0; f < cut.num_faces(); ++f)
         for (int v : cut.face(f)) drop[f] |= (cut.V.row(v) - Eigen::RowVector3d(0, 0, 1)).norm() < 0.8;
       cut.remove_faces(drop);
-      WorkingMesh w = working(compact_mesh(cut));  // no site left inside the hole
+      WorkingMesh w = test::working_mesh(compact_mesh(cut));  // no site left inside the hole
       const std::vector<int> before = loop_lengths(w);
       ASSERT_EQ(before.size(), 1u);
       ASSERT_GT(before[0], defaults.surrounded_hole_factor * defaults.max_hole_edges);

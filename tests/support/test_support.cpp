@@ -116,6 +116,14 @@ UnitSphere unit_area_sphere(int subdivisions) {
   return u;
 }
 
+WorkingMesh working_mesh(const TriangleMesh& m) {
+  WorkingMesh w(m.V, vertex_normals(m.V, m.F), std::vector<int>(m.V.rows(), -1));
+  std::vector<MeshFace> faces;
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f) faces.push_back({m.F(f, 0), m.F(f, 1), m.F(f, 2)});
+  w.set_faces(faces);
+  return w;
+}
+
 }  // namespace heatcvt::test
 
 #include <fstream>

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "heatcvt/mesher/working_mesh.h"
 #include "heatcvt/laplacian.h"
 #include "heatcvt/mesh.h"
 
@@ -37,6 +38,10 @@ struct UnitSphere {
   Laplacian laplacian;
 };
 UnitSphere unit_area_sphere(int subdivisions);
+
+/// The mesher's working mesh of `m`: its vertices with their area-weighted vertex normals, no
+/// projection anchors, and its faces.
+WorkingMesh working_mesh(const TriangleMesh& m);
 
 }  // namespace heatcvt::test
 

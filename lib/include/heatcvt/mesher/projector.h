@@ -67,7 +67,8 @@ struct CloudFitOptions {
   double max_height_bandwidths = 2.0;
   /// Steps of project()'s greedy walk on the kNN graph. Default 1000.
   int max_walk_steps = 1000;
-  /// Which points are on the border of the samples (distance_to_sample_border()).
+  /// Which points are on the border of the samples (distance_to_sample_border()); its `threads`
+  /// is replaced by this struct's.
   SampleBorderOptions border;
   int threads = 0;  ///< for the kNN search; 0 = all cores. Default 0.
 };
