@@ -5,7 +5,10 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <set>
+#include <vector>
+#include <algorithm>
 
 #include "heatcvt/cvt.h"
 #include "heatcvt/errors.h"
@@ -133,6 +136,45 @@ TEST(Cvt, DualsOfRealMeshesAreClosedManifoldsOfTheInputGenus) {
                 q.min_angle_deg, q.mean_min_angle_deg, (r.total_seconds - r.setup_seconds) / 30);
     EXPECT_GT(q.mean_min_angle_deg, 45.0);
   }
+}
+
+// CvtOptions::spatial_site_order only renumbers the sites: with the farthest-point start, the
+// surface Lloyd and heat iterations, every site of the ordered run is within 1e-6 of the
+// spacing of a site of the plain run and the cell areas agree as multisets; consecutive sites of
+// the ordered run are closer than in the plain run (whose farthest-point numbering jumps across
+// the sphere; asserted as the precondition).
+TEST(Cvt, SpatialSiteOrderOnlyRenumbersTheSites) {
+  auto sphere = test::icosphere(4);
+  CvtOptions o;
+  o.sites = 200;
+  o.iterations = 4;
+  o.initialization = CvtInitialization::farthest_point;
+  o.surface_lloyd_iterations = 20;
+  const Laplacian lap = cotan_laplacian(sphere.V, sphere.F);
+  const CvtResult plain = centroidal_voronoi(sphere.V, sphere.F, lap, o);
+  o.spatial_site_order = true;
+  const CvtResult ordered = centroidal_voronoi(sphere.V, sphere.F, lap, o);
+  ASSERT_EQ(plain.positions.rows(), ordered.positions.rows());
+  const double spacing = std::sqrt(4 * M_PI / o.sites);
+  for (Eigen::Index s = 0; s < ordered.positions.rows(); ++s) {
+    double nearest = std::numeric_limits<double>::infinity();
+    for (Eigen::Index t = 0; t < plain.positions.rows(); ++t)
+      nearest = std::min(nearest, (ordered.positions.row(s) - plain.positions.row(t)).norm());
+    EXPECT_LT(nearest, 1e-6 * spacing) << s;
+  }
+  std::vector<double> a(plain.diagram.cell_area.begin(), plain.diagram.cell_area.end());
+  std::vector<double> b(ordered.diagram.cell_area.begin(), ordered.diagram.cell_area.end());
+  std::sort(a.begin(), a.end());
+  std::sort(b.begin(), b.end());
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(a[i], b[i], 1e-9) << i;
+  auto step = [](const Eigen::MatrixX3d& P) {
+    double sum = 0;
+    for (Eigen::Index s = 1; s < P.rows(); ++s) sum += (P.row(s) - P.row(s - 1)).norm();
+    return sum / static_cast<double>(P.rows() - 1);
+  };
+  ASSERT_GT(step(plain.positions), 2 * spacing);
+  EXPECT_LT(step(ordered.positions), 2 * spacing);
 }
 
 TEST(Cvt, AnisotropicCellsFollowCurvature) {

@@ -236,7 +236,10 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
   //    Euclidean cells would pull towards isotropic ones), during the factorisation.
   const bool surface_on = options.surface_lloyd_iterations > 0 && face_metric_area.size() == 0;
   const bool run_start = options.graph_lloyd_iterations > 0 || surface_on;
-  if (generate && !run_start) sites = initial_sites(V, F, options.sites, options.initialization, options.seed);
+  if (generate && !run_start) {
+    sites = initial_sites(V, F, options.sites, options.initialization, options.seed);
+    if (options.spatial_site_order) sites = in_spatial_order(V, F, std::move(sites));
+  }
   CvtStartReport report;
   const std::unique_ptr<HeatSolver> solver =
       factor_during_start(surface, laplacian, options, run_start, surface_on, threads, sites, report);

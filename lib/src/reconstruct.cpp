@@ -345,6 +345,7 @@ CvtOptions reconstruction_cvt_options(const ReconstructionOptions& options) {
   copt.threads = options.threads;
   copt.time_coefficient = options.time_coefficient;
   copt.build_dual = false;
+  copt.spatial_site_order = options.spatial_site_order;
   if (options.farthest_point_start) {
     copt.initialization = CvtInitialization::farthest_point;
     copt.graph_lloyd_iterations = options.cloud.graph_lloyd_iterations;

@@ -112,6 +112,10 @@ struct ReconstructionOptions {
   /// noise keeps averaging out over the whole cloud. 0 = every point. Default 10 (the
   /// measurements behind it are in docs/benchmarks.md).
   double cvt_points_per_site = 10.0;
+  /// Number the CVT's start sites in Morton order (CvtOptions::spatial_site_order). The streamed
+  /// path (reconstruct_stream.h), whose site counts reach the hundreds of thousands, turns it on.
+  /// Default false.
+  bool spatial_site_order = false;
   /// Project the CVT points onto the surface fitted to the whole cloud (the fit of the site
   /// positions) before the Laplacian is built: noise of the scan does not reach the Laplacian,
   /// whose factor and localized solves are then as cheap as on a clean scan. Default true.

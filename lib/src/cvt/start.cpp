@@ -14,6 +14,7 @@
 #include "heatcvt/cvt.h"
 #include "heatcvt/errors.h"
 #include "heatcvt/face_clipper.h"
+#include "heatcvt/spatial_order.h"
 
 namespace heatcvt {
 
@@ -23,6 +24,16 @@ using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 }  // namespace
+
+std::vector<SurfacePoint> in_spatial_order(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
+                                           std::vector<SurfacePoint> sites) {
+  Eigen::MatrixX3d P(static_cast<Eigen::Index>(sites.size()), 3);
+  for (size_t s = 0; s < sites.size(); ++s) P.row(s) = position(V, F, sites[s]).transpose();
+  std::vector<SurfacePoint> sorted;
+  sorted.reserve(sites.size());
+  for (int s : morton_order(P)) sorted.push_back(sites[s]);
+  return sorted;
+}
 
 std::vector<SurfacePoint> initial_sites(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, int count,
                                         CvtInitialization method, std::uint32_t seed) {
@@ -466,7 +477,10 @@ CvtStartReport cvt_start(const CvtSurface& surface, const CvtOptions& options, b
                          std::vector<SurfacePoint>& sites, const std::function<int()>& threads_now) {
   CvtStartReport report;
   const Eigen::MatrixX3i& F = surface.F;
-  if (sites.empty()) sites = initial_sites(surface.V, F, options.sites, options.initialization, options.seed);
+  if (sites.empty()) {
+    sites = initial_sites(surface.V, F, options.sites, options.initialization, options.seed);
+    if (options.spatial_site_order) sites = in_spatial_order(surface.V, F, std::move(sites));
+  }
   const int ns = static_cast<int>(sites.size());
   const auto tg = Clock::now();
   if (options.graph_lloyd_iterations > 0) {

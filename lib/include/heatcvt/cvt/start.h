@@ -20,6 +20,11 @@ struct CvtOptions;
 std::vector<SurfacePoint> initial_sites(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, int count,
                                         CvtInitialization method, std::uint32_t seed);
 
+/// The sites sorted by the Morton code of their positions (spatial_order.h): neighbouring cells
+/// get neighbouring site numbers (CvtOptions::spatial_site_order).
+std::vector<SurfacePoint> in_spatial_order(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
+                                           std::vector<SurfacePoint> sites);
+
 /// Graph Lloyd (CvtOptions::graph_lloyd_iterations): cells = graph_voronoi() of the sources,
 /// new source = the vertex of the cell closest to the cell's area-weighted mean position
 /// (`vertex_area` per vertex). At most `iterations`, stops when no source changes; `done`
