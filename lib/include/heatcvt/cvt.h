@@ -157,8 +157,8 @@ struct CvtOptions {
   /// instead of the order they were drawn in, so the per-site loops and cell rings of every later
   /// step read memory that is close together. The cells, centroids and stopping rules are the
   /// same; only tie-breaks by site index differ. Worth it where the per-site arrays outgrow the
-  /// caches (tens of thousands of sites: −32 % per heat iteration at 60,000 sites, see
-  /// docs/benchmarks.md). Default false (the numbering of the draw).
+  /// caches (tens of thousands of sites; measurements in docs/benchmarks.md). Default false (the
+  /// numbering of the draw).
   bool spatial_site_order = false;
   /// Early stop of the surface Lloyd: max site move < this · spacing. Default 0.01.
   double surface_lloyd_tolerance = 0.01;

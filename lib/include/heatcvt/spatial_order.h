@@ -1,8 +1,8 @@
 #pragma once
 /// \file spatial_order.h
 /// A spatially coherent order of points (Morton / Z-order): points close in space get close
-/// indices, so the neighbour accesses of every later stage (kNN, Laplacian assembly, the CVT's
-/// cells, the mesher's rings) stay in cache instead of jumping across the whole array.
+/// indices, so loops that visit each item's neighbours (the CVT's cells, the mesher's rings) read
+/// memory that is close together instead of jumping across the whole array.
 #include <Eigen/Core>
 #include <vector>
 
