@@ -7,17 +7,89 @@
 #include <cmath>
 
 namespace heatcvt {
+namespace {
+
+// The flip rule of flip_edges() for the edge (a, b) of face f1 = (a, b, c) and its twin
+// f2 = (b, a, d). Reads only the positions, valences and edges of a, b, c, d. `d` receives
+// the opposite vertex (-1 on a border).
+class FlipRule {
+ public:
+  FlipRule(const WorkingMesh& mesh, const FlipOptions& options, const std::vector<char>* only_at,
+           const std::vector<int>* target_valence)
+      : mesh_(mesh), o_(options), only_at_(only_at), target_(target_valence),
+        flat_cos_(std::cos(options.flat_dihedral_deg * M_PI / 180.0)),
+        valence_angle_(options.valence_min_angle_deg * M_PI / 180.0),
+        cos_limit_(std::cos(options.max_normal_deviation_deg * M_PI / 180.0)) {}
+
+  bool wants(int a, int b, int c, int* f2_out, int* d_out) const {
+    const int f2 = mesh_.half_edge_face(b, a);
+    *f2_out = f2;
+    *d_out = -1;
+    if (f2 < 0) return false;
+    int d = -1;
+    for (int v : mesh_.face(f2))
+      if (v != a && v != b) d = v;
+    *d_out = d;
+    if (d < 0 || d == c) return false;
+    if (only_at_ && !(*only_at_)[a] && !(*only_at_)[b]) return false;
+    if (mesh_.edge_face_count(c, d) > 0) return false;
+    if (mesh_.valence(a) <= 3 || mesh_.valence(b) <= 3) return false;
+    const double before = std::min(min_angle(a, b, c), min_angle(b, a, d));
+    const double after = std::min(min_angle(c, a, d), min_angle(d, b, c));
+    if (o_.valence_mode) {
+      if (!valence_gain(a, b, c, d)) return false;
+      // Never across creases or thin parts, where a valence flip can fold the surface
+      // through itself.
+      if (!(normal(a, b, c).normalized().dot(normal(b, a, d).normalized()) > flat_cos_)) return false;
+      if (!(after > before || after > valence_angle_)) return false;
+    } else if (!(after > before + 1e-9)) {
+      return false;
+    }
+    const Eigen::Vector3d avg = (normal(a, b, c).normalized() + normal(b, a, d).normalized()).normalized();
+    const Eigen::Vector3d m1 = normal(c, a, d), m2 = normal(d, b, c);
+    if (!(m1.norm() > 0) || !(m2.norm() > 0) || !avg.allFinite()) return false;
+    return !(m1.normalized().dot(avg) < cos_limit_ || m2.normalized().dot(avg) < cos_limit_);
+  }
+
+ private:
+  Eigen::Vector3d normal(int a, int b, int c) const {
+    const Eigen::MatrixX3d& V = mesh_.V;
+    return (V.row(b) - V.row(a)).cross(V.row(c) - V.row(a)).transpose();
+  }
+  double min_angle(int a, int b, int c) const { return face_min_angle(mesh_, {a, b, c}); }
+  bool valence_gain(int a, int b, int c, int d) const {
+    auto dev = [&](int v, int x) {
+      const int t = target_ ? (*target_)[v] : 6;
+      return (x - t) * (x - t);
+    };
+    const int va = mesh_.valence(a), vb = mesh_.valence(b), vc = mesh_.valence(c), vd = mesh_.valence(d);
+    return dev(a, va - 1) + dev(b, vb - 1) + dev(c, vc + 1) + dev(d, vd + 1) <
+           dev(a, va) + dev(b, vb) + dev(c, vc) + dev(d, vd);
+  }
+
+  const WorkingMesh& mesh_;
+  const FlipOptions& o_;
+  const std::vector<char>* only_at_;
+  const std::vector<int>* target_;
+  double flat_cos_, valence_angle_, cos_limit_;
+};
+
+}  // namespace
 
 int flip_edges(WorkingMesh& mesh, const FlipOptions& options, const std::vector<char>* only_at,
                const std::vector<int>* target_valence) {
-  const Eigen::MatrixX3d& V = mesh.V;
-  auto normal = [&](int a, int b, int c) -> Eigen::Vector3d {
-    return (V.row(b) - V.row(a)).cross(V.row(c) - V.row(a)).transpose();
-  };
-  auto min_angle = [&](int a, int b, int c) { return face_min_angle(mesh, {a, b, c}); };
-  const double flat_cos = std::cos(options.flat_dihedral_deg * M_PI / 180.0);
-  const double valence_angle = options.valence_min_angle_deg * M_PI / 180.0;
-  const double cos_limit = std::cos(options.max_normal_deviation_deg * M_PI / 180.0);
+  const FlipRule rule(mesh, options, only_at, target_valence);
+  // A rejected edge stays rejected while none of a, b, c, d is in a flip: the rule reads only
+  // their valences and edges (positions do not move here). `changed` stamps the vertices of
+  // every flip, `checked` the last rejection of each face corner (with its d), so passes after
+  // the first look only at edges next to a flip. Same flips in the same order as a full scan.
+  const int nv = mesh.num_vertices();
+  std::vector<long> changed(nv, 0);
+  std::vector<long> checked(3 * static_cast<size_t>(mesh.num_faces()), -1);
+  std::vector<int> checked_d(checked.size(), -1);
+  long clock = 0;
+  auto in_range = [nv](int v) { return v >= 0 && v < nv; };
+  auto still = [&](int v, long when) { return !in_range(v) || changed[v] <= when; };
   int flips = 0;
   for (int pass = 0; pass < options.max_passes; ++pass) {
     int pass_flips = 0;
@@ -25,40 +97,24 @@ int flip_edges(WorkingMesh& mesh, const FlipOptions& options, const std::vector<
       for (int k = 0; k < 3; ++k) {
         const MeshFace& t = mesh.face(f1);
         const int a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
-        const int f2 = mesh.half_edge_face(b, a);
-        if (f2 < 0) continue;
-        int d = -1;
-        for (int v : mesh.face(f2))
-          if (v != a && v != b) d = v;
-        if (d < 0 || d == c) continue;
-        if (only_at && !(*only_at)[a] && !(*only_at)[b]) continue;
-        if (mesh.edge_face_count(c, d) > 0) continue;
-        if (mesh.valence(a) <= 3 || mesh.valence(b) <= 3) continue;
-        const double before = std::min(min_angle(a, b, c), min_angle(b, a, d));
-        const double after = std::min(min_angle(c, a, d), min_angle(d, b, c));
-        if (options.valence_mode) {
-          auto dev = [&](int v, int x) {
-            const int t = target_valence ? (*target_valence)[v] : 6;
-            return (x - t) * (x - t);
-          };
-          const int va = mesh.valence(a), vb = mesh.valence(b), vc = mesh.valence(c), vd = mesh.valence(d);
-          const int dv_before = dev(a, va) + dev(b, vb) + dev(c, vc) + dev(d, vd);
-          const int dv_after = dev(a, va - 1) + dev(b, vb - 1) + dev(c, vc + 1) + dev(d, vd + 1);
-          if (dv_after >= dv_before) continue;
-          // Never across creases or thin parts, where a valence flip can fold the surface
-          // through itself.
-          const Eigen::Vector3d o1 = normal(a, b, c).normalized(), o2 = normal(b, a, d).normalized();
-          if (!(o1.dot(o2) > flat_cos)) continue;
-          if (!(after > before || after > valence_angle)) continue;
-        } else if (!(after > before + 1e-9)) {
+        const size_t corner = 3 * static_cast<size_t>(f1) + k;
+        const bool tracked = in_range(a) && in_range(b) && in_range(c) && corner < checked.size();
+        if (tracked && checked[corner] >= 0) {
+          const long when = checked[corner];
+          if (still(a, when) && still(b, when) && still(c, when) && still(checked_d[corner], when)) continue;
+        }
+        int f2 = -1, d = -1;
+        if (!rule.wants(a, b, c, &f2, &d)) {
+          if (tracked) {
+            checked[corner] = clock;
+            checked_d[corner] = d;
+          }
           continue;
         }
-        const Eigen::Vector3d n1 = normal(a, b, c), n2 = normal(b, a, d);
-        const Eigen::Vector3d m1 = normal(c, a, d), m2 = normal(d, b, c);
-        const Eigen::Vector3d avg = (n1.normalized() + n2.normalized()).normalized();
-        if (!(m1.norm() > 0) || !(m2.norm() > 0) || !avg.allFinite()) continue;
-        if (m1.normalized().dot(avg) < cos_limit || m2.normalized().dot(avg) < cos_limit) continue;
         mesh.flip(f1, k, f2);
+        ++clock;
+        for (int v : {a, b, c, d})
+          if (in_range(v)) changed[v] = clock;
         ++pass_flips;
         break;  // face f1 changed: move on to the next face
       }
