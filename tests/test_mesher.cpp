@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <random>
 #include <set>
 #include <string>
 #include <utility>
@@ -577,6 +578,33 @@ WorkingMesh jittered_sphere(const TriangleMesh& coarse, double amount) {
     w.N.row(v) = w.V.row(v);
   }
   return w;
+}
+
+TEST(EdgeFlips, PassesAfterTheFirstFlipWhatFullScansFlip) {
+  // flip_edges() re-examines only edges next to a flip after its first pass. Each call's first
+  // pass is a full scan, so one call of P passes must flip exactly what P one-pass calls flip.
+  // Inputs where later passes still flip (asserted): max-min-angle flips on a strongly sheared
+  // grid, valence flips on a jittered grid of valences 4 and 8.
+  TriangleMesh sheared = test::grid(16, 0, 1, 0, 1, true), jittered = sheared;
+  sheared.V.col(0) += 2.5 * sheared.V.col(1);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> jitter(-0.02, 0.02);
+  for (Eigen::Index v = 0; v < jittered.V.rows(); ++v) jittered.V.row(v) += Eigen::RowVector3d(jitter(rng), jitter(rng), 0);
+  for (const bool valence_mode : {false, true}) {
+    const WorkingMesh start = test::working_mesh(valence_mode ? jittered : sheared);
+    FlipOptions o;
+    o.valence_mode = valence_mode;
+    o.max_passes = 1;
+    WorkingMesh single = start;
+    const int first_pass = flip_edges(single, o);
+    int single_flips = first_pass;
+    for (int pass = 1; pass < 12; ++pass) single_flips += flip_edges(single, o);
+    ASSERT_GT(single_flips, first_pass) << "valence_mode " << valence_mode;  // later passes flip
+    WorkingMesh many = start;
+    o.max_passes = 12;
+    EXPECT_EQ(flip_edges(many, o), single_flips) << "valence_mode " << valence_mode;
+    EXPECT_EQ(many.faces(), single.faces()) << "valence_mode " << valence_mode;
+  }
 }
 
 TEST(Polish, TangentialRelaxationEvensOutAndStaysOnTheSurface) {
