@@ -5,6 +5,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <queue>
 #include <string>
 #include <utility>
@@ -170,6 +171,9 @@ void orient_normals_mst(const Eigen::MatrixX3d& P, Eigen::MatrixX3d& N, int k, i
   std::vector<char> done(n, 0);
   using Item = std::pair<double, std::pair<int, int>>;  // (weight, (node, parent)), min-heap
   std::priority_queue<Item, std::vector<Item>, std::greater<Item>> heap;
+  // The least item pushed so far for each node: an item that does not beat it would only be
+  // popped after the node is done, so it is not pushed (the same tree, far fewer heap items).
+  std::vector<Item> best(n, Item{std::numeric_limits<double>::infinity(), {0, std::numeric_limits<int>::max()}});
   for (int seed : order) {
     if (done[seed]) continue;
     if (N(seed, 2) < 0) N.row(seed) *= -1.0;
@@ -190,7 +194,10 @@ void orient_normals_mst(const Eigen::MatrixX3d& P, Eigen::MatrixX3d& N, int k, i
             const double len = d.norm();
             if (len > 0) w += offset_penalty * std::abs(N.row(v).dot(d)) / len;
           }
-          heap.push({w, {u, v}});
+          const Item item{w, {u, v}};
+          if (!(item < best[u])) continue;
+          best[u] = item;
+          heap.push(item);
         }
     }
   }

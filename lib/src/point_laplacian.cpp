@@ -18,6 +18,7 @@
 #include "heatcvt/errors.h"
 #include "heatcvt/normals.h"
 #include "heatcvt/parallel.h"
+#include "parallel_sort.h"
 
 namespace heatcvt {
 namespace {
@@ -100,7 +101,7 @@ TuftedCover tufted_sheets(const std::vector<std::array<int, 3>>& soup) {
   return c;
 }
 
-void glue_sheets(TuftedCover& c, const Eigen::MatrixX3d& P) {
+void glue_sheets(TuftedCover& c, const Eigen::MatrixX3d& P, int threads) {
   std::vector<int>& tail = c.tail;
   std::vector<int64_t>& next = c.next;
   std::vector<int64_t>& twin = c.twin;
@@ -118,8 +119,8 @@ void glue_sheets(TuftedCover& c, const Eigen::MatrixX3d& P) {
     int third;
     double angle;
   };
-  std::vector<Side> sides;
-  sides.reserve(3 * nf);
+  std::vector<Side> sides(3 * nf);
+#pragma omp parallel for num_threads(threads) schedule(static)
   for (int64_t f = 0; f < nf; ++f)
     for (int c = 0; c < 3; ++c) {
       const int64_t hf = 6 * f + c;  // front half-edge tail → head
@@ -131,41 +132,48 @@ void glue_sheets(TuftedCover& c, const Eigen::MatrixX3d& P) {
         if (tail[g] == b && tail[next[g]] == a) hb = g;
       }
       const int64_t key = std::min<int64_t>(a, b) * n + std::max<int64_t>(a, b);
-      sides.push_back(a < b ? Side{key, f, hf, hb, third, 0.0} : Side{key, f, hb, hf, third, 0.0});
+      sides[3 * f + c] = a < b ? Side{key, f, hf, hb, third, 0.0} : Side{key, f, hb, hf, third, 0.0};
     }
-  std::sort(sides.begin(), sides.end(),
-            [](const Side& x, const Side& y) { return x.key != y.key ? x.key < y.key : x.face < y.face; });
-  std::vector<Side> order;
-  for (size_t r = 0; r < sides.size();) {
-    size_t e = r;
-    while (e < sides.size() && sides[e].key == sides[r].key) ++e;
-    const size_t m = e - r;
-    const int a = static_cast<int>(sides[r].key / n), b = static_cast<int>(sides[r].key % n);
-    const Eigen::Vector3d pa = P.row(a).transpose();
-    const Eigen::Vector3d axis = (P.row(b).transpose() - pa).normalized();
-    Eigen::Vector3d ref = P.row(sides[r].third).transpose() - pa;
-    ref = (ref - ref.dot(axis) * axis).normalized();
-    const Eigen::Vector3d ortho = axis.cross(ref);
-    for (size_t i = r; i < e; ++i) {
-      const Eigen::Vector3d d = P.row(sides[i].third).transpose() - pa;
-      double ang = std::atan2(d.dot(ortho), d.dot(ref));
-      if (!std::isfinite(ang)) ang = 0;
-      sides[i].angle = ang < 0 ? ang + 2 * M_PI : ang;
+  parallel_sort(sides.begin(), sides.end(), threads,
+                [](const Side& x, const Side& y) { return x.key != y.key ? x.key < y.key : x.face < y.face; });
+  // Groups of one edge each; they write disjoint twins, so they are glued on all threads.
+  std::vector<size_t> starts;
+  for (size_t r = 0; r < sides.size(); ++r)
+    if (r == 0 || sides[r].key != sides[r - 1].key) starts.push_back(r);
+  starts.push_back(sides.size());
+  const int64_t groups = static_cast<int64_t>(starts.size()) - 1;
+#pragma omp parallel num_threads(threads)
+  {
+    std::vector<Side> order;
+#pragma omp for schedule(dynamic, 4096)
+    for (int64_t g = 0; g < groups; ++g) {
+      const size_t r = starts[g], e = starts[g + 1], m = e - r;
+      const int a = static_cast<int>(sides[r].key / n), b = static_cast<int>(sides[r].key % n);
+      const Eigen::Vector3d pa = P.row(a).transpose();
+      const Eigen::Vector3d axis = (P.row(b).transpose() - pa).normalized();
+      Eigen::Vector3d ref = P.row(sides[r].third).transpose() - pa;
+      ref = (ref - ref.dot(axis) * axis).normalized();
+      const Eigen::Vector3d ortho = axis.cross(ref);
+      for (size_t i = r; i < e; ++i) {
+        const Eigen::Vector3d d = P.row(sides[i].third).transpose() - pa;
+        double ang = std::atan2(d.dot(ortho), d.dot(ref));
+        if (!std::isfinite(ang)) ang = 0;
+        sides[i].angle = ang < 0 ? ang + 2 * M_PI : ang;
+      }
+      std::stable_sort(sides.begin() + r, sides.begin() + e,
+                       [](const Side& x, const Side& y) { return x.angle < y.angle; });
+      order.clear();
+      const size_t h = (m + 1) / 2;
+      for (size_t i = 0; i < h; ++i) {
+        order.push_back(sides[r + i]);
+        if (h + i < m) order.push_back(sides[r + h + i]);
+      }
+      for (size_t i = 0; i < m; ++i) {
+        const int64_t up = order[i].up, down = order[(i + 1) % m].down;
+        twin[up] = down;
+        twin[down] = up;
+      }
     }
-    std::stable_sort(sides.begin() + r, sides.begin() + e,
-                     [](const Side& x, const Side& y) { return x.angle < y.angle; });
-    order.clear();
-    const size_t h = (m + 1) / 2;
-    for (size_t i = 0; i < h; ++i) {
-      order.push_back(sides[r + i]);
-      if (h + i < m) order.push_back(sides[r + h + i]);
-    }
-    for (size_t i = 0; i < m; ++i) {
-      const int64_t up = order[i].up, down = order[(i + 1) % m].down;
-      twin[up] = down;
-      twin[down] = up;
-    }
-    r = e;
   }
 }
 
@@ -275,10 +283,10 @@ void add_cover_weights(const TuftedCover& c, int64_t n, double cot_clamp, double
 }
 
 TuftedResult tufted_intrinsic_delaunay(const std::vector<std::array<int, 3>>& soup, const Eigen::MatrixX3d& P,
-                                       double mollify_factor, double cot_clamp, double scale,
+                                       double mollify_factor, double cot_clamp, double scale, int threads,
                                        std::vector<std::pair<int64_t, double>>& edge_weights, Eigen::VectorXd& M) {
   TuftedCover cover = tufted_sheets(soup);
-  glue_sheets(cover, P);
+  glue_sheets(cover, P, threads);
   set_mollified_lengths(cover, P, mollify_factor);
   const TuftedResult result = flip_to_delaunay(cover, cot_clamp);
   add_cover_weights(cover, P.rows(), cot_clamp, scale, edge_weights, M);
@@ -395,9 +403,9 @@ LocalFan local_fan(const Eigen::MatrixX3d& P, const Eigen::MatrixXi& nb, int i, 
 // Sums the per-edge contributions (sorted: deterministic order), clamps negative weights and
 // assembles L, the lumped masses M (floored at min_mass_fraction of the mean) and h̄.
 void assemble_laplacian(const Eigen::MatrixX3d& P, std::vector<std::pair<int64_t, double>>& edge_weights,
-                        Eigen::VectorXd M, const PointLaplacianOptions& options, PointLaplacian& out) {
+                        Eigen::VectorXd M, const PointLaplacianOptions& options, int threads, PointLaplacian& out) {
   const int n = static_cast<int>(P.rows());
-  std::sort(edge_weights.begin(), edge_weights.end());
+  parallel_sort(edge_weights.begin(), edge_weights.end(), threads);
   std::vector<Eigen::Triplet<double>> triplets;
   triplets.reserve(edge_weights.size());
   Eigen::VectorXd diag = Eigen::VectorXd::Zero(n);
@@ -428,7 +436,7 @@ void assemble_laplacian(const Eigen::MatrixX3d& P, std::vector<std::pair<int64_t
         const int a = out.triangles(t, c), b = out.triangles(t, (c + 1) % 3);
         keys.push_back(static_cast<int64_t>(std::min(a, b)) * n + std::max(a, b));
       }
-    std::sort(keys.begin(), keys.end());
+    parallel_sort(keys.begin(), keys.end(), threads);
     keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
     for (int64_t key : keys) length_sum += (P.row(static_cast<int>(key / n)) - P.row(static_cast<int>(key % n))).norm();
     edge_count = static_cast<int64_t>(keys.size());
@@ -517,13 +525,13 @@ PointLaplacian point_laplacian(const Eigen::MatrixX3d& P, const PointLaplacianOp
                             " points are collinear or coincident)");
   if (options.intrinsic_delaunay) {
     const TuftedResult r = tufted_intrinsic_delaunay(all_tris, P, options.mollify_factor, options.cot_clamp,
-                                                     1.0 / 3.0, edge_weights, M);
+                                                     1.0 / 3.0, threads, edge_weights, M);
     out.intrinsic_flips = r.flips;
     out.unflippable_edges = r.skipped;
   }
 
   // Distinct triangles, first occurrence kept, in order of occurrence.
-  std::sort(keyed.begin(), keyed.end());
+  parallel_sort(keyed.begin(), keyed.end(), threads);
   std::vector<int64_t> firsts;
   for (size_t r = 0; r < keyed.size(); ++r)
     if (r == 0 || keyed[r].first != keyed[r - 1].first) firsts.push_back(keyed[r].second);
@@ -532,7 +540,7 @@ PointLaplacian point_laplacian(const Eigen::MatrixX3d& P, const PointLaplacianOp
   for (size_t r = 0; r < firsts.size(); ++r)
     for (int c = 0; c < 3; ++c) out.triangles(static_cast<Eigen::Index>(r), c) = all_tris[firsts[r]][c];
 
-  assemble_laplacian(P, edge_weights, std::move(M), options, out);
+  assemble_laplacian(P, edge_weights, std::move(M), options, threads, out);
   out.neighbors = nb;
   out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
