@@ -22,7 +22,10 @@ struct RingQuality {
 };
 
 // Smallest angle of a 2D triangle, or −1 when it is inverted / degenerate (counter-clockwise = valid).
-double min_angle_2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+// With below_cot > 0: −2 as soon as the angle is certainly below the angle θ whose cotangent that
+// is (cot of the smallest angle above below_cot), without its atan2.
+double min_angle_2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c,
+                    double below_cot = 0) {
   const double cr = (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
   if (!(cr > 0)) return -1;
   const Eigen::Vector2d p[3] = {a, b, c};
@@ -33,7 +36,9 @@ double min_angle_2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Ei
     if (len < shortest) shortest = len, k = q;
   }
   const Eigen::Vector2d e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
-  return std::atan2(cr, e1.dot(e2));  // |e1 × e2| = cr for every corner of a CCW triangle
+  const double dot = e1.dot(e2);
+  if (below_cot > 0 && dot > below_cot * cr) return -2;
+  return std::atan2(cr, dot);  // |e1 × e2| = cr for every corner of a CCW triangle
 }
 
 // Greedy colouring of the vertex graph in index order (vertices of one colour share no face).
@@ -156,11 +161,17 @@ class VertexMover {
       slide.normalize();
       centroid = centroid.dot(slide) * slide;
     }
-    auto q2 = [&](const Eigen::Vector2d& y) {
+    // Ring quality with v at y. With `rival`, stops early (returning an invalid quality) as soon
+    // as a triangle's smallest angle shows that the ring cannot be better() than `rival`.
+    auto q2 = [&](const Eigen::Vector2d& y, const RingQuality* rival = nullptr) {
+      const double floor = rival ? std::min(rival->min, cap_) - 1e-9 : -1.0;
+      // Angles a margin below the floor are recognised by their cotangent (no atan2).
+      const double margin = 1e-7;
+      const double below_cot = floor > margin ? 1.0 / std::tan(floor - margin) : 0.0;
       RingQuality q;
       for (const auto& [b, c] : ring) {
-        const double a = min_angle_2d(y, b, c);
-        if (a < 0) {
+        const double a = min_angle_2d(y, b, c, below_cot);
+        if (a < 0 || a < floor) {
           q.valid = false;
           return q;
         }
@@ -180,7 +191,7 @@ class VertexMover {
         const double ang = d * 2 * M_PI / directions;
         const Eigen::Vector2d dir = fan.interior ? Eigen::Vector2d(std::cos(ang), std::sin(ang)) : (d == 0 ? slide : -slide);
         const Eigen::Vector2d y = best + step * dir;
-        const RingQuality qy = q2(y);
+        const RingQuality qy = q2(y, &qb);
         if (better(qy, qb)) best = y, qb = qy, improved = true;
       }
       if (!improved) step *= 0.5;
