@@ -528,3 +528,18 @@ TEST(PointLaplacianRealData, EveryCloudInTheSharedData) {
     EXPECT_EQ(solver.num_vertices(), cloud.P.rows());
   }
 }
+
+TEST(PointLaplacian, OneOrTwoThreadsGiveTheSameBits) {
+  // 20,000 points: the tufted cover's sorts are large enough to run on both threads.
+  const Eigen::MatrixX3d P = random_sphere(20000, 31);
+  PointLaplacianOptions one, two;
+  one.threads = 1;
+  two.threads = 2;
+  const PointLaplacian a = point_laplacian(P, one), b = point_laplacian(P, two);
+  ASSERT_TRUE(one.intrinsic_delaunay);
+  ASSERT_EQ(a.laplacian.L.nonZeros(), b.laplacian.L.nonZeros());
+  EXPECT_EQ((SpMat(a.laplacian.L - b.laplacian.L)).norm(), 0.0);
+  EXPECT_EQ((a.laplacian.M - b.laplacian.M).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(a.triangles, b.triangles);
+  EXPECT_EQ(a.intrinsic_flips, b.intrinsic_flips);
+}

@@ -22,8 +22,8 @@ struct RingQuality {
 };
 
 // Smallest angle of a 2D triangle, or −1 when it is inverted / degenerate (counter-clockwise = valid).
-// With below_cot > 0: −2 as soon as the angle is certainly below the angle θ whose cotangent that
-// is (cot of the smallest angle above below_cot), without its atan2.
+// With below_cot > 0: −2, without an atan2, when the smallest angle's cotangent exceeds below_cot
+// (the angle is then below arccot(below_cot)).
 double min_angle_2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c,
                     double below_cot = 0) {
   const double cr = (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
