@@ -236,10 +236,7 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
   //    Euclidean cells would pull towards isotropic ones), during the factorisation.
   const bool surface_on = options.surface_lloyd_iterations > 0 && face_metric_area.size() == 0;
   const bool run_start = options.graph_lloyd_iterations > 0 || surface_on;
-  if (generate && !run_start) {
-    sites = initial_sites(V, F, options.sites, options.initialization, options.seed);
-    if (options.spatial_site_order) sites = in_spatial_order(V, F, std::move(sites));
-  }
+  if (generate && !run_start) sites = generated_sites(V, F, options);
   CvtStartReport report;
   const std::unique_ptr<HeatSolver> solver =
       factor_during_start(surface, laplacian, options, run_start, surface_on, threads, sites, report);

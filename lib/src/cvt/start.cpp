@@ -10,6 +10,7 @@
 #include <queue>
 #include <random>
 #include <string>
+#include <utility>
 
 #include "heatcvt/cvt.h"
 #include "heatcvt/errors.h"
@@ -33,6 +34,12 @@ std::vector<SurfacePoint> in_spatial_order(const Eigen::MatrixX3d& V, const Eige
   sorted.reserve(sites.size());
   for (int s : morton_order(P)) sorted.push_back(sites[s]);
   return sorted;
+}
+
+std::vector<SurfacePoint> generated_sites(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
+                                          const CvtOptions& options) {
+  std::vector<SurfacePoint> sites = initial_sites(V, F, options.sites, options.initialization, options.seed);
+  return options.spatial_site_order ? in_spatial_order(V, F, std::move(sites)) : sites;
 }
 
 std::vector<SurfacePoint> initial_sites(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, int count,
@@ -477,10 +484,7 @@ CvtStartReport cvt_start(const CvtSurface& surface, const CvtOptions& options, b
                          std::vector<SurfacePoint>& sites, const std::function<int()>& threads_now) {
   CvtStartReport report;
   const Eigen::MatrixX3i& F = surface.F;
-  if (sites.empty()) {
-    sites = initial_sites(surface.V, F, options.sites, options.initialization, options.seed);
-    if (options.spatial_site_order) sites = in_spatial_order(surface.V, F, std::move(sites));
-  }
+  if (sites.empty()) sites = generated_sites(surface.V, F, options);
   const int ns = static_cast<int>(sites.size());
   const auto tg = Clock::now();
   if (options.graph_lloyd_iterations > 0) {

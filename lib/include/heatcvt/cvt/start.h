@@ -25,6 +25,11 @@ std::vector<SurfacePoint> initial_sites(const Eigen::MatrixX3d& V, const Eigen::
 std::vector<SurfacePoint> in_spatial_order(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
                                            std::vector<SurfacePoint> sites);
 
+/// The generated start sites of a CVT run: initial_sites() with the options' count, method and
+/// seed, in_spatial_order() when options.spatial_site_order.
+std::vector<SurfacePoint> generated_sites(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
+                                          const CvtOptions& options);
+
 /// Graph Lloyd (CvtOptions::graph_lloyd_iterations): cells = graph_voronoi() of the sources,
 /// new source = the vertex of the cell closest to the cell's area-weighted mean position
 /// (`vertex_area` per vertex). At most `iterations`, stops when no source changes; `done`
