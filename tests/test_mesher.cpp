@@ -24,6 +24,7 @@
 #include "heatcvt/mesher/orientation.h"
 #include "heatcvt/mesher/projector.h"
 #include "heatcvt/mesher/sliver_collapse.h"
+#include "heatcvt/mesher/sliver_repair.h"
 #include "heatcvt/mesher/surface_mesher.h"
 #include "heatcvt/mesher/tangential_relaxation.h"
 #include "heatcvt/mesher/untangle.h"
@@ -661,6 +662,64 @@ TEST(SliverCollapse, CollapsesTheShortEdgeOfSlivers) {
   EXPECT_TRUE(r.ok()) << r.summary();
   EXPECT_EQ(r.genus, 0);
   EXPECT_EQ(r.vertices, test::icosphere(2).V.rows() - 1);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(SliverRepair, RemovesTheSliversOfAJitteredSphereWithoutLosingAVertex) {
+  const TriangleMesh fine = test::icosphere(5);
+  const MeshSurfaceProjector surface(fine.V, fine.F);
+  WorkingMesh w = jittered_sphere(test::icosphere(2), 0.12);
+  const int vertices = w.num_vertices();
+  ASSERT_GT(slivers(w, 25), 3);
+  const double before = ring_min_angle(w);
+  EXPECT_GT(repair_slivers(w, surface, {}, std::vector<char>(vertices, 0), vertices), 0);
+  EXPECT_EQ(slivers(w, 25), 0);
+  EXPECT_GT(ring_min_angle(w), before);
+  EXPECT_EQ(vertices_in_faces(w), vertices);  // the floor: only flips and moves
+  for (int v = 0; v < w.num_vertices(); ++v) EXPECT_NEAR(w.V.row(v).norm(), 1.0, 1e-3);
+  const ValidationReport r = validate(w, true);
+  EXPECT_TRUE(r.ok()) << r.summary();
+  EXPECT_EQ(r.genus, 0);
+  expect_index_fresh(w);
+}
+
+TEST(SliverRepair, MovesAVertexBackIntoItsRingAndHonoursFrozenVertices) {
+  // Vertex 17 of a 6 × 6 grid, (0.5, 1/3), moved most of the way to its neighbour 18: slivers.
+  const TriangleMesh sheet = test::grid(6);
+  const MeshSurfaceProjector surface(sheet.V, sheet.F);
+  WorkingMesh w = test::working_mesh(sheet);
+  w.V(17, 0) = 0.62;
+  ASSERT_GT(slivers(w, 25), 0);
+  WorkingMesh held = w;
+  EXPECT_EQ(repair_slivers(held, surface, {}, std::vector<char>(w.num_vertices(), 1), 0), 0);
+  EXPECT_EQ((held.V - w.V).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(held.faces(), w.faces());
+  EXPECT_GT(repair_slivers(w, surface, {}, std::vector<char>(w.num_vertices(), 0), w.num_vertices()), 0);
+  EXPECT_EQ(slivers(w, 25), 0);
+  EXPECT_LT(w.V(17, 0), 0.62);
+  EXPECT_NEAR(w.V(17, 2), 0.0, 1e-12);  // on the plane
+  const ValidationReport r = validate(w, false);
+  EXPECT_TRUE(r.ok()) << r.summary();
+  EXPECT_EQ(r.boundary_loops, 1);
+  EXPECT_EQ(r.vertices, 49);
+}
+
+TEST(SliverRepair, AFlatEarOnTheBorderGoes) {
+  // A 4 × 4 grid with a flat ear (9° at its base) hung on the border edge 1–2.
+  const TriangleMesh plane = test::grid(4, -0.5, 1.5, -0.5, 1.5);
+  const MeshSurfaceProjector surface(plane.V, plane.F);
+  WorkingMesh w = test::working_mesh(test::grid(4));
+  const int ear = w.add_vertex(Eigen::Vector3d(0.375, -0.02, 0), Eigen::Vector3d::UnitZ(), -1);
+  ASSERT_TRUE(w.has_half_edge(1, 2));
+  w.add_face({2, 1, ear});
+  ASSERT_EQ(slivers(w, 25), 1);
+  EXPECT_GT(repair_slivers(w, surface, {}, std::vector<char>(w.num_vertices(), 0), 0), 0);
+  EXPECT_EQ(slivers(w, 25), 0);
+  EXPECT_EQ(vertices_in_faces(w), 25);
+  const ValidationReport r = validate(w, false);
+  EXPECT_TRUE(r.ok()) << r.summary();
+  EXPECT_EQ(r.boundary_loops, 1);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -422,6 +422,8 @@ class Sizer {
   // slivers are left, as each polish can expose new ones. Each pass starts with only the regions
   // around faces crossing now frozen. A later pass may end with a smaller φmin than an earlier
   // one: the state with the largest φmin (among those with the count within count_aim) is kept.
+  // The slivers it still has get the best of their local edits, with no polish after it to undo
+  // them (repair_slivers() only makes edits that raise the smallest angle around a sliver).
   void sliver_passes(double length) {
     struct State {
       WorkingMesh::Checkpoint mesh;
@@ -462,6 +464,11 @@ class Sizer {
       mesh_.rollback(best.mesh);
       stats_ = best.stats;
       crossings_ = best.crossings;
+    }
+    if (figures_below_target()) {
+      thaw();
+      const int floor = static_cast<int>(std::ceil((1 - o_.count_tolerance) * o_.target_vertices));
+      attempt([&] { return repair_slivers(mesh_, surface_, o_.repair, frozen(), floor); });
     }
   }
 

@@ -12,6 +12,7 @@
 #include "heatcvt/mesher/mesher_stats.h"
 #include "heatcvt/mesher/projector.h"
 #include "heatcvt/mesher/sliver_collapse.h"
+#include "heatcvt/mesher/sliver_repair.h"
 #include "heatcvt/mesher/working_mesh.h"
 
 #include <cmath>
@@ -113,6 +114,9 @@ struct IsotropicRemeshOptions {
   SliverFlipOptions sliver_flips;
   BoundaryTrimOptions border_slivers;
   SliverCollapseOptions slivers;
+  /// The best local edit per sliver still left after the sliver passes, on the pass kept
+  /// (repair_slivers()); its collapses may take the count down to the count tolerance.
+  SliverRepairOptions repair;
   /// Times the trim, collapse, count restoration and polish are repeated while slivers are left
   /// (each polish can expose new flat border triangles or ears). Default 8.
   int sliver_passes = 8;
@@ -177,7 +181,8 @@ bool sizing_reshapes(const WorkingMesh& mesh, const SurfaceProjector& surface, c
 /// angle polish + max-min-angle flips follow, and the slivers left are flipped over creases,
 /// the border's notches closed (fill_notches), slivers trimmed (flat along the border, ears,
 /// spikes) or collapsed before the count is restored and polished once more, up to
-/// sliver_passes times; the pass with the largest φmin is kept.
+/// sliver_passes times; the pass with the largest φmin is kept, and each sliver still left gets
+/// the best of its local edits (repair_slivers()).
 /// Faces keep a consistent orientation and the genus of each piece is kept (splits, collapses
 /// with the link condition and flips do not change it; the border cleaning moves borders by less
 /// than a face and may close a three-edge hole; pieces cut off by the sliver collapses are removed

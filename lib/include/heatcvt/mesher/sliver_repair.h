@@ -1,0 +1,56 @@
+#pragma once
+/// \file sliver_repair.h
+/// The last repair of the slivers the other stages leave: for each face whose smallest angle is
+/// below a threshold, every local edit that could remove it is scored on the faces around it and
+/// the best one is applied if it raises their smallest angle.
+#include "heatcvt/mesher/projector.h"
+#include "heatcvt/mesher/working_mesh.h"
+
+#include <vector>
+
+namespace heatcvt {
+
+/// Options of repair_slivers().
+struct SliverRepairOptions {
+  double sliver_angle_deg = 25;  ///< a sliver has a smallest angle below this. Default 25°.
+  /// Passes over the slivers (each edits faces that share no vertex, then looks again). Default 6.
+  int passes = 6;
+  /// An edited face must face within this of each of its corners' surface normals, or (the
+  /// surface's normals are noisy on scans) face on their side and turn by at most this against
+  /// the face it replaces: no edit folds the mesh. Default 60°.
+  double max_normal_turn_deg = 60;
+  /// A border face is cut off only where its height over its border edge is at most this times
+  /// the mesh's mean edge length (the border moves by less than that), or where the midpoint of
+  /// that edge is farther than that from the surface (the face spans a gap). Default 0.5.
+  double max_trim_height = 0.5;
+  /// A flip's new edge must have its midpoint within this times its length of the surface, or
+  /// no farther than the old edge's midpoint. Default 0.25.
+  double max_flip_offset = 0.25;
+};
+
+/// For each face with its smallest angle below options.sliver_angle_deg (smallest first, none
+/// sharing a vertex with a face edited in the same pass, no corner `frozen`), the candidate
+/// edits are:
+/// - collapse of one of its edges into the midpoint projected to the surface or into one end
+///   (link condition; an inner edge between two border vertices never; an interior vertex only
+///   into a border one, which keeps its place; a border edge only between simple border
+///   vertices);
+/// - flip of one of its inner edges (the new edge not in the mesh yet, both ends of the old one
+///   keeping valence above 3);
+/// - move of one of its interior corners to the centroid of its neighbours, or half-way there,
+///   projected to the surface (border vertices stay: where scans overlap, the projection of a
+///   border vertex can land on the other scan's layer);
+/// - for a face on the border, cutting it off (its corners keep faces and stay manifold; its
+///   height over the border edge at most max_trim_height mean edges, or the midpoint of that
+///   edge farther than that from the surface).
+/// Each edit is scored by the smallest angle of the faces around the face's corners after it;
+/// the best is applied when that beats the smallest angle there before, no edited face folds
+/// (max_normal_turn_deg) and the mesh keeps at least `min_vertices` vertices in faces.
+/// Faces keep a consistent orientation; the genus is kept (collapses under the link condition,
+/// flips and moves do not change it; a cut face takes at most one border vertex with it).
+/// Self-intersections are not checked here: the caller undoes what makes faces cross.
+/// Returns the edits applied.
+int repair_slivers(WorkingMesh& mesh, const SurfaceProjector& surface, const SliverRepairOptions& options,
+                   const std::vector<char>& frozen, int min_vertices);
+
+}  // namespace heatcvt

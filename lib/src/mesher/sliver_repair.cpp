@@ -1,0 +1,330 @@
+// The last repair of slivers: the best of several local edits per sliver.
+#include "heatcvt/mesher/sliver_repair.h"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+namespace heatcvt {
+namespace {
+
+// A local edit, described before it is made so that it can be scored: faces that go, faces that
+// get new corners, at most one vertex that moves (the one a collapse keeps, or a moved corner).
+struct Edit {
+  std::vector<int> removed;
+  std::vector<std::pair<int, MeshFace>> changed;
+  int flip_face = -1, flip_k = -1, flip_other = -1;  // a flip: WorkingMesh::flip(f1, k, f2)
+  int moved = -1;
+  Eigen::Vector3d position, normal;
+  int anchor = -1;
+  int lost_vertices = 0;
+};
+
+class SliverRepair {
+ public:
+  SliverRepair(WorkingMesh& mesh, const SurfaceProjector& surface, const SliverRepairOptions& o,
+               const std::vector<char>& frozen)
+      : mesh_(mesh), surface_(surface), o_(o), frozen_(frozen),
+        min_cos_(std::cos(o.max_normal_turn_deg * M_PI / 180.0)) {
+    frozen_.resize(mesh.num_vertices(), 0);
+    double sum = 0;
+    long count = 0;
+    for (const MeshFace& f : mesh.faces())
+      for (int k = 0; k < 3; ++k, ++count) sum += (mesh.V.row(f[k]) - mesh.V.row(f[(k + 1) % 3])).norm();
+    mean_edge_ = count > 0 ? sum / count : 0;
+  }
+
+  // One pass; returns the edits made. `vertices`: the vertices in faces, kept at least `floor`.
+  int pass(int& vertices, int floor) {
+    vf_ = mesh_.vertex_faces();
+    links_ = border_links(mesh_);
+    touched_ = frozen_;
+    dead_.assign(mesh_.num_faces(), 0);
+    const double thr = o_.sliver_angle_deg * M_PI / 180.0;
+    std::vector<std::pair<double, int>> slivers;
+    for (int id = 0; id < mesh_.num_faces(); ++id) {
+      const double m = face_min_angle(mesh_, mesh_.face(id));
+      if (m < thr) slivers.emplace_back(m, id);
+    }
+    std::sort(slivers.begin(), slivers.end());
+    int done = 0;
+    for (const auto& [angle, id] : slivers) {
+      const MeshFace f = mesh_.face(id);
+      if (dead_[id] || touched_[f[0]] || touched_[f[1]] || touched_[f[2]]) continue;
+      const std::vector<int> region = faces_at(f);
+      double best = min_angle(region, nullptr);
+      Edit chosen;
+      bool found = false;
+      for (Edit& e : candidates(id)) {
+        if (vertices - e.lost_vertices < floor) continue;
+        const double m = min_angle(region, &e);
+        if (m > best + 1e-9) best = m, chosen = std::move(e), found = true;
+      }
+      if (!found) continue;
+      apply(chosen, region);
+      vertices -= chosen.lost_vertices;
+      ++done;
+    }
+    mesh_.remove_faces(dead_);
+    return done;
+  }
+
+ private:
+  WorkingMesh& mesh_;
+  const SurfaceProjector& surface_;
+  const SliverRepairOptions& o_;
+  std::vector<char> frozen_;
+  const double min_cos_;
+  double mean_edge_ = 0;
+  std::vector<std::vector<int>> vf_;
+  BorderLinks links_;
+  std::vector<char> touched_, dead_;
+
+  // The faces at the corners of f (each once, ascending).
+  std::vector<int> faces_at(const MeshFace& f) const {
+    std::vector<int> out;
+    for (int v : f) out.insert(out.end(), vf_[v].begin(), vf_[v].end());
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+  }
+
+  Eigen::Vector3d position(int v, const Edit* e) const {
+    return e && v == e->moved ? e->position : Eigen::Vector3d(mesh_.V.row(v).transpose());
+  }
+  Eigen::Vector3d normal(int v, const Edit* e) const {
+    return e && v == e->moved ? e->normal : Eigen::Vector3d(mesh_.N.row(v).transpose());
+  }
+
+  // Whether the edited face g (corners h) faces within max_normal_turn of each corner's surface
+  // normal, or at least on the side of each and within max_normal_turn of the face it replaces.
+  bool unfolded(int g, const MeshFace& h, const Edit& e) const {
+    const Eigen::Vector3d p0 = position(h[0], &e), p1 = position(h[1], &e), p2 = position(h[2], &e);
+    const Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
+    if (!(n.norm() > 0)) return false;
+    const Eigen::Vector3d u = n.normalized();
+    bool along_surface = true;
+    for (int v : h) {
+      const double c = u.dot(normal(v, &e));
+      if (!(c > 0)) return false;
+      along_surface = along_surface && c >= min_cos_;
+    }
+    if (along_surface) return true;
+    const MeshFace& old = mesh_.face(g);
+    const Eigen::Vector3d m =
+        (mesh_.V.row(old[1]) - mesh_.V.row(old[0])).cross(mesh_.V.row(old[2]) - mesh_.V.row(old[0])).transpose();
+    return m.norm() > 0 && u.dot(m.normalized()) >= min_cos_;
+  }
+
+  // Smallest angle of the faces of `region` after the edit e (before any edit when e is null);
+  // −1 when the edit folds one of them.
+  double min_angle(const std::vector<int>& region, const Edit* e) const {
+    double m = M_PI;
+    for (int g : region) {
+      if (e && std::find(e->removed.begin(), e->removed.end(), g) != e->removed.end()) continue;
+      MeshFace h = mesh_.face(g);
+      bool edited = false;
+      if (e) {
+        for (const auto& [id, corners] : e->changed)
+          if (id == g) h = corners, edited = true;
+        edited = edited || (e->moved >= 0 && (h[0] == e->moved || h[1] == e->moved || h[2] == e->moved));
+      }
+      if (edited && !unfolded(g, h, *e)) return -1;
+      m = std::min(m, triangle_min_angle(position(h[0], e), position(h[1], e), position(h[2], e)));
+    }
+    return m;
+  }
+
+  bool on_border(int v) const { return links_.on(v); }
+
+  std::vector<Edit> candidates(int id) {
+    std::vector<Edit> out;
+    const MeshFace f = mesh_.face(id);
+    for (int k = 0; k < 3; ++k) {
+      if (frozen_[f[k]]) return out;
+    }
+    for (int k = 0; k < 3; ++k) add_collapses(f[k], f[(k + 1) % 3], out);
+    for (int k = 0; k < 3; ++k) add_flip(id, k, out);
+    for (int v : f) add_moves(v, out);
+    add_trim(id, out);
+    return out;
+  }
+
+  // Collapses of (a, b) into the projected midpoint, a or b (the rules of the header).
+  void add_collapses(int a, int b, std::vector<Edit>& out) const {
+    const bool border_edge = mesh_.edge_face_count(a, b) == 1;
+    if (border_edge ? !(links_.simple(a) && links_.simple(b)) : (on_border(a) && on_border(b))) return;
+    if (on_border(b) && !border_edge) std::swap(a, b);
+    std::vector<int> shared, others;
+    std::vector<int> na, nb;
+    for (int g : vf_[a]) {
+      const MeshFace& h = mesh_.face(g);
+      if (h[0] == b || h[1] == b || h[2] == b) shared.push_back(g);
+      for (int v : h)
+        if (v != a && v != b) na.push_back(v);
+    }
+    for (int g : vf_[b]) {
+      const MeshFace& h = mesh_.face(g);
+      if (!(h[0] == a || h[1] == a || h[2] == a)) others.push_back(g);
+      for (int v : h)
+        if (v != a && v != b) nb.push_back(v);
+    }
+    const std::size_t sides = border_edge ? 1 : 2;
+    if (shared.size() != sides) return;
+    std::sort(na.begin(), na.end());
+    na.erase(std::unique(na.begin(), na.end()), na.end());
+    std::sort(nb.begin(), nb.end());
+    nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
+    std::vector<int> common;
+    std::set_intersection(na.begin(), na.end(), nb.begin(), nb.end(), std::back_inserter(common));
+    if (common.size() != sides) return;  // link condition
+    for (int v : common)
+      if (mesh_.valence(v) < 4) return;  // the opposite vertices keep faces enough
+    if (vf_[a].size() + vf_[b].size() < (border_edge ? 4u : 7u)) return;
+    Edit base;
+    base.removed = shared;
+    for (int g : others) {
+      MeshFace h = mesh_.face(g);
+      for (int& v : h)
+        if (v == b) v = a;
+      base.changed.emplace_back(g, h);
+    }
+    base.moved = a;
+    base.lost_vertices = 1;
+    const bool keep_a = on_border(a) && !border_edge;  // an interior vertex goes into a border one
+    if (!keep_a) {
+      Edit e = base;
+      e.anchor = mesh_.anchor[a];
+      surface_.project(0.5 * (mesh_.V.row(a) + mesh_.V.row(b)).transpose(), e.anchor, e.position, e.normal);
+      if (e.position.allFinite() && e.normal.allFinite()) out.push_back(std::move(e));
+    }
+    for (int end : {a, b}) {
+      if (keep_a && end == b) continue;
+      Edit e = base;
+      e.position = mesh_.V.row(end).transpose();
+      e.normal = mesh_.N.row(end).transpose();
+      e.anchor = mesh_.anchor[end];
+      out.push_back(std::move(e));
+    }
+  }
+
+  double midpoint_offset(int a, int b) const {
+    const Eigen::Vector3d mid = 0.5 * (mesh_.V.row(a) + mesh_.V.row(b)).transpose();
+    Eigen::Vector3d pos, nrm;
+    int hint = mesh_.anchor[a];
+    surface_.project(mid, hint, pos, nrm);
+    return pos.allFinite() ? (pos - mid).norm() : std::numeric_limits<double>::infinity();
+  }
+
+  // Flip of the edge between corners k and k+1 of face id.
+  void add_flip(int id, int k, std::vector<Edit>& out) const {
+    const MeshFace& t = mesh_.face(id);
+    const int a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
+    const int other = mesh_.half_edge_face(b, a);
+    if (other < 0 || mesh_.edge_face_count(a, b) != 2) return;
+    int d = -1;
+    for (int v : mesh_.face(other))
+      if (v != a && v != b) d = v;
+    if (d < 0 || d == c || frozen_[d] || mesh_.edge_face_count(c, d) > 0 || mesh_.valence(a) <= 3 ||
+        mesh_.valence(b) <= 3)
+      return;
+    const double length = (mesh_.V.row(c) - mesh_.V.row(d)).norm();
+    if (!(midpoint_offset(c, d) <= std::max(midpoint_offset(a, b), o_.max_flip_offset * length))) return;
+    Edit e;
+    e.changed = {{id, MeshFace{c, a, d}}, {other, MeshFace{d, b, c}}};
+    e.flip_face = id, e.flip_k = k, e.flip_other = other;
+    out.push_back(std::move(e));
+  }
+
+  // Moves of an interior vertex v towards the centroid of its neighbours. Border vertices stay:
+  // where scans overlap, a border vertex's projection can land on the other scan's layer.
+  void add_moves(int v, std::vector<Edit>& out) const {
+    if (on_border(v)) return;
+    std::vector<int> ring;
+    for (int g : vf_[v])
+      for (int u : mesh_.face(g))
+        if (u != v) ring.push_back(u);
+    std::sort(ring.begin(), ring.end());
+    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+    if (ring.empty()) return;
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (int u : ring) centroid += mesh_.V.row(u).transpose();
+    centroid /= static_cast<double>(ring.size());
+    const Eigen::Vector3d here = mesh_.V.row(v).transpose();
+    for (double step : {1.0, 0.5}) {
+      Edit e;
+      e.moved = v;
+      e.anchor = mesh_.anchor[v];
+      surface_.project(here + step * (centroid - here), e.anchor, e.position, e.normal);
+      if (e.position.allFinite() && e.normal.allFinite()) out.push_back(std::move(e));
+    }
+  }
+
+  // Cutting off a border face: one border edge with an interior apex, or an ear (two border
+  // edges, the lone corner leaves the mesh), no higher than max_trim_height mean edges.
+  void add_trim(int id, std::vector<Edit>& out) const {
+    const MeshFace& f = mesh_.face(id);
+    int borders = 0, k_edge = -1;
+    for (int k = 0; k < 3; ++k)
+      if (mesh_.edge_face_count(f[k], f[(k + 1) % 3]) == 1) ++borders, k_edge = k;
+    Edit e;
+    e.removed = {id};
+    int a, b, c;
+    if (borders == 1) {
+      a = f[k_edge], b = f[(k_edge + 1) % 3], c = f[(k_edge + 2) % 3];
+      if (on_border(c)) return;  // the apex would be left with two fans
+    } else if (borders == 2) {
+      int k = 0;
+      while (k < 3 && vf_[f[k]].size() != 1) ++k;
+      if (k == 3) return;
+      c = f[k], a = f[(k + 1) % 3], b = f[(k + 2) % 3];
+      if (mesh_.edge_face_count(a, b) != 2) return;
+      e.lost_vertices = 1;
+    } else {
+      return;
+    }
+    if (vf_[a].size() < 2 || vf_[b].size() < 2) return;
+    const Eigen::Vector3d pa = mesh_.V.row(a), pb = mesh_.V.row(b), pc = mesh_.V.row(c);
+    const double base = (pb - pa).norm();
+    if (!(base > 0)) return;
+    const double allowed = o_.max_trim_height * mean_edge_;
+    if ((pb - pa).cross(pc - pa).norm() / base <= allowed || midpoint_offset(a, b) > allowed)
+      out.push_back(std::move(e));
+  }
+
+  void apply(const Edit& e, const std::vector<int>& region) {
+    if (e.moved >= 0) {
+      mesh_.V.row(e.moved) = e.position.transpose();
+      mesh_.N.row(e.moved) = e.normal.transpose();
+      mesh_.anchor[e.moved] = e.anchor;
+    }
+    if (e.flip_face >= 0) {
+      mesh_.flip(e.flip_face, e.flip_k, e.flip_other);
+    } else {
+      for (const auto& [g, h] : e.changed) mesh_.replace_face(g, h);
+    }
+    for (int g : e.removed) dead_[g] = 1;
+    for (int g : region)
+      for (int v : mesh_.face(g)) touched_[v] = 1;
+    for (const auto& [g, h] : e.changed)
+      for (int v : h) touched_[v] = 1;
+  }
+};
+
+}  // namespace
+
+int repair_slivers(WorkingMesh& mesh, const SurfaceProjector& surface, const SliverRepairOptions& options,
+                   const std::vector<char>& frozen, int min_vertices) {
+  SliverRepair repair(mesh, surface, options, frozen);
+  int vertices = vertices_in_faces(mesh), edits = 0;
+  for (int pass = 0; pass < options.passes; ++pass) {
+    const int done = repair.pass(vertices, min_vertices);
+    if (done == 0) break;
+    edits += done;
+  }
+  return edits;
+}
+
+}  // namespace heatcvt
