@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <set>
+#include <iterator>
 
 #include "heatcvt/mesher/manifold_extraction.h"
 #include "heatcvt/mesher/mesh_checks.h"
@@ -19,41 +19,17 @@ struct CollapsePass {
   const SurfaceProjector& surface;
   const SliverCollapseOptions& o;
   std::vector<std::vector<int>> vf;
-  std::vector<char> dead, touched, border;
+  std::vector<char> dead, touched;
   BorderLinks links;
 
-  // Tries to collapse edge (a, b) (b into a); returns whether it did. An inner edge between two
-  // border vertices is never collapsed (it would pinch the surface); a border edge between two
-  // simple border vertices may be (the border loses a vertex and keeps its course); a border
-  // vertex takes in an interior one and keeps its place.
-  bool try_collapse(int a, int b) {
-    const bool border_edge = mesh.edge_face_count(a, b) == 1;
-    if (border_edge ? !(links.simple(a) && links.simple(b)) : (border[a] && border[b])) return false;
-    if (border[b] && !border_edge) std::swap(a, b);
-    const size_t sides = border_edge ? 1 : 2;
+  // Tries to collapse edge (a, b) (collapse_topology()); returns whether it did.
+  bool try_collapse(int a0, int b0) {
+    EdgeCollapse edge;
+    if (!collapse_topology(mesh, vf, links, a0, b0, edge)) return false;
+    const int a = edge.kept, b = edge.gone;
+    const std::vector<int>& shared = edge.shared;
+    const std::vector<int>& others = edge.others;
     const Eigen::MatrixX3d& S = mesh.V;
-    std::vector<int> shared, others;
-    std::set<int> na, nb;
-    for (int g : vf[a]) {
-      const MeshFace& h = mesh.face(g);
-      if (h[0] == b || h[1] == b || h[2] == b) shared.push_back(g);
-      for (int v : h)
-        if (v != a) na.insert(v);
-    }
-    for (int g : vf[b]) {
-      const MeshFace& h = mesh.face(g);
-      if (!(h[0] == a || h[1] == a || h[2] == a)) others.push_back(g);
-      for (int v : h)
-        if (v != b) nb.insert(v);
-    }
-    if (shared.size() != sides) return false;
-    std::vector<int> common;
-    for (int v : na)
-      if (v != b && nb.count(v)) common.push_back(v);
-    if (common.size() != sides) return false;  // link condition
-    for (int v : common)
-      if (vf[v].size() < 4 - (border[v] ? 1 : 0)) return false;  // the opposite vertices keep faces enough
-    if (vf[a].size() + vf[b].size() < (border_edge ? 4 : 7)) return false;
     // The ring after the collapse: faces of a and b except the two shared ones, b -> a.
     std::vector<int> ring;
     for (int g : vf[a])
@@ -69,7 +45,7 @@ struct CollapsePass {
     const double min_cos = std::cos(o.max_normal_turn_deg * M_PI / 180.0);
     double best_min = old_min;
     int best = -1;
-    const bool keep_a = border[a] && !border_edge;  // an interior vertex goes into a border one
+    const bool keep_a = edge.keep_place;
     for (int c = keep_a ? 1 : 0; c < (keep_a ? 2 : 3); ++c) {
       if (!cand_pos[c].allFinite() || !cand_nrm[c].allFinite()) continue;
       double m = M_PI;
@@ -110,7 +86,6 @@ struct CollapsePass {
     const Eigen::MatrixX3d& S = mesh.V;
     vf = mesh.vertex_faces();
     dead.assign(mesh.num_faces(), 0);
-    border = mesh.boundary_vertices();
     links = border_links(mesh);
     touched.assign(mesh.num_vertices(), 0);
     // A frozen vertex is treated as touched: no collapse reaches its ring.
@@ -239,6 +214,48 @@ bool cut_neck_fans(const WorkingMesh& mesh, const std::vector<std::vector<int>>&
 
 }  // namespace
 
+bool collapse_topology(const WorkingMesh& mesh, const std::vector<std::vector<int>>& vf, const BorderLinks& links,
+                       int a, int b, EdgeCollapse& collapse) {
+  const bool border_edge = mesh.edge_face_count(a, b) == 1;
+  if (border_edge ? !(links.simple(a) && links.simple(b)) : (links.on(a) && links.on(b))) return false;
+  if (links.on(b) && !border_edge) std::swap(a, b);
+  std::vector<int> shared, others, na, nb;
+  for (int g : vf[a]) {
+    const MeshFace& h = mesh.face(g);
+    if (h[0] == b || h[1] == b || h[2] == b) shared.push_back(g);
+    for (int v : h)
+      if (v != a && v != b) na.push_back(v);
+  }
+  for (int g : vf[b]) {
+    const MeshFace& h = mesh.face(g);
+    if (!(h[0] == a || h[1] == a || h[2] == a)) others.push_back(g);
+    for (int v : h)
+      if (v != a && v != b) nb.push_back(v);
+  }
+  const std::size_t sides = border_edge ? 1 : 2;
+  if (shared.size() != sides) return false;
+  for (std::vector<int>* n : {&na, &nb}) {
+    std::sort(n->begin(), n->end());
+    n->erase(std::unique(n->begin(), n->end()), n->end());
+  }
+  std::vector<int> common;
+  std::set_intersection(na.begin(), na.end(), nb.begin(), nb.end(), std::back_inserter(common));
+  if (common.size() != sides) return false;  // link condition
+  for (int v : common)
+    if (mesh.valence(v) < 4) return false;  // the opposite vertices keep faces enough
+  if (vf[a].size() + vf[b].size() < (border_edge ? 4u : 7u)) return false;
+  collapse = {a, b, border_edge, links.on(a) && !border_edge, std::move(shared), std::move(others)};
+  return true;
+}
+
+double midpoint_offset(const WorkingMesh& mesh, const SurfaceProjector& surface, int a, int b) {
+  const Eigen::Vector3d mid = 0.5 * (mesh.V.row(a) + mesh.V.row(b)).transpose();
+  Eigen::Vector3d pos, nrm;
+  int hint = mesh.anchor[a];
+  surface.project(mid, hint, pos, nrm);
+  return pos.allFinite() ? (pos - mid).norm() : std::numeric_limits<double>::infinity();
+}
+
 int collapse_slivers(WorkingMesh& mesh, const SurfaceProjector& surface, const SliverCollapseOptions& options,
                      MesherStats& stats, const std::vector<char>* frozen) {
   const WorkingMesh::Checkpoint before = mesh.checkpoint();
@@ -253,7 +270,7 @@ int collapse_slivers(WorkingMesh& mesh, const SurfaceProjector& surface, const S
   fo.valence_mode = false;
   int collapsed = 0;
   for (int pass = 0; pass < options.passes; ++pass) {
-    CollapsePass p{mesh, surface, options, {}, {}, {}, {}, {}};
+    CollapsePass p{mesh, surface, options, {}, {}, {}, {}};
     const int done = p.run(fixed);
     if (done == 0) break;
     collapsed += done;
@@ -279,15 +296,6 @@ int collapse_slivers(WorkingMesh& mesh, const SurfaceProjector& surface, const S
 }
 
 namespace {
-
-// Distance from the midpoint of (a, b) to its projection on the surface (infinite where it has none).
-double midpoint_offset(const WorkingMesh& mesh, const SurfaceProjector& surface, int a, int b) {
-  const Eigen::Vector3d mid = 0.5 * (mesh.V.row(a) + mesh.V.row(b)).transpose();
-  Eigen::Vector3d pos, nrm;
-  int hint = mesh.anchor[a];
-  surface.project(mid, hint, pos, nrm);
-  return pos.allFinite() ? (pos - mid).norm() : std::numeric_limits<double>::infinity();
-}
 
 // Whether triangle (a, b, c) faces like the normals of its corners.
 bool faces_like_corners(const WorkingMesh& mesh, int a, int b, int c) {

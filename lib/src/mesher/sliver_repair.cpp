@@ -1,6 +1,8 @@
 // The last repair of slivers: the best of several local edits per sliver.
 #include "heatcvt/mesher/sliver_repair.h"
 
+#include "heatcvt/mesher/sliver_collapse.h"
+
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -141,10 +143,7 @@ class SliverRepair {
 
   std::vector<Edit> candidates(int id) {
     std::vector<Edit> out;
-    const MeshFace f = mesh_.face(id);
-    for (int k = 0; k < 3; ++k) {
-      if (frozen_[f[k]]) return out;
-    }
+    const MeshFace f = mesh_.face(id);  // no corner frozen: pass() skips those
     for (int k = 0; k < 3; ++k) add_collapses(f[k], f[(k + 1) % 3], out);
     for (int k = 0; k < 3; ++k) add_flip(id, k, out);
     for (int v : f) add_moves(v, out);
@@ -152,40 +151,14 @@ class SliverRepair {
     return out;
   }
 
-  // Collapses of (a, b) into the projected midpoint, a or b (the rules of the header).
-  void add_collapses(int a, int b, std::vector<Edit>& out) const {
-    const bool border_edge = mesh_.edge_face_count(a, b) == 1;
-    if (border_edge ? !(links_.simple(a) && links_.simple(b)) : (on_border(a) && on_border(b))) return;
-    if (on_border(b) && !border_edge) std::swap(a, b);
-    std::vector<int> shared, others;
-    std::vector<int> na, nb;
-    for (int g : vf_[a]) {
-      const MeshFace& h = mesh_.face(g);
-      if (h[0] == b || h[1] == b || h[2] == b) shared.push_back(g);
-      for (int v : h)
-        if (v != a && v != b) na.push_back(v);
-    }
-    for (int g : vf_[b]) {
-      const MeshFace& h = mesh_.face(g);
-      if (!(h[0] == a || h[1] == a || h[2] == a)) others.push_back(g);
-      for (int v : h)
-        if (v != a && v != b) nb.push_back(v);
-    }
-    const std::size_t sides = border_edge ? 1 : 2;
-    if (shared.size() != sides) return;
-    std::sort(na.begin(), na.end());
-    na.erase(std::unique(na.begin(), na.end()), na.end());
-    std::sort(nb.begin(), nb.end());
-    nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
-    std::vector<int> common;
-    std::set_intersection(na.begin(), na.end(), nb.begin(), nb.end(), std::back_inserter(common));
-    if (common.size() != sides) return;  // link condition
-    for (int v : common)
-      if (mesh_.valence(v) < 4) return;  // the opposite vertices keep faces enough
-    if (vf_[a].size() + vf_[b].size() < (border_edge ? 4u : 7u)) return;
+  // Collapses of (a, b) (collapse_topology()) into the projected midpoint or into one end.
+  void add_collapses(int a0, int b0, std::vector<Edit>& out) const {
+    EdgeCollapse c;
+    if (!collapse_topology(mesh_, vf_, links_, a0, b0, c)) return;
+    const int a = c.kept, b = c.gone;
     Edit base;
-    base.removed = shared;
-    for (int g : others) {
+    base.removed = c.shared;
+    for (int g : c.others) {
       MeshFace h = mesh_.face(g);
       for (int& v : h)
         if (v == b) v = a;
@@ -193,29 +166,20 @@ class SliverRepair {
     }
     base.moved = a;
     base.lost_vertices = 1;
-    const bool keep_a = on_border(a) && !border_edge;  // an interior vertex goes into a border one
-    if (!keep_a) {
+    if (!c.keep_place) {
       Edit e = base;
       e.anchor = mesh_.anchor[a];
       surface_.project(0.5 * (mesh_.V.row(a) + mesh_.V.row(b)).transpose(), e.anchor, e.position, e.normal);
       if (e.position.allFinite() && e.normal.allFinite()) out.push_back(std::move(e));
     }
     for (int end : {a, b}) {
-      if (keep_a && end == b) continue;
+      if (c.keep_place && end == b) continue;
       Edit e = base;
       e.position = mesh_.V.row(end).transpose();
       e.normal = mesh_.N.row(end).transpose();
       e.anchor = mesh_.anchor[end];
       out.push_back(std::move(e));
     }
-  }
-
-  double midpoint_offset(int a, int b) const {
-    const Eigen::Vector3d mid = 0.5 * (mesh_.V.row(a) + mesh_.V.row(b)).transpose();
-    Eigen::Vector3d pos, nrm;
-    int hint = mesh_.anchor[a];
-    surface_.project(mid, hint, pos, nrm);
-    return pos.allFinite() ? (pos - mid).norm() : std::numeric_limits<double>::infinity();
   }
 
   // Flip of the edge between corners k and k+1 of face id.
@@ -231,7 +195,7 @@ class SliverRepair {
         mesh_.valence(b) <= 3)
       return;
     const double length = (mesh_.V.row(c) - mesh_.V.row(d)).norm();
-    if (!(midpoint_offset(c, d) <= std::max(midpoint_offset(a, b), o_.max_flip_offset * length))) return;
+    if (!(midpoint_offset(mesh_, surface_, c, d) <= std::max(midpoint_offset(mesh_, surface_, a, b), o_.max_flip_offset * length))) return;
     Edit e;
     e.changed = {{id, MeshFace{c, a, d}}, {other, MeshFace{d, b, c}}};
     e.flip_face = id, e.flip_k = k, e.flip_other = other;
@@ -290,7 +254,7 @@ class SliverRepair {
     const double base = (pb - pa).norm();
     if (!(base > 0)) return;
     const double allowed = o_.max_trim_height * mean_edge_;
-    if ((pb - pa).cross(pc - pa).norm() / base <= allowed || midpoint_offset(a, b) > allowed)
+    if ((pb - pa).cross(pc - pa).norm() / base <= allowed || midpoint_offset(mesh_, surface_, a, b) > allowed)
       out.push_back(std::move(e));
   }
 

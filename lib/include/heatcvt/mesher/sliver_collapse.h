@@ -47,6 +47,29 @@ struct SliverFlipOptions {
   double max_offset = 0.25;
 };
 
+/// An edge collapse the rules allow (collapse_topology()): `gone` goes into `kept`; `shared` are
+/// the faces on the edge (they go), `others` the other faces of `gone` (they take `kept` instead).
+struct EdgeCollapse {
+  int kept = -1, gone = -1;
+  bool border_edge = false;  ///< the edge has one face
+  bool keep_place = false;   ///< an interior vertex goes into a border one, which keeps its place
+  std::vector<int> shared, others;
+};
+
+/// Whether edge (a, b) may be collapsed, and how: an inner edge between two border vertices
+/// never (it would pinch the surface); a border edge only between two simple border vertices
+/// (the border loses a vertex and keeps its course); a border vertex takes in an interior one and
+/// keeps its place; the link condition holds (the ends share exactly the opposite vertices of the
+/// edge's faces), those keep valence ≥ 4, and the two ends have at least 7 faces between them (4
+/// on a border edge). `vf`: the faces at each vertex, current for a, b and their faces; `links`:
+/// the border.
+bool collapse_topology(const WorkingMesh& mesh, const std::vector<std::vector<int>>& vf, const BorderLinks& links,
+                       int a, int b, EdgeCollapse& collapse);
+
+/// Distance from the midpoint of (a, b) to its projection on the surface (infinite where it has
+/// none): how far an edge strays from the surface, e.g. across a gap.
+double midpoint_offset(const WorkingMesh& mesh, const SurfaceProjector& surface, int a, int b);
+
 /// Flips the inner edges (a, b) of slivers into (c, d) where the pair bends over a crease or a
 /// fold, so that the flat-pair rules of flip_edges() refuse it: the pair's smallest angle grows,
 /// the new edge's midpoint lies on the surface (within max_offset of its length, or no farther
