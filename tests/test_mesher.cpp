@@ -12,9 +12,11 @@
 #include <utility>
 #include <vector>
 
+#include "heatcvt/closest_point.h"
 #include "heatcvt/mesh.h"
 #include "heatcvt/mesher/angle_polish.h"
 #include "heatcvt/mesher/compaction.h"
+#include "heatcvt/mesher/coverage_repair.h"
 #include "heatcvt/mesher/dual_candidates.h"
 #include "heatcvt/mesher/edge_flips.h"
 #include "heatcvt/mesher/edge_split.h"
@@ -720,6 +722,64 @@ TEST(SliverRepair, AFlatEarOnTheBorderGoes) {
   const ValidationReport r = validate(w, false);
   EXPECT_TRUE(r.ok()) << r.summary();
   EXPECT_EQ(r.boundary_loops, 1);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+// `sphere` pushed out radially into a spike around the unit direction d: radius 1 + h (x·d)^k
+// for x·d > 0 (a tip of height h whose width shrinks as k grows).
+TriangleMesh spiked(TriangleMesh sphere, const Eigen::Vector3d& d, double h, int k) {
+  for (Eigen::Index v = 0; v < sphere.V.rows(); ++v) {
+    const Eigen::Vector3d x = sphere.V.row(v).normalized();
+    sphere.V.row(v) = (x * (1.0 + h * std::pow(std::max(0.0, x.dot(d)), k))).transpose();
+  }
+  return sphere;
+}
+
+// Largest distance from the vertices of `fine` to the faces of `w`.
+double farthest_from(const WorkingMesh& w, const TriangleMesh& fine) {
+  const Eigen::MatrixX3i F = face_matrix(w);
+  const std::vector<SurfacePoint> p = closest_surface_points(w.V, F, fine.V);
+  double gap = 0;
+  for (Eigen::Index v = 0; v < fine.V.rows(); ++v)
+    gap = std::max(gap, (position(w.V, F, p[static_cast<std::size_t>(v)]) - fine.V.row(v).transpose()).norm());
+  return gap;
+}
+
+TEST(CoverageRepair, PutsAVertexBackOnATipThatTheMeshCutOff) {
+  // A spike centred on a face of the coarse mesh: no vertex of the coarse mesh is on its tip.
+  const TriangleMesh coarse_sphere = test::icosphere(2);
+  const Eigen::RowVector3d c = (coarse_sphere.V.row(coarse_sphere.F(0, 0)) + coarse_sphere.V.row(coarse_sphere.F(0, 1)) +
+                                coarse_sphere.V.row(coarse_sphere.F(0, 2))) / 3.0;
+  const Eigen::Vector3d d = c.transpose().normalized();
+  const TriangleMesh fine = spiked(test::icosphere(5), d, 0.35, 48);
+  const MeshSurfaceProjector surface(fine.V, fine.F);
+  WorkingMesh w = test::working_mesh(spiked(coarse_sphere, d, 0.35, 48));
+  const double spacing = std::sqrt(surface_area(fine.V, fine.F) / w.num_vertices());
+  const CoverageRepairOptions o;
+  const double before = farthest_from(w, fine);
+  ASSERT_GT(before, o.max_gap * spacing) << "the coarse mesh must cut the tip for the test";
+  const double angle_before = ring_min_angle(w);
+
+  const std::vector<char> all(w.num_vertices(), 1);
+  WorkingMesh frozen = w;
+  EXPECT_EQ(repair_coverage(frozen, surface, fine.V, spacing, o, &all).moves, 0);
+  EXPECT_EQ((frozen.V - w.V).cwiseAbs().maxCoeff(), 0.0);
+
+  const CoverageRepairStats st = repair_coverage(w, surface, fine.V, spacing, o);
+  EXPECT_GT(st.moves, 0);
+  EXPECT_NEAR(st.gap_before, before, 1e-12);
+  EXPECT_LE(st.gap_after, o.max_gap * spacing);
+  EXPECT_NEAR(farthest_from(w, fine), st.gap_after, 1e-12);
+  EXPECT_EQ(st.uncovered_after, 0);
+  EXPECT_GE(ring_min_angle(w), std::min(o.min_angle_deg * kDeg, angle_before) - 1e-9);
+  for (int v = 0; v < w.num_vertices(); ++v) {  // every vertex on the spiked surface
+    const Eigen::Vector3d x = w.V.row(v).normalized();
+    EXPECT_NEAR(w.V.row(v).norm(), 1.0 + 0.35 * std::pow(std::max(0.0, x.dot(d)), 48), 5e-3) << "vertex " << v;
+  }
+  const ValidationReport r = validate(w, true);
+  EXPECT_TRUE(r.ok()) << r.summary();
+  EXPECT_EQ(r.vertices, coarse_sphere.V.rows());
 }
 
 // ---------------------------------------------------------------------------------------------

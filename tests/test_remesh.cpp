@@ -11,6 +11,7 @@
 #include <random>
 
 #include "heatcvt/errors.h"
+#include "heatcvt/mesh_io.h"
 #include "heatcvt/remesh.h"
 #include "heatcvt/subdivision.h"
 #include "heatcvt/validate.h"
@@ -190,4 +191,28 @@ TEST(RemeshCvt, RepairGivesAManifoldWhereCellsWrapAThinTube) {
   EXPECT_TRUE(r.checks.find("closed")->passed) << r.checks.summary();
   EXPECT_TRUE(r.checks.find("all_vertices_used")->passed) << r.checks.summary();
   EXPECT_EQ(r.mesh.V.rows(), 60 + r.repair_sites - r.repair_dropped_sites);
+}
+
+// bunny_pmp at 1,000 sites: the post-CVT stages' first result cuts off more of the tips than the
+// dual (refused), so without the fallback the dual (φmin below 25°) is the output. With it, heat
+// iterations raise the dual's φmin and the stages' second result is kept, meeting the remeshing
+// targets (every check, count within 2 %, φmin ≥ 30°, φm ≥ 52°).
+TEST(RemeshCvt, ARefusedPostCvtResultGetsHeatIterationsAndASecondRun) {
+  const TriangleMesh input = read_mesh(test::data_path("meshes/bunny_pmp.off"));
+  RemeshOptions no_fallback;
+  no_fallback.cvt.sites = 1000;
+  no_fallback.cvt.threads = 2;
+  no_fallback.fallback_phi_min_deg = 0;
+  const RemeshResult first = remesh_cvt(input, no_fallback);
+  ASSERT_FALSE(first.post_cvt_kept) << "the first result must be refused for the test";
+  ASSERT_LT(first.quality.min_angle_deg, 25.0);
+
+  RemeshOptions with = no_fallback;
+  with.fallback_phi_min_deg = RemeshOptions{}.fallback_phi_min_deg;
+  const RemeshResult r = remesh_cvt(input, with);
+  EXPECT_TRUE(r.post_cvt_kept) << r.post_cvt_refusal;
+  EXPECT_TRUE(r.checks.ok()) << r.checks.summary();
+  EXPECT_NEAR(static_cast<double>(r.mesh.V.rows()), 1000.0, 20.0);
+  EXPECT_GE(r.quality.min_angle_deg, 30.0);
+  EXPECT_GE(r.quality.mean_min_angle_deg, 52.0);
 }

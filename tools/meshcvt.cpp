@@ -25,6 +25,9 @@
 using namespace heatcvt;
 using Clock = std::chrono::steady_clock;
 
+// The CVT's φmin target (degrees) when the dual is the output (--no-post-cvt).
+constexpr double kDualPhiMin = 25.0;
+
 int main(int argc, char** argv) {
   CLI::App app{"meshcvt: remesh a triangle mesh by an intrinsic centroidal Voronoi tessellation with heat "
                "diffusion (Herholz, Haase, Alexa 2017, §7.1); writes the dual triangulation"};
@@ -63,7 +66,10 @@ int main(int argc, char** argv) {
   app.add_option("--target-phi-m", target_mean,
                  "with --quality-every: stop once phi_m >= this and phi_min >= --target-phi-min (0 = off)")
       ->capture_default_str();
-  app.add_option("--target-phi-min", target_min, "see --target-phi-m (degrees; 0 = off)")->capture_default_str();
+  app.add_option("--target-phi-min", target_min,
+                 "see --target-phi-m (degrees; 0 = off: the post-CVT stages raise phi_min; with --no-post-cvt the "
+                 "default is " + std::to_string(static_cast<int>(kDualPhiMin)) + ")")
+      ->capture_default_str();
   app.add_option("--anisotropy", anisotropy,
                  "lambda of the anisotropic CVT: lift to (p, lambda n) in R^6 after scaling to the unit bounding "
                  "box (paper: 0.05; 0 = isotropic)")
@@ -112,8 +118,10 @@ int main(int argc, char** argv) {
   app.add_flag("-q,--quiet", quiet, "no progress and no report on the terminal");
   if (const int status = cli::parse_command_line(app, argc, argv, "meshcvt"); status >= 0) return status;
 
+  auto given = [&](const char* name) { return app.count(name) > 0; };
+  // Without the post-CVT stages the dual is the output: the CVT itself must reach φmin.
+  if (no_post && !paper && !given("--target-phi-min")) target_min = kDualPhiMin;
   if (paper) {
-    auto given = [&](const char* name) { return app.count(name) > 0; };
     if (!given("--iterations")) iterations = paper_cvt.iterations;
     if (!given("--quality-every")) quality_every = paper_cvt.quality_every;
     if (!given("--target-phi-m")) target_mean = paper_cvt.target_phi_mean_deg;
@@ -178,8 +186,8 @@ int main(int argc, char** argv) {
     remesh.cvt.threads = threads;
     remesh.cvt.time_coefficient = t_coef;
     remesh.cvt.quality_every = quality_every;
-    remesh.cvt.target_phi_mean_deg = target_mean > 0 ? target_mean : (target_min > 0 ? 1e-9 : 0.0);
-    remesh.cvt.target_phi_min_deg = target_min > 0 ? target_min : (target_mean > 0 ? 1e-9 : 0.0);
+    remesh.cvt.target_phi_mean_deg = target_mean;
+    remesh.cvt.target_phi_min_deg = target_min;
     remesh.cvt.initialization = init == "farthest" ? CvtInitialization::farthest_point : CvtInitialization::random;
     remesh.cvt.relaxation = relaxation;
     remesh.cvt.graph_lloyd_iterations = graph_lloyd;
@@ -257,6 +265,9 @@ int main(int argc, char** argv) {
                       {"snapped_vertices", res.creases.snapped}, {"line_edges", res.creases.line_edges},
                       {"missing_edges", res.creases.missing_edges}, {"undone", res.creases.undone},
                       {"undone_reason", res.creases.undone_reason}};
+    rep["coverage"] = {{"uncovered_before", res.coverage.uncovered_before},
+                       {"uncovered_after", res.coverage.uncovered_after}, {"moves", res.coverage.moves},
+                       {"gap_before", res.coverage.gap_before}, {"gap_after", res.coverage.gap_after}};
     rep["refinement_levels"] = res.refinement_levels;
     rep["cvt_vertices"] = res.cvt_vertices;
     rep["repair_rounds"] = res.repair_rounds;
@@ -291,6 +302,10 @@ int main(int argc, char** argv) {
       std::printf("  stages:");
       for (const auto& [name, seconds] : res.stage_seconds) std::printf(" %s %.2f s;", name.c_str(), seconds);
       std::printf("\n");
+      if (res.coverage.uncovered_before > 0)
+        std::printf("  coverage repair: %d vertex moves; %d input vertices farther than %.2f site spacings, %d after\n",
+                    res.coverage.moves, res.coverage.uncovered_before, remesh.coverage.max_gap,
+                    res.coverage.uncovered_after);
       if (!no_post && !res.post_cvt_kept)
         std::printf("  post-CVT stages: %s; the dual is written\n", res.post_cvt_refusal.c_str());
       if (res.creases.lines + res.creases.skipped_lines > 0)

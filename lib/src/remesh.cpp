@@ -13,6 +13,7 @@
 #include "heatcvt/laplacian.h"
 #include "heatcvt/mesh.h"
 #include "heatcvt/mesher/compaction.h"
+#include "heatcvt/mesher/coverage_repair.h"
 #include "heatcvt/mesher/projector.h"
 #include "heatcvt/normalize.h"
 #include "heatcvt/subdivision.h"
@@ -205,11 +206,29 @@ std::string post_cvt_refusal(const TriangleMesh& input, const TriangleMesh& post
   return "";
 }
 
+// Coverage repair (mesher/coverage_repair.h) of the post-CVT stages' result `mesh` against the
+// input's vertices, at the spacing of the sites asked for.
+void cover_input(const TriangleMesh& input, const SurfaceProjector& surface, const RemeshOptions& options,
+                 TriangleMesh& mesh, RemeshResult& out) {
+  if (options.coverage.rounds <= 0 || mesh.F.rows() == 0) return;
+  const auto t = Clock::now();
+  std::vector<char> used(static_cast<std::size_t>(input.V.rows()), 0);
+  for (Eigen::Index k = 0; k < input.F.size(); ++k) used[static_cast<std::size_t>(input.F.data()[k])] = 1;
+  Eigen::MatrixX3d samples(std::count(used.begin(), used.end(), 1), 3);
+  for (Eigen::Index v = 0, r = 0; v < input.V.rows(); ++v)
+    if (used[static_cast<std::size_t>(v)]) samples.row(r++) = input.V.row(v);
+  const double spacing = std::sqrt(surface_area(input.V, input.F) / std::max(1, options.cvt.sites));
+  WorkingMesh work = working_mesh_of(mesh, surface);
+  out.coverage = repair_coverage(work, surface, samples, spacing, options.coverage);
+  if (out.coverage.moves > 0) mesh = compact_mesh(work);
+  out.stage_seconds.emplace_back("coverage repair", seconds_since(t));
+}
+
 // The shared post-CVT stages on out.cvt.dual with the input mesh as the projector (the refined
 // mesh is the same surface). Their result replaces out.mesh unless it fails a check that the dual
 // passed (the stages, made for clouds, may open or fill a thin handle): then the dual is kept and
-// out.post_cvt_kept is false.
-void run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options, RemeshResult& out) {
+// out.post_cvt_kept is false. Returns out.post_cvt_kept.
+bool run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options, RemeshResult& out) {
   const MeshSurfaceProjector surface(input.V, input.F);
   SurfaceMesherOptions mo = options.mesher;
   mo.threads = options.cvt.threads;
@@ -220,12 +239,13 @@ void run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options
   } catch (const Error& e) {  // nothing extracted (a dual of very few sites): the dual stays
     out.post_cvt_kept = false;
     out.post_cvt_refusal = std::string("nothing extracted: ") + e.what();
-    return;
+    return false;
   }
   out.mesher = std::move(post.stats);
   // the mesher validates its result as an open surface; the checks below use the input's topology
   for (const auto& stage : out.mesher.stage_seconds)
     if (stage.first != "validate") out.stage_seconds.push_back(stage);
+  cover_input(input, surface, options, post.mesh, out);
   const auto t = Clock::now();
   ValidationReport checks = check_result(post.mesh, out.input, true);
   const std::string refusal = post_cvt_refusal(input, post.mesh, checks, options, out);
@@ -236,6 +256,7 @@ void run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options
     out.checks = std::move(checks);
   }
   out.stage_seconds.emplace_back("post-CVT checks", seconds_since(t));
+  return out.post_cvt_kept;
 }
 
 // Sharp creases of the input kept as lines of out.mesh (mesher/creases.h). The result replaces
@@ -296,6 +317,24 @@ SurfaceDescription describe_surface(const TriangleMesh& mesh) {
 
 namespace {
 
+// The CVT of options.cvt from `start` (none: generated sites), its closed-ball repair, and its
+// dual with the checks against the input's topology as out.mesh / out.checks.
+void run_cvt(const TriangleMesh& work, const Laplacian& laplacian, const Eigen::VectorXd& metric,
+             const RemeshOptions& options, const std::vector<SurfacePoint>& start, const CvtCallback& progress,
+             RemeshResult& out) {
+  auto t = Clock::now();
+  out.cvt = centroidal_voronoi(work.V, work.F, laplacian, options.cvt, start, progress, metric);
+  out.stage_seconds.emplace_back("cvt", seconds_since(t));
+  t = Clock::now();
+  if (options.cvt.build_dual && !has_nonmanifold_edges(out.input)) repair_closed_ball(work, laplacian, metric, options, progress, out);
+  out.stage_seconds.emplace_back("repair", seconds_since(t));
+  t = Clock::now();
+  out.mesh.V = out.cvt.dual.V;
+  out.mesh.F = out.cvt.dual.F;
+  out.checks = check_result(out.mesh, out.input, options.cvt.build_dual);
+  out.stage_seconds.emplace_back("checks", seconds_since(t));
+}
+
 // The pipeline of remesh_cvt() on a mesh already in its unit frame.
 RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions& options, const CvtCallback& progress) {
   const int sites = options.cvt.sites;
@@ -333,25 +372,20 @@ RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions&
   out.degenerate_faces = static_cast<int>(laplacian.degenerate_faces.size());
   out.stage_seconds.emplace_back("laplacian", seconds_since(t));
 
-  t = Clock::now();
-  out.cvt = centroidal_voronoi(work->V, work->F, laplacian, options.cvt, {}, progress, metric);
-  out.stage_seconds.emplace_back("cvt", seconds_since(t));
-
-  t = Clock::now();
-  if (options.cvt.build_dual && !has_nonmanifold_edges(out.input)) repair_closed_ball(*work, laplacian, metric, options, progress, out);
-  out.stage_seconds.emplace_back("repair", seconds_since(t));
-
-  t = Clock::now();
-  out.mesh.V = out.cvt.dual.V;
-  out.mesh.F = out.cvt.dual.F;
-  out.checks = check_result(out.mesh, out.input, options.cvt.build_dual);
-  out.stage_seconds.emplace_back("checks", seconds_since(t));
+  run_cvt(*work, laplacian, metric, options, {}, progress, out);
   // The stages orient every closed piece outward: not for a non-orientable input.
   if (options.post_cvt_stages && options.cvt.build_dual && out.mesh.F.rows() > 0 && !out.input.non_orientable) {
-    if (dual_meets_targets(out, options))
+    if (dual_meets_targets(out, options)) {
       out.post_cvt_refusal = "not run: the dual of the closed input passes every check and meets the targets";
-    else
-      run_post_cvt_stages(mesh, options, out);
+    } else if (!run_post_cvt_stages(mesh, options, out) && options.fallback_phi_min_deg > options.cvt.target_phi_min_deg) {
+      // Their result refused: the dual is the output, so heat iterations until its own φmin
+      // reaches the fallback target, then the stages again on the new dual.
+      RemeshOptions again = options;
+      again.cvt.target_phi_min_deg = options.fallback_phi_min_deg;
+      const std::vector<SurfacePoint> sites = out.cvt.sites;
+      run_cvt(*work, laplacian, metric, again, sites, progress, out);
+      if (out.mesh.F.rows() > 0 && !dual_meets_targets(out, again)) run_post_cvt_stages(mesh, again, out);
+    }
   }
   if (options.cvt.build_dual && options.post_cvt_stages) keep_creases(mesh, options, out);
   out.quality = triangle_quality(out.mesh.V, out.mesh.F);

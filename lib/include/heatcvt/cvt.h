@@ -115,8 +115,9 @@ struct CvtOptions {
   /// φmin / φm in the iteration's stats (costs about one final step each). 0 = never. Default 0.
   int quality_every = 0;
   /// Stop at the first quality evaluation where φm ≥ target_phi_mean_deg and φmin ≥
-  /// target_phi_min_deg (both must be set > 0; needs quality_every > 0). The evaluated diagram
-  /// becomes the result. Default 0 (off).
+  /// target_phi_min_deg, and the dual has no non-manifold spot (needs quality_every > 0). A target
+  /// ≤ 0 is not required; with both ≤ 0 there is no such stop. The evaluated diagram becomes the
+  /// result. Default 0 (off).
   double target_phi_mean_deg = 0.0;
   double target_phi_min_deg = 0.0;
 

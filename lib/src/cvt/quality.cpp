@@ -205,7 +205,7 @@ bool CvtQualityControl::evaluate(LloydState& lloyd, CvtIterationStats& st, int i
   } else {
     ++evaluations_since_best_;
   }
-  const bool targets_met = options_.target_phi_mean_deg > 0 && options_.target_phi_min_deg > 0 &&
+  const bool targets_met = (options_.target_phi_mean_deg > 0 || options_.target_phi_min_deg > 0) &&
                            q.mean_min_angle_deg >= options_.target_phi_mean_deg &&
                            q.min_angle_deg >= options_.target_phi_min_deg && bad.empty();
   const int room = budget(result);

@@ -1,0 +1,54 @@
+#pragma once
+/// \file coverage_repair.h
+/// Coverage repair: vertices moved back onto the parts of the surface that the mesh no longer
+/// reaches. Tangential relaxation and the angle polish move each vertex towards the middle of its
+/// ring and project it back onto the surface; at a tip, a ridge sharper than the vertex spacing
+/// or the bottom of a narrow cavity that pulls the vertices off the extreme point, and the mesh
+/// then cuts the tip off (the one-sided distance from the surface to the mesh grows). This step
+/// takes the surface's samples farthest from the mesh and moves the nearest mesh vertex onto each
+/// (or part of the way), where its triangles keep their shape and orientation.
+#include <Eigen/Core>
+#include <vector>
+
+#include "heatcvt/mesher/projector.h"
+#include "heatcvt/mesher/working_mesh.h"
+
+namespace heatcvt {
+
+/// Options of repair_coverage().
+struct CoverageRepairOptions {
+  /// A sample farther than this many vertex spacings from the mesh is uncovered. Default 0.5.
+  double max_gap = 0.5;
+  /// A move is kept only where the smallest angle of the moved vertex's triangles stays at least
+  /// min(this, its value before the move). Default 30°.
+  double min_angle_deg = 30;
+  /// ... and none of these triangles turns by more than this. Default 45°.
+  double max_turn_deg = 45;
+  /// Fractions of the way to the sample tried for a vertex, first to last (the first kept wins).
+  /// Default {1, 0.75, 0.5}.
+  std::vector<double> fractions{1.0, 0.75, 0.5};
+  /// Rounds (distances measured again after each). Default 4.
+  int rounds = 4;
+};
+
+/// What repair_coverage() did.
+struct CoverageRepairStats {
+  int uncovered_before = 0;  ///< samples farther than max_gap spacings before the repair
+  int uncovered_after = 0;   ///< and after it
+  int moves = 0;             ///< vertex moves kept
+  double gap_before = 0;     ///< largest distance from a sample to the mesh, before and after
+  double gap_after = 0;
+};
+
+/// Moves vertices of `mesh` towards the samples farther than options.max_gap · `spacing` from it
+/// (farthest first, each vertex at most once per round): the corner of the sample's nearest face
+/// that is nearest the sample goes onto it (projected through `surface`), or the largest of
+/// options.fractions of the way that keeps the vertex's triangles within the angle and turn
+/// bounds and facing along its normal. Border vertices and vertices with (*fixed)[v] stay.
+/// `samples` are points on the surface (an input mesh's vertices).
+CoverageRepairStats repair_coverage(WorkingMesh& mesh, const SurfaceProjector& surface,
+                                    const Eigen::MatrixX3d& samples, double spacing,
+                                    const CoverageRepairOptions& options = {},
+                                    const std::vector<char>* fixed = nullptr);
+
+}  // namespace heatcvt
