@@ -5,12 +5,13 @@
 //   bench_cvt [--iterations N] [--threads T] [--quality-every K] [--only NAME] [--quick] [--no-cgal] [--repeat R]
 //             [--config default|paper|both]
 //
-// Two CVT configurations per model: `default` = fast_cvt_options() (meshcvt's defaults:
-// farthest-point + surface-Lloyd start during the factorisation, quality of the start checked
-// before any heat iteration with split / small-angle rounds, then over-relaxed heat Lloyd, quality
-// checked every 2nd iteration, cells split where too big for thin parts; stops at quality, at most
-// N iterations; "– (0 it)" in the time/iteration column: the start met the targets) and `paper` =
-// CvtOptions{} (random start, plain Lloyd, N iterations, quality every K).
+// Two CVT configurations per model: `default` = fast_cvt_options() (meshcvt's CVT with the dual
+// as output, --no-post-cvt, targets φm ≥ 51° and φmin ≥ 25°: farthest-point + surface-Lloyd
+// start during the factorisation, quality of the start checked before any heat iteration with
+// split / small-angle rounds, then over-relaxed heat Lloyd, quality checked every 2nd iteration,
+// cells split where too big for thin parts; stops at quality, at most N iterations; "– (0 it)"
+// in the time/iteration column: the start met the targets) and `paper` = CvtOptions{} (random
+// start, plain Lloyd, N iterations, quality every K).
 // Development overrides of the default configuration (environment): CVT_RELAXATION, CVT_ANDERSON,
 // CVT_GRAPH_LLOYD, CVT_SPLIT, CVT_INIT_RANDOM, CVT_SURFACE_LLOYD, CVT_SURFACE_OMEGA, CVT_SURFACE_TOL,
 // CVT_QUALITY_AT_START, CVT_QUALITY_EVERY, CVT_RINGS_SETTLED, CVT_SPLIT_ROUNDS, CVT_SPLIT_IT, CVT_ORDERING,
