@@ -335,6 +335,22 @@ void run_cvt(const TriangleMesh& work, const Laplacian& laplacian, const Eigen::
   out.stage_seconds.emplace_back("checks", seconds_since(t));
 }
 
+// Whether the result `after` is better than `before` (both of `sites` sites asked for): it passes
+// every check that `before` passed, its vertex count is within `tolerance` where that of `before`
+// is, and its φmin is larger.
+bool improves_on(const RemeshResult& after, const RemeshResult& before, int sites, double tolerance) {
+  for (const MeshCheck& c : before.checks.checks) {
+    const MeshCheck* now = after.checks.find(c.name);
+    if (c.ran && c.passed && !(now && now->ran && now->passed)) return false;
+  }
+  const auto within = [&](const RemeshResult& r) {
+    return std::abs(static_cast<double>(r.mesh.V.rows()) - sites) <= tolerance * sites;
+  };
+  if (within(before) && !within(after)) return false;
+  return triangle_quality(after.mesh.V, after.mesh.F).min_angle_deg >
+         triangle_quality(before.mesh.V, before.mesh.F).min_angle_deg;
+}
+
 // The pipeline of remesh_cvt() on a mesh already in its unit frame.
 RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions& options, const CvtCallback& progress) {
   const int sites = options.cvt.sites;
@@ -379,12 +395,20 @@ RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions&
       out.post_cvt_refusal = "not run: the dual of the closed input passes every check and meets the targets";
     } else if (!run_post_cvt_stages(mesh, options, out) && options.fallback_phi_min_deg > options.cvt.target_phi_min_deg) {
       // Their result refused: the dual is the output, so heat iterations until its own φmin
-      // reaches the fallback target, then the stages again on the new dual.
+      // reaches the fallback target, then the stages again on the new dual; the second result
+      // replaces the first where it is better (improves_on()).
       RemeshOptions again = options;
       again.cvt.target_phi_min_deg = options.fallback_phi_min_deg;
-      const std::vector<SurfacePoint> sites = out.cvt.sites;
-      run_cvt(*work, laplacian, metric, again, sites, progress, out);
-      if (out.mesh.F.rows() > 0 && !dual_meets_targets(out, again)) run_post_cvt_stages(mesh, again, out);
+      RemeshResult first = out;
+      run_cvt(*work, laplacian, metric, again, first.cvt.sites, progress, out);
+      if (dual_meets_targets(out, again))
+        out.post_cvt_refusal = "not run again: after heat iterations the dual passes every check and meets the targets";
+      else if (out.mesh.F.rows() > 0)
+        run_post_cvt_stages(mesh, again, out);
+      if (!improves_on(out, first, sites, options.mesher.sizing.count_tolerance)) {
+        first.stage_seconds = std::move(out.stage_seconds);
+        out = std::move(first);
+      }
     }
   }
   if (options.cvt.build_dual && options.post_cvt_stages) keep_creases(mesh, options, out);

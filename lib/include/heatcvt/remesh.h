@@ -93,8 +93,9 @@ struct RemeshOptions {
   double coverage_slack = 0.25;
   /// Where the post-CVT stages' result is refused (the dual is then the output), the CVT goes on
   /// from its sites with the φmin target raised to this (heat iterations until the dual's own
-  /// φmin reaches it, or the CVT's stops), then the stages run again on the new dual. 0 = off.
-  /// Default 25.
+  /// φmin reaches it, or the CVT's stops), then the stages run again on the new dual. This second
+  /// result is kept where it passes every check the first passed, keeps the count within
+  /// mesher.sizing.count_tolerance where the first did, and has a larger φmin. 0 = off. Default 25.
   double fallback_phi_min_deg = 25.0;
   /// Run the shared post-CVT stages (mesh_dual_surface(), mesher/surface_mesher.h) on the dual with
   /// the input mesh as the projector: the vertices are then projected onto the input and may be
