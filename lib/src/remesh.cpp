@@ -141,16 +141,24 @@ ValidationReport check_result(const TriangleMesh& result, const SurfaceDescripti
   return rep;
 }
 
+// The input's vertices that faces use (the samples of its surface).
+Eigen::MatrixX3d face_vertices(const TriangleMesh& input) {
+  std::vector<char> used(static_cast<std::size_t>(input.V.rows()), 0);
+  for (Eigen::Index k = 0; k < input.F.size(); ++k) used[static_cast<std::size_t>(input.F.data()[k])] = 1;
+  Eigen::MatrixX3d samples(std::count(used.begin(), used.end(), 1), 3);
+  for (Eigen::Index v = 0, r = 0; v < input.V.rows(); ++v)
+    if (used[static_cast<std::size_t>(v)]) samples.row(r++) = input.V.row(v);
+  return samples;
+}
+
 // Distance from `mesh` to the input vertex (of a face) farthest from it: how well it covers the input.
 double farthest_input_vertex(const TriangleMesh& input, const TriangleMesh& mesh) {
   if (mesh.F.rows() == 0) return std::numeric_limits<double>::infinity();
-  std::vector<char> used(static_cast<std::size_t>(input.V.rows()), 0);
-  for (Eigen::Index k = 0; k < input.F.size(); ++k) used[static_cast<std::size_t>(input.F.data()[k])] = 1;
-  const std::vector<SurfacePoint> nearest = closest_surface_points(mesh.V, mesh.F, input.V);
+  const Eigen::MatrixX3d samples = face_vertices(input);
+  const std::vector<SurfacePoint> nearest = closest_surface_points(mesh.V, mesh.F, samples);
   double farthest = 0;
-  for (Eigen::Index v = 0; v < input.V.rows(); ++v)
-    if (used[static_cast<std::size_t>(v)])
-      farthest = std::max(farthest, (position(mesh.V, mesh.F, nearest[static_cast<std::size_t>(v)]) - input.V.row(v).transpose()).norm());
+  for (Eigen::Index v = 0; v < samples.rows(); ++v)
+    farthest = std::max(farthest, (position(mesh.V, mesh.F, nearest[static_cast<std::size_t>(v)]) - samples.row(v).transpose()).norm());
   return farthest;
 }
 
@@ -212,11 +220,7 @@ void cover_input(const TriangleMesh& input, const SurfaceProjector& surface, con
                  TriangleMesh& mesh, RemeshResult& out) {
   if (options.coverage.rounds <= 0 || mesh.F.rows() == 0) return;
   const auto t = Clock::now();
-  std::vector<char> used(static_cast<std::size_t>(input.V.rows()), 0);
-  for (Eigen::Index k = 0; k < input.F.size(); ++k) used[static_cast<std::size_t>(input.F.data()[k])] = 1;
-  Eigen::MatrixX3d samples(std::count(used.begin(), used.end(), 1), 3);
-  for (Eigen::Index v = 0, r = 0; v < input.V.rows(); ++v)
-    if (used[static_cast<std::size_t>(v)]) samples.row(r++) = input.V.row(v);
+  const Eigen::MatrixX3d samples = face_vertices(input);
   const double spacing = std::sqrt(surface_area(input.V, input.F) / std::max(1, options.cvt.sites));
   WorkingMesh work = working_mesh_of(mesh, surface);
   out.coverage = repair_coverage(work, surface, samples, spacing, options.coverage);
