@@ -724,6 +724,49 @@ TEST(SliverRepair, AFlatEarOnTheBorderGoes) {
   EXPECT_EQ(r.boundary_loops, 1);
 }
 
+TEST(SliverRepair, SlidesABorderVertexAlongItsBorder) {
+  // Vertex 3 of a 6 × 6 grid, (0.5, 0) on the border y = 0, slid most of the way to its border
+  // neighbour 4: slivers that no interior move, flip or collapse (the floor keeps every vertex)
+  // can mend as well as sliding it back.
+  const TriangleMesh sheet = test::grid(6);
+  const MeshSurfaceProjector surface(sheet.V, sheet.F);
+  WorkingMesh w = test::working_mesh(sheet);
+  w.V(3, 0) = 0.62;
+  ASSERT_GT(slivers(w, 25), 0);
+  WorkingMesh held = w;
+  SliverRepairOptions fixed_border;
+  fixed_border.move_border = false;
+  repair_slivers(held, surface, fixed_border, std::vector<char>(w.num_vertices(), 0), w.num_vertices());
+  ASSERT_GT(slivers(held, 25), 0) << "precondition: only a border move mends it";
+  EXPECT_GT(repair_slivers(w, surface, {}, std::vector<char>(w.num_vertices(), 0), w.num_vertices()), 0);
+  EXPECT_EQ(slivers(w, 25), 0);
+  EXPECT_LT(w.V(3, 0), 0.62);
+  EXPECT_NEAR(w.V(3, 1), 0.0, 1e-12);  // still on the border line
+  EXPECT_NEAR(w.V(3, 2), 0.0, 1e-12);
+  const ValidationReport r = validate(w, false);
+  EXPECT_TRUE(r.ok()) << r.summary();
+  EXPECT_EQ(r.boundary_loops, 1);
+  EXPECT_EQ(r.vertices, 49);
+}
+
+TEST(SliverRepair, MendsAPatchWhoseNormalsAreFlipped) {
+  // The sliver of MovesAVertexBackIntoItsRing on a sheet whose stored normals all point against
+  // its faces (a patch whose scan normals were oriented the other way): every face faces against
+  // its corners before and after, and the repair still mends it without folding a face.
+  const TriangleMesh sheet = test::grid(6);
+  const MeshSurfaceProjector surface(sheet.V, sheet.F);
+  WorkingMesh w = test::working_mesh(sheet);
+  w.N.rowwise() = -Eigen::RowVector3d::UnitZ();
+  w.V(17, 0) = 0.62;
+  ASSERT_GT(slivers(w, 25), 0);
+  EXPECT_GT(repair_slivers(w, surface, {}, std::vector<char>(w.num_vertices(), 0), w.num_vertices()), 0);
+  EXPECT_EQ(slivers(w, 25), 0);
+  for (int v = 0; v < w.num_vertices(); ++v) EXPECT_EQ(w.N(v, 2), -1.0);  // moved vertices keep theirs
+  const ValidationReport r = validate(w, false);
+  EXPECT_TRUE(r.ok()) << r.summary();
+  EXPECT_EQ(r.vertices, 49);
+}
+
 // ---------------------------------------------------------------------------------------------
 
 // `sphere` pushed out radially into a spike around the unit direction d: radius 1 + h (x·d)^k

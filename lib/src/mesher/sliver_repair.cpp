@@ -29,7 +29,8 @@ class SliverRepair {
   SliverRepair(WorkingMesh& mesh, const SurfaceProjector& surface, const SliverRepairOptions& o,
                const std::vector<char>& frozen)
       : mesh_(mesh), surface_(surface), o_(o), frozen_(frozen),
-        min_cos_(std::cos(o.max_normal_turn_deg * M_PI / 180.0)) {
+        min_cos_(std::cos(o.max_normal_turn_deg * M_PI / 180.0)),
+        side_margin_(std::sin(o.side_margin_deg * M_PI / 180.0)) {
     frozen_.resize(mesh.num_vertices(), 0);
     double sum = 0;
     long count = 0;
@@ -78,7 +79,7 @@ class SliverRepair {
   const SurfaceProjector& surface_;
   const SliverRepairOptions& o_;
   std::vector<char> frozen_;
-  const double min_cos_;
+  const double min_cos_, side_margin_;
   double mean_edge_ = 0;
   std::vector<std::vector<int>> vf_;
   BorderLinks links_;
@@ -96,28 +97,41 @@ class SliverRepair {
   Eigen::Vector3d position(int v, const Edit* e) const {
     return e && v == e->moved ? e->position : Eigen::Vector3d(mesh_.V.row(v).transpose());
   }
+  // The surface normal at v after e. A moved vertex takes the normal of the surface at its new
+  // place unless that turns by more than max_normal_turn from its normal before: the fitted
+  // normals of a scan are unreliable at its border and a move spans a fraction of an edge.
   Eigen::Vector3d normal(int v, const Edit* e) const {
-    return e && v == e->moved ? e->normal : Eigen::Vector3d(mesh_.N.row(v).transpose());
+    const Eigen::Vector3d old = mesh_.N.row(v).transpose();
+    return e && v == e->moved && e->normal.dot(old) >= min_cos_ ? e->normal : old;
+  }
+
+  // Corners of the face with corners h (positions after e) whose surface normal the face's
+  // normal u does not face along: u·n <= margin. -1 for a degenerate face.
+  int corners_against(const MeshFace& h, const Edit* e, double margin, Eigen::Vector3d& u) const {
+    const Eigen::Vector3d p0 = position(h[0], e), p1 = position(h[1], e), p2 = position(h[2], e);
+    const Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
+    if (!(n.norm() > 0)) return -1;
+    u = n.normalized();
+    int against = 0;
+    for (int v : h) against += !(u.dot(normal(v, e)) > margin);
+    return against;
   }
 
   // Whether the edited face g (corners h) faces within max_normal_turn of each corner's surface
-  // normal, or at least on the side of each and within max_normal_turn of the face it replaces.
+  // normal, or turns by at most max_normal_turn against the face it replaces and faces against
+  // no more corner normals than that face did. Scan normals are noisy at borders and depth jumps
+  // and may be flipped on a patch, so a face may already face against some of them; a corner
+  // within side_margin of the face's plane counts as against before the edit and as along
+  // after it, so that a corner normal lying in the plane does not decide.
   bool unfolded(int g, const MeshFace& h, const Edit& e) const {
-    const Eigen::Vector3d p0 = position(h[0], &e), p1 = position(h[1], &e), p2 = position(h[2], &e);
-    const Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
-    if (!(n.norm() > 0)) return false;
-    const Eigen::Vector3d u = n.normalized();
+    Eigen::Vector3d u, m;
+    const int against = corners_against(h, &e, -side_margin_, u);
+    if (against < 0) return false;
     bool along_surface = true;
-    for (int v : h) {
-      const double c = u.dot(normal(v, &e));
-      if (!(c > 0)) return false;
-      along_surface = along_surface && c >= min_cos_;
-    }
+    for (int v : h) along_surface = along_surface && u.dot(normal(v, &e)) >= min_cos_;
     if (along_surface) return true;
-    const MeshFace& old = mesh_.face(g);
-    const Eigen::Vector3d m =
-        (mesh_.V.row(old[1]) - mesh_.V.row(old[0])).cross(mesh_.V.row(old[2]) - mesh_.V.row(old[0])).transpose();
-    return m.norm() > 0 && u.dot(m.normalized()) >= min_cos_;
+    const int was_against = corners_against(mesh_.face(g), nullptr, side_margin_, m);
+    return was_against >= 0 && against <= was_against && u.dot(m) >= min_cos_;
   }
 
   // Smallest angle of the faces of `region` after the edit e (before any edit when e is null);
@@ -202,10 +216,14 @@ class SliverRepair {
     out.push_back(std::move(e));
   }
 
-  // Moves of an interior vertex v towards the centroid of its neighbours. Border vertices stay:
-  // where scans overlap, a border vertex's projection can land on the other scan's layer.
+  // Moves of an interior vertex v towards the centroid of its neighbours; a border vertex moves
+  // along its border only (add_border_moves): where scans overlap, a move across the border can
+  // take its projection onto the other scan's layer.
   void add_moves(int v, std::vector<Edit>& out) const {
-    if (on_border(v)) return;
+    if (on_border(v)) {
+      add_border_moves(v, out);
+      return;
+    }
     std::vector<int> ring;
     for (int g : vf_[v])
       for (int u : mesh_.face(g))
@@ -222,6 +240,26 @@ class SliverRepair {
       e.moved = v;
       e.anchor = mesh_.anchor[v];
       surface_.project(here + step * (centroid - here), e.anchor, e.position, e.normal);
+      if (e.position.allFinite() && e.normal.allFinite()) out.push_back(std::move(e));
+    }
+  }
+
+  // Moves of a simple border vertex v along its border chord (prev to next) towards the
+  // chord's midpoint, the whole way or half of it, projected to the surface: the border keeps
+  // its course and only the spacing of its vertices changes.
+  void add_border_moves(int v, std::vector<Edit>& out) const {
+    if (!links_.simple(v) || !o_.move_border) return;
+    const Eigen::Vector3d here = mesh_.V.row(v).transpose();
+    const Eigen::Vector3d a = mesh_.V.row(links_.prev[v]).transpose(), b = mesh_.V.row(links_.next[v]).transpose();
+    const Eigen::Vector3d chord = b - a;
+    if (!(chord.norm() > 0)) return;
+    const Eigen::Vector3d t = chord.normalized();
+    const double along = (0.5 * (a + b) - here).dot(t);
+    for (double step : {1.0, 0.5}) {
+      Edit e;
+      e.moved = v;
+      e.anchor = mesh_.anchor[v];
+      surface_.project(here + step * along * t, e.anchor, e.position, e.normal);
       if (e.position.allFinite() && e.normal.allFinite()) out.push_back(std::move(e));
     }
   }
@@ -261,7 +299,7 @@ class SliverRepair {
   void apply(const Edit& e, const std::vector<int>& region) {
     if (e.moved >= 0) {
       mesh_.V.row(e.moved) = e.position.transpose();
-      mesh_.N.row(e.moved) = e.normal.transpose();
+      mesh_.N.row(e.moved) = normal(e.moved, &e).transpose();
       mesh_.anchor[e.moved] = e.anchor;
     }
     if (e.flip_face >= 0) {

@@ -16,9 +16,14 @@ struct SliverRepairOptions {
   /// Passes over the slivers (each edits faces that share no vertex, then looks again). Default 6.
   int passes = 6;
   /// An edited face must face within this of each of its corners' surface normals, or (the
-  /// surface's normals are noisy on scans) face on their side and turn by at most this against
-  /// the face it replaces: no edit folds the mesh. Default 60°.
+  /// surface's normals are noisy on scans, and may be flipped on a patch) turn by at most this
+  /// against the face it replaces and face against no more corner normals than it did: no edit
+  /// folds the mesh. A moved vertex keeps its normal where the surface's normal at its new place
+  /// turns by more than this. Default 60°.
   double max_normal_turn_deg = 60;
+  /// A corner normal within this of a face's plane counts as faced against before an edit and as
+  /// faced along after it (a normal lying in the plane does not decide). Default 6°.
+  double side_margin_deg = 6;
   /// A border face is cut off only where its height over its border edge is at most this times
   /// the mesh's mean edge length (the border moves by less than that), or where the midpoint of
   /// that edge is farther than that from the surface (the face spans a gap). Default 0.5.
@@ -26,6 +31,9 @@ struct SliverRepairOptions {
   /// A flip's new edge must have its midpoint within this times its length of the surface, or
   /// no farther than the old edge's midpoint. Default 0.25.
   double max_flip_offset = 0.25;
+  /// Whether a simple border corner may slide along the chord between its border neighbours.
+  /// Default true.
+  bool move_border = true;
 };
 
 /// For each face with its smallest angle below options.sliver_angle_deg (smallest first, none
@@ -38,8 +46,11 @@ struct SliverRepairOptions {
 /// - flip of one of its inner edges (the new edge not in the mesh yet, both ends of the old one
 ///   keeping valence above 3);
 /// - move of one of its interior corners to the centroid of its neighbours, or half-way there,
-///   projected to the surface (border vertices stay: where scans overlap, the projection of a
-///   border vertex can land on the other scan's layer);
+///   projected to the surface;
+/// - move of one of its simple border corners along the chord between its two border
+///   neighbours to the chord's midpoint, or half-way there, projected to the surface (only along
+///   the border, which keeps its course: where scans overlap, a move across the border could
+///   take the vertex onto the other scan's layer);
 /// - for a face on the border, cutting it off (its corners keep faces and stay manifold; its
 ///   height over the border edge at most max_trim_height mean edges, or the midpoint of that
 ///   edge farther than that from the surface).
