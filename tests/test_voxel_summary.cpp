@@ -1,7 +1,6 @@
 // Voxel summary, voxel size chooser and the streamed reconstruction (voxel_summary.h,
 // reconstruct_stream.h), on shapes built in code.
 #include <gtest/gtest.h>
-#include <omp.h>
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
@@ -34,8 +33,8 @@ PointCloud torus_cloud(int count, double noise, std::uint32_t seed = 5) {
   return cloud;
 }
 
-VoxelSummary summarise(const PointCloud& cloud, double h, Eigen::Index chunk) {
-  VoxelSummary summary(h);
+VoxelSummary summarise(const PointCloud& cloud, double h, Eigen::Index chunk, int threads = 0) {
+  VoxelSummary summary(h, threads);
   for (Eigen::Index start = 0; start < cloud.P.rows(); start += chunk) {
     const Eigen::Index n = std::min(chunk, cloud.P.rows() - start);
     CloudChunk c;
@@ -91,22 +90,30 @@ TEST(VoxelSummary, ChunkSizeDoesNotChangeAnyBit) {
   }
 }
 
-TEST(VoxelSummary, BinningOnOneOrAllThreadsGivesTheSameBits) {
-  // A chunk large enough to be binned on all threads (each thread a residue class of voxels).
+TEST(VoxelSummary, OneOrTwoThreadsGiveTheSameBits) {
+  // A chunk large enough to be binned on every thread (each thread a residue class of voxels),
+  // noisy enough (σ = half a voxel) that surface_points() takes the wide fits.
   const PointCloud cloud = torus_cloud(60000, 0.01);
-  const int threads = omp_get_max_threads();
-  omp_set_num_threads(1);
-  const VoxelSummary one = summarise(cloud, 0.02, 60000);
-  omp_set_num_threads(std::max(2, threads));
-  const VoxelSummary all = summarise(cloud, 0.02, 60000);
-  omp_set_num_threads(threads);
+  const VoxelSummary one = summarise(cloud, 0.02, 60000, 1);
+  const VoxelSummary two = summarise(cloud, 0.02, 60000, 2);
   ASSERT_GT(one.voxels(), 5000);
-  EXPECT_TRUE(identical(all.points(), one.points()));
-  EXPECT_TRUE(identical(all.normals(), one.normals()));
-  EXPECT_TRUE(identical(all.colours(), one.colours()));
-  EXPECT_TRUE((all.counts().array() == one.counts().array()).all());
+  EXPECT_TRUE(identical(two.points(), one.points()));
+  EXPECT_TRUE(identical(two.normals(), one.normals()));
+  EXPECT_TRUE(identical(two.colours(), one.colours()));
+  EXPECT_TRUE((two.counts().array() == one.counts().array()).all());
+  Eigen::VectorXi w1, w2;
+  Eigen::MatrixX3d c1, c2;
+  const Eigen::MatrixX3d s1 = one.surface_points(3000, &w1, &c1), s2 = two.surface_points(3000, &w2, &c2);
+  ASSERT_GT(s1.rows(), 2000);
+  EXPECT_TRUE(identical(s2, s1));
+  EXPECT_TRUE(identical(c2, c1));
+  EXPECT_TRUE((w1.array() == w2.array()).all());
   // ... and the same as point by point (chunks of one, binned serially).
   EXPECT_TRUE(identical(summarise(cloud, 0.02, 1).points(), one.points()));
+  // The voxel size chooser too.
+  VoxelSizeOptions o1, o2;
+  o1.threads = 1, o2.threads = 2;
+  EXPECT_EQ(choose_voxel_size(cloud.P, 500, o1), choose_voxel_size(cloud.P, 500, o2));
 }
 
 TEST(VoxelSummary, MomentsMatchTheirVoxelsPoints) {
@@ -206,7 +213,7 @@ TEST(VoxelSummary, WideFitTakesTheNormalWhereTheNoiseBandFillsTheVoxelNeighbourh
   const double h = 0.02, sigma = 0.6 * h;
   const TriangleMesh sphere = test::icosphere(5);
   const Eigen::MatrixX3d P = sample_surface(sphere.V, sphere.F, 400000, 7, sigma);
-  VoxelSummary s(h);
+  VoxelSummary s(h, 2);
   s.add(P);
   auto rms_off = [](const Eigen::MatrixX3d& Q, double radius) {
     return std::sqrt((Q.rowwise().norm().array() - radius).square().mean());
@@ -217,10 +224,9 @@ TEST(VoxelSummary, WideFitTakesTheNormalWhereTheNoiseBandFillsTheVoxelNeighbourh
   const double narrow = rms_off(s.surface_points(0, nullptr, nullptr, plain), 1.0);
   const Eigen::MatrixX3d fitted = s.surface_points(0);
   const double wide = rms_off(fitted, 1.0);
-  const int threads = omp_get_max_threads();
-  omp_set_num_threads(1);
-  const Eigen::MatrixX3d serial = s.surface_points(0);
-  omp_set_num_threads(threads);
+  VoxelSummary one_thread(h, 1);
+  one_thread.add(P);
+  const Eigen::MatrixX3d serial = one_thread.surface_points(0);
   EXPECT_TRUE(identical(serial, fitted)) << "the thread count changed the surface points";
   std::printf("rms off the sphere: voxel fit %.5f, widened normal and mean shift %.5f (sigma %.5f)\n", narrow, wide, sigma);
   EXPECT_LT(wide, 0.75 * narrow);

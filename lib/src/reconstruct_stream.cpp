@@ -142,7 +142,7 @@ StreamedReconstruction reconstruct_surface_streamed(CloudChunkSource& source, co
   RawBuffer raw;
   Reservoir reservoir(stream.sample_points, stream.sample_seed);
   std::unique_ptr<VoxelSummary> summary;
-  if (stream.voxel_size > 0) summary = std::make_unique<VoxelSummary>(stream.voxel_size);
+  if (stream.voxel_size > 0) summary = std::make_unique<VoxelSummary>(stream.voxel_size, options.threads);
   std::int64_t points = 0;
   CloudChunk chunk;
   // Pass 1: raw points while they fit, the reservoir sample, and the summary when its size is given.
@@ -158,12 +158,14 @@ StreamedReconstruction reconstruct_surface_streamed(CloudChunkSource& source, co
   if (!summary) {
     if (reservoir.seen() < 10)
       throw InvalidInputError(source.name() + ": fewer than 10 finite points (" + std::to_string(points) + " points read)");
-    double h = choose_voxel_size(reservoir.sample(), options.sites, stream.voxel);
+    VoxelSizeOptions voxel = stream.voxel;
+    voxel.threads = options.threads;
+    double h = choose_voxel_size(reservoir.sample(), options.sites, voxel);
     if (stream.project_to_surface) {
       const double per_voxel = static_cast<double>(reservoir.seen()) / (options.sites * stream.voxel.points_per_site);
       h /= std::min(stream.fine_voxel_factor, std::max(1.0, std::sqrt(per_voxel / stream.min_points_per_fine_voxel)));
     }
-    summary = std::make_unique<VoxelSummary>(h);
+    summary = std::make_unique<VoxelSummary>(h, options.threads);
     source.rewind();  // pass 2: every point into the summary
     while (source.next(chunk)) summary->add(chunk);
     passes = 2;

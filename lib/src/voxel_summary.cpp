@@ -99,7 +99,7 @@ Cell cell_of(double x, double y, double z, double inv_h) {
 
 // Occupied cells of size h: the cells as 63-bit keys (21 bits per axis, relative to the smallest
 // cell) sorted and counted, or a hash set when the cloud spans more than 2^21 cells on an axis.
-Eigen::Index occupied_voxels(const Eigen::MatrixX3d& P, double h) {
+Eigen::Index occupied_voxels(const Eigen::MatrixX3d& P, double h, int threads) {
   const double inv_h = 1.0 / h;
   const Eigen::Index n = P.rows();
   if (n == 0) return 0;
@@ -108,7 +108,7 @@ Eigen::Index occupied_voxels(const Eigen::MatrixX3d& P, double h) {
   constexpr std::int64_t kAxis = std::int64_t{1} << 21;
   if (c1[0] - c0[0] < kAxis && c1[1] - c0[1] < kAxis && c1[2] - c0[2] < kAxis) {
     std::vector<std::uint64_t> keys(static_cast<std::size_t>(n));
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(threads)
     for (Eigen::Index i = 0; i < n; ++i) {
       const Cell c = cell_of(P(i, 0), P(i, 1), P(i, 2), inv_h);
       keys[static_cast<std::size_t>(i)] = static_cast<std::uint64_t>(c[0] - c0[0]) << 42 |
@@ -145,7 +145,8 @@ struct VoxelSummary::Impl {
   mutable bool order_valid = false;
 };
 
-VoxelSummary::VoxelSummary(double voxel_size) : h_(voxel_size), inv_h_(1.0 / voxel_size), impl_(std::make_unique<Impl>()) {
+VoxelSummary::VoxelSummary(double voxel_size, int threads)
+    : h_(voxel_size), inv_h_(1.0 / voxel_size), threads_(resolve_threads(threads)), impl_(std::make_unique<Impl>()) {
   if (!(std::isfinite(voxel_size) && voxel_size > 0))
     throw InvalidInputError("VoxelSummary: voxel_size must be finite and > 0 (got " + std::to_string(voxel_size) + ")");
 }
@@ -210,7 +211,7 @@ void VoxelSummary::add_weighted(const Eigen::MatrixX3d& P, const Eigen::MatrixX3
     slot[static_cast<std::size_t>(i)] = slot_of(cell_of(P(i, 0), P(i, 1), P(i, 2), inv_h_));
     ++finite;
   }
-#pragma omp parallel num_threads(n >= kParallelBinning ? resolve_threads(0) : 1)
+#pragma omp parallel num_threads(n >= kParallelBinning ? threads_ : 1)
   {
     const auto t = static_cast<std::uint32_t>(omp_get_thread_num());
     const auto threads = static_cast<std::uint32_t>(omp_get_num_threads());
@@ -406,7 +407,7 @@ struct BlockFits {
 };
 // `moments_of(j)`: the moments of cell j (Moments or MergedMoments).
 template <class MomentsOf>
-BlockFits block_fits(const std::vector<Cell>& cells, const MomentsOf& moments_of, double size) {
+BlockFits block_fits(const std::vector<Cell>& cells, const MomentsOf& moments_of, double size, int threads) {
   const std::size_t n = cells.size();
   BlockFits out;
   out.mu.assign(n, Eigen::Vector3d::Zero());
@@ -415,7 +416,7 @@ BlockFits block_fits(const std::vector<Cell>& cells, const MomentsOf& moments_of
   out.ok.assign(n, 0);
   constexpr std::size_t kChunk = 4096;
   const auto chunks = static_cast<std::int64_t>((n + kChunk - 1) / kChunk);
-#pragma omp parallel for schedule(dynamic, 1)
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
   for (std::int64_t k = 0; k < chunks; ++k) {
     const std::size_t begin = static_cast<std::size_t>(k) * kChunk, end = std::min(n, begin + kChunk);
     MergedMoments nb;
@@ -490,7 +491,7 @@ void VoxelSummary::project_means(const VoxelSurfaceFit& fit, Eigen::MatrixX3d& P
     rank[ord[r]] = static_cast<std::uint32_t>(r);
   }
   const auto voxel_moments = [&](std::size_t r) -> const Moments& { return m.moments[ord[r]]; };
-  const BlockFits local = block_fits(cells, voxel_moments, h_);
+  const BlockFits local = block_fits(cells, voxel_moments, h_, threads_);
   // Widen only in a noise regime: where most neighbourhoods are no plane. Where few are, they are
   // edges, clutter and depth steps, which a wider plane does not describe.
   std::size_t thick_voxels = 0;
@@ -503,9 +504,9 @@ void VoxelSummary::project_means(const VoxelSurfaceFit& fit, Eigen::MatrixX3d& P
     grids.push_back(coarse_grid(cells, voxel_moments, h_, level));
     const CoarseGrid& g = grids.back();
     wide.push_back(block_fits(g.cells, [&](std::size_t j) -> const MergedMoments& { return g.merged[j]; },
-                              h_ * static_cast<double>(std::int64_t{1} << level)));
+                              h_ * static_cast<double>(std::int64_t{1} << level), threads_));
   }
-#pragma omp parallel for schedule(dynamic, 4096)
+#pragma omp parallel for schedule(dynamic, 4096) num_threads(threads_)
   for (Eigen::Index ri = 0; ri < rows; ++ri) {
     const auto r = static_cast<std::size_t>(ri);
     const Cell& c = cells[r];
@@ -573,14 +574,14 @@ Eigen::MatrixX3d VoxelSummary::surface_points(Eigen::Index target_points, Eigen:
   double size = h_;
   if (target_points > 0 && P.rows() > target_points) {
     double lo = h_, hi = 2 * h_;
-    while (occupied_voxels(P, hi) > target_points) lo = hi, hi *= 2;
+    while (occupied_voxels(P, hi, threads_) > target_points) lo = hi, hi *= 2;
     for (int it = 0; it < kRebinBisections; ++it) {
       const double mid = std::sqrt(lo * hi);
-      (occupied_voxels(P, mid) > target_points ? lo : hi) = mid;
+      (occupied_voxels(P, mid, threads_) > target_points ? lo : hi) = mid;
     }
     size = hi;
   }
-  VoxelSummary rebinned(size);
+  VoxelSummary rebinned(size, threads_);
   for (Eigen::Index r = 0; r < P.rows(); ++r) {
     const double c[3] = {C.rows() ? C(r, 0) : 0.0, C.rows() ? C(r, 1) : 0.0, C.rows() ? C(r, 2) : 0.0};
     rebinned.add_point(P(r, 0), P(r, 1), P(r, 2), C.rows() ? c : nullptr, static_cast<std::int64_t>(w(r)));
@@ -607,12 +608,13 @@ SurfaceAreaEstimate estimate_surface_area(const Eigen::MatrixX3d& sample, const 
   const double target = std::max(1.0, static_cast<double>(n) / options.sample_points_per_voxel);
   // Start where a flat square of side diag would give the target count, then rescale.
   double h = diag / std::sqrt(target);
-  Eigen::Index count = occupied_voxels(P, h);
+  const int threads = resolve_threads(options.threads);
+  Eigen::Index count = occupied_voxels(P, h, threads);
   for (int it = 1; it < options.probe_iterations; ++it) {
     const double next = h * std::sqrt(static_cast<double>(count) / target);
     if (std::abs(next - h) <= 1e-3 * h) break;
     h = next;
-    count = occupied_voxels(P, h);
+    count = occupied_voxels(P, h, threads);
   }
   return {static_cast<double>(count) * h * h / 1.5, h, count};
 }

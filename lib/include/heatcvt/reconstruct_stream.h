@@ -28,7 +28,8 @@ struct StreamOptions {
   /// Voxel size of the summary (input units); 0 = chosen by choose_voxel_size() from a
   /// reservoir sample of the first pass, for ReconstructionOptions::sites. Default 0.
   double voxel_size = 0.0;
-  /// The chooser's options (points_per_site: voxel means per site). Defaults as VoxelSizeOptions.
+  /// The chooser's options (points_per_site: voxel means per site). Defaults as VoxelSizeOptions;
+  /// its `threads` is replaced by ReconstructionOptions::threads, as is the summary's.
   VoxelSizeOptions voxel;
   /// Size of the uniform reservoir sample (first pass) the voxel size is chosen from. Default 100000.
   std::int64_t sample_points = 100000;

@@ -44,9 +44,11 @@ struct VoxelSurfaceFit {
 /// so the covariance keeps its precision far from the origin.
 class VoxelSummary {
  public:
-  /// Voxels are the cubes [c·h, (c+1)·h)³ for integer cells c, h = voxel_size.
+  /// Voxels are the cubes [c·h, (c+1)·h)³ for integer cells c, h = voxel_size. `threads`: the
+  /// OpenMP threads of the binning and of surface_points() (0 = all cores); no result depends
+  /// on it.
   /// \throw InvalidInputError unless voxel_size is finite and > 0.
-  explicit VoxelSummary(double voxel_size);
+  explicit VoxelSummary(double voxel_size, int threads = 0);
   ~VoxelSummary();
   VoxelSummary(VoxelSummary&&) noexcept;
   VoxelSummary& operator=(VoxelSummary&&) noexcept;
@@ -104,8 +106,8 @@ class VoxelSummary {
   ///     bisection) at which at most target_points cells are occupied: the projected means lie on
   ///     a thin surface, so the count hits the target without the noise of the raw points.
   /// `weights` (optional) receives the point count behind each output point; `colours` (optional)
-  /// the count-weighted mean colour (0 rows unless has_colours()). Runs on all OpenMP threads;
-  /// the result does not depend on their number.
+  /// the count-weighted mean colour (0 rows unless has_colours()). Runs on the summary's
+  /// threads; the result does not depend on their number.
   Eigen::MatrixX3d surface_points(Eigen::Index target_points = 0, Eigen::VectorXi* weights = nullptr,
                                   Eigen::MatrixX3d* colours = nullptr, const VoxelSurfaceFit& fit = {}) const;
   /// #voxels by 3 integer cells, in the same order.
@@ -120,6 +122,7 @@ class VoxelSummary {
   std::uint32_t slot_of(const std::array<std::int64_t, 3>& key);
   void project_means(const VoxelSurfaceFit& fit, Eigen::MatrixX3d& P, Eigen::VectorXd& w, Eigen::MatrixX3d& C) const;
   double h_, inv_h_;  // voxel size and its inverse (cells are floor(p · inv_h_))
+  int threads_;       // resolved OpenMP thread count
   std::int64_t added_ = 0, skipped_ = 0, coloured_ = 0;
   std::unique_ptr<Impl> impl_;
 };
@@ -135,6 +138,9 @@ struct VoxelSizeOptions {
   /// Refinements of that probe size (each rescales it by the square root of the count ratio,
   /// the law of a surface: occupied voxels ∝ h⁻²). Default 6.
   int probe_iterations = 6;
+  /// OpenMP threads of the probe's binning (0 = all cores); the result does not depend on it.
+  /// Default 0.
+  int threads = 0;
 };
 
 /// Surface-area estimate from an unbiased sample of the cloud (e.g. a reservoir sample):
