@@ -12,6 +12,9 @@
 namespace heatcvt {
 namespace {
 
+// A border vertex within this many mean edges of the surface's own border lies on it.
+constexpr double kOnBorder = 1e-3;
+
 // A local edit, described before it is made so that it can be scored: faces that go, faces that
 // get new corners, at most one vertex that moves (the one a collapse keeps, or a moved corner).
 struct Edit {
@@ -255,11 +258,17 @@ class SliverRepair {
     if (!(chord.norm() > 0)) return;
     const Eigen::Vector3d t = chord.normalized();
     const double along = (0.5 * (a + b) - here).dot(t);
+    // A vertex on the surface's own border (an input mesh's boundary) stays on it.
+    Eigen::Vector3d on, n;
+    const bool on_surface_border = surface_.has_border() && surface_.project_to_border(here, on, n) &&
+                                   (on - here).norm() <= kOnBorder * mean_edge_;
     for (double step : {1.0, 0.5}) {
       Edit e;
       e.moved = v;
       e.anchor = mesh_.anchor[v];
-      surface_.project(here + step * along * t, e.anchor, e.position, e.normal);
+      const Eigen::Vector3d target = here + step * along * t;
+      if (!(on_surface_border && surface_.project_to_border(target, e.position, e.normal)))
+        surface_.project(target, e.anchor, e.position, e.normal);
       if (e.position.allFinite() && e.normal.allFinite()) out.push_back(std::move(e));
     }
   }
