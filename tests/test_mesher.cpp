@@ -749,6 +749,40 @@ TEST(SliverRepair, SlidesABorderVertexAlongItsBorder) {
   EXPECT_EQ(r.vertices, 49);
 }
 
+// A grid on [-1, 1]² mapped onto the unit disk (x √(1 − y²/2), y √(1 − x²/2)): its border
+// vertices lie on the unit circle.
+TriangleMesh disk(int n) {
+  TriangleMesh m = test::grid(n, -1, 1, -1, 1);
+  for (Eigen::Index v = 0; v < m.V.rows(); ++v) {
+    const double x = m.V(v, 0), y = m.V(v, 1);
+    m.V(v, 0) = x * std::sqrt(1 - 0.5 * y * y), m.V(v, 1) = y * std::sqrt(1 - 0.5 * x * x);
+  }
+  return m;
+}
+
+TEST(SliverRepair, ABorderVertexOnTheInputMeshsBoundaryStaysOnIt) {
+  // Vertex 3 of a coarse disk, (0, −1), moved along the circle most of the way to its border
+  // neighbour 4. Sliding it back along the chord would cut inside the input's round boundary;
+  // the repair keeps it on that boundary.
+  const TriangleMesh fine = disk(40);
+  const MeshSurfaceProjector surface(fine.V, fine.F);
+  WorkingMesh w = test::working_mesh(disk(6));
+  const double a3 = std::atan2(w.V(3, 1), w.V(3, 0)), a4 = std::atan2(w.V(4, 1), w.V(4, 0));
+  const double a = 0.2 * a3 + 0.8 * a4;
+  Eigen::Vector3d on, n;
+  ASSERT_TRUE(surface.project_to_border(Eigen::Vector3d(std::cos(a), std::sin(a), 0), on, n));
+  w.V.row(3) = on.transpose();
+  ASSERT_GT(slivers(w, 25), 0);
+  EXPECT_GT(repair_slivers(w, surface, {}, std::vector<char>(w.num_vertices(), 0), w.num_vertices()), 0);
+  const Eigen::Vector3d moved = w.V.row(3).transpose();
+  EXPECT_LT(std::atan2(moved.y(), moved.x()), a);  // slid back towards where it was
+  ASSERT_TRUE(surface.project_to_border(moved, on, n));
+  EXPECT_LT((on - moved).norm(), 1e-12);  // on the input's boundary
+  const ValidationReport r = validate(w, false);
+  EXPECT_TRUE(r.ok()) << r.summary();
+  EXPECT_EQ(r.vertices, 49);
+}
+
 TEST(SliverRepair, MendsAPatchWhoseNormalsAreFlipped) {
   // The sliver of MovesAVertexBackIntoItsRing on a sheet whose stored normals all point against
   // its faces (a patch whose scan normals were oriented the other way): every face faces against
