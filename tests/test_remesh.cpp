@@ -193,14 +193,14 @@ TEST(RemeshCvt, RepairGivesAManifoldWhereCellsWrapAThinTube) {
   EXPECT_EQ(r.mesh.V.rows(), 60 + r.repair_sites - r.repair_dropped_sites);
 }
 
-// bunny_pmp at 1,000 sites: the post-CVT stages' first result cuts off more of the tips than the
-// dual (refused), so without the fallback the dual (φmin below 25°) is the output. With it, heat
-// iterations raise the dual's φmin and the stages' second result is kept, meeting the remeshing
-// targets (every check, count within 2 %, φmin ≥ 30°, φm ≥ 52°).
+// bunny_libigl at 300 sites: the post-CVT stages' first result cuts off more of the tips than the
+// dual (refused), so without the fallback the dual, with φmin below 25°, is the output. With it,
+// the CVT goes on from its sites until the dual's φmin reaches fallback_phi_min_deg and the stages
+// run again: φmin at least the fallback's target, every check passed, the count within 2 %.
 TEST(RemeshCvt, ARefusedPostCvtResultGetsHeatIterationsAndASecondRun) {
-  const TriangleMesh input = read_mesh(test::data_path("meshes/bunny_pmp.off"));
+  const TriangleMesh input = read_mesh(test::data_path("meshes/bunny_libigl.off"));
   RemeshOptions no_fallback;
-  no_fallback.cvt.sites = 1000;
+  no_fallback.cvt.sites = 300;
   no_fallback.cvt.threads = 2;
   no_fallback.fallback_phi_min_deg = 0;
   const RemeshResult first = remesh_cvt(input, no_fallback);
@@ -209,7 +209,33 @@ TEST(RemeshCvt, ARefusedPostCvtResultGetsHeatIterationsAndASecondRun) {
 
   RemeshOptions with = no_fallback;
   with.fallback_phi_min_deg = RemeshOptions{}.fallback_phi_min_deg;
+  ASSERT_EQ(with.fallback_phi_min_deg, 25.0);
   const RemeshResult r = remesh_cvt(input, with);
+  EXPECT_TRUE(r.checks.ok()) << r.checks.summary();
+  EXPECT_NEAR(static_cast<double>(r.mesh.V.rows()), 300.0, 6.0);
+  EXPECT_GE(r.quality.min_angle_deg, with.fallback_phi_min_deg);
+}
+
+// fertility at 1,000 sites: the dual passes every check with φmin between a scan's 25° and a
+// remesh's 30°. With the scan's target the stages are skipped and the dual is the output; with
+// meshcvt's (RemeshOptions' mesher.sizing.min_angle_deg, 30°) they run and their result is kept:
+// every check, the count within 2 %, φmin ≥ 30°, φm ≥ 52°.
+TEST(RemeshCvt, ADualBelowThirtyDegreesGoesThroughTheStages) {
+  const TriangleMesh input = read_mesh(test::data_path("meshes/fertility.off"));
+  RemeshOptions scan_target;
+  scan_target.cvt.sites = 1000;
+  scan_target.cvt.threads = 2;
+  scan_target.mesher.sizing.min_angle_deg = 25;
+  const RemeshResult dual = remesh_cvt(input, scan_target);
+  ASSERT_FALSE(dual.post_cvt_kept);
+  ASSERT_EQ(dual.post_cvt_refusal.rfind("not run", 0), 0u) << dual.post_cvt_refusal;
+  ASSERT_GE(dual.quality.min_angle_deg, 25.0);
+  ASSERT_LT(dual.quality.min_angle_deg, 30.0);
+
+  RemeshOptions o = scan_target;
+  o.mesher.sizing.min_angle_deg = RemeshOptions{}.mesher.sizing.min_angle_deg;
+  ASSERT_EQ(o.mesher.sizing.min_angle_deg, 30.0);
+  const RemeshResult r = remesh_cvt(input, o);
   EXPECT_TRUE(r.post_cvt_kept) << r.post_cvt_refusal;
   EXPECT_TRUE(r.checks.ok()) << r.checks.summary();
   EXPECT_NEAR(static_cast<double>(r.mesh.V.rows()), 1000.0, 20.0);

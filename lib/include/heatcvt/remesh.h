@@ -109,13 +109,17 @@ struct RemeshOptions {
   /// Options of those stages (threads: cvt.threads is used). Default SurfaceMesherOptions{} with
   /// holes.policy = keep: the boundary loops of an input mesh are real, so only holes inside the
   /// input surface (missing dual triangles) are closed; and min_piece_vertex_fraction = 0: every
-  /// component of an input mesh is real, however small; and sizing.remove_flying = false: no face
-  /// of the dual is taken for one across a depth jump.
+  /// component of an input mesh is real, however small; sizing.remove_flying = false: no face
+  /// of the dual is taken for one across a depth jump; and sizing.min_angle_deg = 30 with
+  /// sizing.repair.sliver_angle_deg = 30: a remesh aims at φmin ≥ 30° (a scan's mesh at 25°), so
+  /// the stages run on a dual below that and treat faces below it as slivers.
   SurfaceMesherOptions mesher = [] {
     SurfaceMesherOptions m;
     m.holes.policy = HolePolicy::keep;
     m.min_piece_vertex_fraction = 0;
     m.sizing.remove_flying = false;  // an input mesh's faces are its surface
+    m.sizing.min_angle_deg = 30;
+    m.sizing.repair.sliver_angle_deg = 30;
     return m;
   }();
   /// Sharp creases of the input (dihedral angle above creases.min_dihedral_deg, default 60°) kept

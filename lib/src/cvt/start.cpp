@@ -358,19 +358,22 @@ int revive_restricted(const CvtSurface& surface, const std::vector<Eigen::Vector
                       const std::vector<double>& mass, const std::vector<Eigen::Vector3d>& P,
                       std::vector<SurfacePoint>& next) {
   const int n = static_cast<int>(X.size()), ns = static_cast<int>(mass.size());
+  if (std::all_of(mass.begin(), mass.end(), [](double m) { return m > 0; })) return 0;
+  // The vertex of each cell farthest from its site (the first in index order on ties).
+  std::vector<int> far(ns, -1);
+  std::vector<double> far_d(ns, -1);
+  for (int v = 0; v < n; ++v) {
+    const int c = label[v];
+    if (c < 0) continue;
+    const double d = (X[v] - P[c]).squaredNorm();
+    if (d > far_d[c]) far_d[c] = d, far[c] = v;
+  }
   std::vector<double> cell_mass = mass;
   int revived = 0;
   for (int s = 0; s < ns; ++s) {
     if (mass[s] > 0) continue;
     const int big = static_cast<int>(std::max_element(cell_mass.begin(), cell_mass.end()) - cell_mass.begin());
-    int far = -1;
-    double fd = -1;
-    for (int v = 0; v < n; ++v)
-      if (label[v] == big) {
-        const double d = (X[v] - P[big]).squaredNorm();
-        if (d > fd) fd = d, far = v;
-      }
-    if (far >= 0) next[s] = vertex_point(surface.F, surface.vfaces, far);
+    if (far[big] >= 0) next[s] = vertex_point(surface.F, surface.vfaces, far[big]);
     cell_mass[big] = 0;
     ++revived;
   }
