@@ -91,8 +91,9 @@ TEST(VoxelSummary, ChunkSizeDoesNotChangeAnyBit) {
 }
 
 TEST(VoxelSummary, OneOrTwoThreadsGiveTheSameBits) {
-  // A chunk large enough to be binned on every thread (each thread a residue class of voxels),
-  // noisy enough (σ = half a voxel) that surface_points() takes the wide fits.
+  // A chunk large enough to be binned on every thread (each thread a residue class of voxels);
+  // the wide fits of surface_points() on both thread counts are compared in
+  // WideFitTakesTheNormalWhereTheNoiseBandFillsTheVoxelNeighbourhood.
   const PointCloud cloud = torus_cloud(60000, 0.01);
   const VoxelSummary one = summarise(cloud, 0.02, 60000, 1);
   const VoxelSummary two = summarise(cloud, 0.02, 60000, 2);
