@@ -668,6 +668,11 @@ TEST(SliverCollapse, CollapsesTheShortEdgeOfSlivers) {
 
 // ---------------------------------------------------------------------------------------------
 
+// repair_slivers() with no vertex frozen and every vertex kept (only flips and moves).
+int repair_keeping_every_vertex(WorkingMesh& w, const SurfaceProjector& surface, const SliverRepairOptions& o = {}) {
+  return repair_slivers(w, surface, o, std::vector<char>(w.num_vertices(), 0), w.num_vertices());
+}
+
 TEST(SliverRepair, RemovesTheSliversOfAJitteredSphereWithoutLosingAVertex) {
   const TriangleMesh fine = test::icosphere(5);
   const MeshSurfaceProjector surface(fine.V, fine.F);
@@ -675,7 +680,7 @@ TEST(SliverRepair, RemovesTheSliversOfAJitteredSphereWithoutLosingAVertex) {
   const int vertices = w.num_vertices();
   ASSERT_GT(slivers(w, 25), 3);
   const double before = ring_min_angle(w);
-  EXPECT_GT(repair_slivers(w, surface, {}, std::vector<char>(vertices, 0), vertices), 0);
+  EXPECT_GT(repair_keeping_every_vertex(w, surface), 0);
   EXPECT_EQ(slivers(w, 25), 0);
   EXPECT_GT(ring_min_angle(w), before);
   EXPECT_EQ(vertices_in_faces(w), vertices);  // the floor: only flips and moves
@@ -697,7 +702,7 @@ TEST(SliverRepair, MovesAVertexBackIntoItsRingAndHonoursFrozenVertices) {
   EXPECT_EQ(repair_slivers(held, surface, {}, std::vector<char>(w.num_vertices(), 1), 0), 0);
   EXPECT_EQ((held.V - w.V).cwiseAbs().maxCoeff(), 0.0);
   EXPECT_EQ(held.faces(), w.faces());
-  EXPECT_GT(repair_slivers(w, surface, {}, std::vector<char>(w.num_vertices(), 0), w.num_vertices()), 0);
+  EXPECT_GT(repair_keeping_every_vertex(w, surface), 0);
   EXPECT_EQ(slivers(w, 25), 0);
   EXPECT_LT(w.V(17, 0), 0.62);
   EXPECT_NEAR(w.V(17, 2), 0.0, 1e-12);  // on the plane
@@ -736,9 +741,9 @@ TEST(SliverRepair, SlidesABorderVertexAlongItsBorder) {
   WorkingMesh held = w;
   SliverRepairOptions fixed_border;
   fixed_border.move_border = false;
-  repair_slivers(held, surface, fixed_border, std::vector<char>(w.num_vertices(), 0), w.num_vertices());
+  repair_keeping_every_vertex(held, surface, fixed_border);
   ASSERT_GT(slivers(held, 25), 0) << "precondition: only a border move mends it";
-  EXPECT_GT(repair_slivers(w, surface, {}, std::vector<char>(w.num_vertices(), 0), w.num_vertices()), 0);
+  EXPECT_GT(repair_keeping_every_vertex(w, surface), 0);
   EXPECT_EQ(slivers(w, 25), 0);
   EXPECT_LT(w.V(3, 0), 0.62);
   EXPECT_NEAR(w.V(3, 1), 0.0, 1e-12);  // still on the border line
@@ -773,7 +778,7 @@ TEST(SliverRepair, ABorderVertexOnTheInputMeshsBoundaryStaysOnIt) {
   ASSERT_TRUE(surface.project_to_border(Eigen::Vector3d(std::cos(a), std::sin(a), 0), on, n));
   w.V.row(3) = on.transpose();
   ASSERT_GT(slivers(w, 25), 0);
-  EXPECT_GT(repair_slivers(w, surface, {}, std::vector<char>(w.num_vertices(), 0), w.num_vertices()), 0);
+  EXPECT_GT(repair_keeping_every_vertex(w, surface), 0);
   const Eigen::Vector3d moved = w.V.row(3).transpose();
   EXPECT_LT(std::atan2(moved.y(), moved.x()), a);  // slid back towards where it was
   ASSERT_TRUE(surface.project_to_border(moved, on, n));
@@ -793,7 +798,7 @@ TEST(SliverRepair, MendsAPatchWhoseNormalsAreFlipped) {
   w.N.rowwise() = -Eigen::RowVector3d::UnitZ();
   w.V(17, 0) = 0.62;
   ASSERT_GT(slivers(w, 25), 0);
-  EXPECT_GT(repair_slivers(w, surface, {}, std::vector<char>(w.num_vertices(), 0), w.num_vertices()), 0);
+  EXPECT_GT(repair_keeping_every_vertex(w, surface), 0);
   EXPECT_EQ(slivers(w, 25), 0);
   for (int v = 0; v < w.num_vertices(); ++v) EXPECT_EQ(w.N(v, 2), -1.0);  // moved vertices keep theirs
   const ValidationReport r = validate(w, false);

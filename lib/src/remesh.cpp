@@ -92,6 +92,9 @@ std::vector<SurfacePoint> farthest_points_of_cells(const VoronoiDiagram& d, cons
 // Whether (V, F) has edges with more than two faces (then no manifold dual exists).
 bool has_nonmanifold_edges(const SurfaceDescription& input) { return input.topology.nonmanifold_edges > 0; }
 
+// Site spacing of `sites` sites on the surface of `mesh`.
+double site_spacing(const TriangleMesh& mesh, int sites) { return std::sqrt(surface_area(mesh.V, mesh.F) / std::max(1, sites)); }
+
 // Closed-ball repair (RemeshOptions::repair_rounds): while the dual of out.cvt is not a manifold,
 // a new site at the farthest point of every cell at a non-manifold spot, the sites in no triangle
 // (cells enclosed by another cell, which is then an annulus) dropped, and the CVT again from
@@ -102,7 +105,7 @@ void repair_closed_ball(const TriangleMesh& work, const Laplacian& laplacian, co
   CvtOptions again = options.cvt;
   again.surface_lloyd_iterations = std::min(again.surface_lloyd_iterations, again.surface_lloyd_split_iterations);
   again.iterations = std::min(again.iterations, options.repair_iterations);
-  const double spacing = std::sqrt(surface_area(work.V, work.F) / options.cvt.sites);
+  const double spacing = site_spacing(work, options.cvt.sites);
   while (out.repair_rounds < options.repair_rounds && out.repair_sites < budget) {
     const int ns = static_cast<int>(out.cvt.sites.size());
     std::vector<int> bad = cells_breaking_closed_ball(out.cvt.dual, out.input);
@@ -151,15 +154,24 @@ Eigen::MatrixX3d face_vertices(const TriangleMesh& input) {
   return samples;
 }
 
-// Distance from `mesh` to the input vertex (of a face) farthest from it: how well it covers the input.
-double farthest_input_vertex(const TriangleMesh& input, const TriangleMesh& mesh) {
+// Distance from `mesh` to the sample (an input vertex of a face, face_vertices()) farthest from
+// it: how well it covers the input.
+double farthest_input_vertex(const Eigen::MatrixX3d& samples, const TriangleMesh& mesh) {
   if (mesh.F.rows() == 0) return std::numeric_limits<double>::infinity();
-  const Eigen::MatrixX3d samples = face_vertices(input);
   const std::vector<SurfacePoint> nearest = closest_surface_points(mesh.V, mesh.F, samples);
   double farthest = 0;
   for (Eigen::Index v = 0; v < samples.rows(); ++v)
     farthest = std::max(farthest, (position(mesh.V, mesh.F, nearest[static_cast<std::size_t>(v)]) - samples.row(v).transpose()).norm());
   return farthest;
+}
+
+// The first check that `before` ran and passed and `after` does not pass; null where none.
+const MeshCheck* check_lost(const ValidationReport& before, const ValidationReport& after) {
+  for (const MeshCheck& c : before.checks) {
+    const MeshCheck* now = after.find(c.name);
+    if (c.ran && c.passed && !(now && now->ran && now->passed)) return &c;
+  }
+  return nullptr;
 }
 
 // Whether the checks found every edge and vertex manifold.
@@ -190,8 +202,8 @@ bool dual_meets_targets(const RemeshResult& out, const RemeshOptions& options) {
 // the input's topology (components, Euler characteristic) where the dual has it (the stages must
 // not open, close or cut the surface), and cover the input as well as a dual that is a manifold
 // (RemeshOptions::max_coverage_ratio).
-std::string post_cvt_refusal(const TriangleMesh& input, const TriangleMesh& post, const ValidationReport& after,
-                             const RemeshOptions& options, const RemeshResult& out) {
+std::string post_cvt_refusal(const Eigen::MatrixX3d& samples, double spacing, const TriangleMesh& post,
+                             const ValidationReport& after, const RemeshOptions& options, const RemeshResult& out) {
   const auto input_topology = [&](const ValidationReport& r) {
     return r.components == out.input.topology.components &&
            r.euler_characteristic == out.input.topology.euler_characteristic();
@@ -200,14 +212,12 @@ std::string post_cvt_refusal(const TriangleMesh& input, const TriangleMesh& post
     return "it has " + std::to_string(after.components) + " components and Euler characteristic " +
            std::to_string(after.euler_characteristic) + ", the input " + std::to_string(out.input.topology.components) +
            " and " + std::to_string(out.input.topology.euler_characteristic());
-  for (const MeshCheck& c : out.checks.checks) {
-    const MeshCheck* now = after.find(c.name);
-    if (c.ran && c.passed && !(now && now->ran && now->passed))
-      return "it fails " + c.name + (now ? " (" + now->detail + ")" : std::string()) + ", which the dual passed";
+  if (const MeshCheck* lost = check_lost(out.checks, after)) {
+    const MeshCheck* now = after.find(lost->name);
+    return "it fails " + lost->name + (now ? " (" + now->detail + ")" : std::string()) + ", which the dual passed";
   }
   if (!is_manifold(out.checks)) return "";  // a dual that is no manifold is no alternative
-  const double spacing = std::sqrt(surface_area(input.V, input.F) / std::max(1, options.cvt.sites));
-  const double post_gap = farthest_input_vertex(input, post), dual_gap = farthest_input_vertex(input, out.mesh);
+  const double post_gap = farthest_input_vertex(samples, post), dual_gap = farthest_input_vertex(samples, out.mesh);
   if (post_gap > options.max_coverage_ratio * dual_gap + options.coverage_slack * spacing)
     return "it covers the input less well: an input vertex is " + std::to_string(post_gap / spacing) +
            " site spacings from it, " + std::to_string(dual_gap / spacing) + " from the dual";
@@ -215,13 +225,11 @@ std::string post_cvt_refusal(const TriangleMesh& input, const TriangleMesh& post
 }
 
 // Coverage repair (mesher/coverage_repair.h) of the post-CVT stages' result `mesh` against the
-// input's vertices, at the spacing of the sites asked for.
-void cover_input(const TriangleMesh& input, const SurfaceProjector& surface, const RemeshOptions& options,
-                 TriangleMesh& mesh, RemeshResult& out) {
+// input's vertices `samples` (face_vertices()), at the site spacing `spacing`.
+void cover_input(const Eigen::MatrixX3d& samples, double spacing, const SurfaceProjector& surface,
+                 const RemeshOptions& options, TriangleMesh& mesh, RemeshResult& out) {
   if (options.coverage.rounds <= 0 || mesh.F.rows() == 0) return;
   const auto t = Clock::now();
-  const Eigen::MatrixX3d samples = face_vertices(input);
-  const double spacing = std::sqrt(surface_area(input.V, input.F) / std::max(1, options.cvt.sites));
   WorkingMesh work = working_mesh_of(mesh, surface);
   out.coverage = repair_coverage(work, surface, samples, spacing, options.coverage);
   if (out.coverage.moves > 0) mesh = compact_mesh(work);
@@ -249,10 +257,12 @@ bool run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options
   // the mesher validates its result as an open surface; the checks below use the input's topology
   for (const auto& stage : out.mesher.stage_seconds)
     if (stage.first != "validate") out.stage_seconds.push_back(stage);
-  cover_input(input, surface, options, post.mesh, out);
+  const Eigen::MatrixX3d samples = face_vertices(input);
+  const double spacing = site_spacing(input, options.cvt.sites);
+  cover_input(samples, spacing, surface, options, post.mesh, out);
   const auto t = Clock::now();
   ValidationReport checks = check_result(post.mesh, out.input, true);
-  const std::string refusal = post_cvt_refusal(input, post.mesh, checks, options, out);
+  const std::string refusal = post_cvt_refusal(samples, spacing, post.mesh, checks, options, out);
   out.post_cvt_kept = refusal.empty();
   if (!out.post_cvt_kept) out.post_cvt_refusal = "result not kept: " + refusal;
   if (out.post_cvt_kept) {
@@ -280,12 +290,10 @@ void keep_creases(const TriangleMesh& input, const RemeshOptions& options, Remes
     ValidationReport checks = check_result(result, out.input, true);
     // Snapping a tip's vertex onto a short crease near it would cut the tip off.
     std::string refusal;
-    if (farthest_input_vertex(input, result) > options.max_crease_gap_growth * farthest_input_vertex(input, out.mesh))
+    const Eigen::MatrixX3d samples = face_vertices(input);
+    if (farthest_input_vertex(samples, result) > options.max_crease_gap_growth * farthest_input_vertex(samples, out.mesh))
       refusal = "an input vertex would be farther from the output";
-    for (const MeshCheck& c : out.checks.checks) {
-      const MeshCheck* now = checks.find(c.name);
-      if (c.ran && c.passed && !(now && now->ran && now->passed)) refusal = "it would fail " + c.name;
-    }
+    if (const MeshCheck* lost = check_lost(out.checks, checks)) refusal = "it would fail " + lost->name;
     if (refusal.empty()) {
       out.mesh = std::move(result);
       out.checks = std::move(checks);
@@ -343,10 +351,7 @@ void run_cvt(const TriangleMesh& work, const Laplacian& laplacian, const Eigen::
 // every check that `before` passed, its vertex count is within `tolerance` where that of `before`
 // is, and its φmin is larger.
 bool improves_on(const RemeshResult& after, const RemeshResult& before, int sites, double tolerance) {
-  for (const MeshCheck& c : before.checks.checks) {
-    const MeshCheck* now = after.checks.find(c.name);
-    if (c.ran && c.passed && !(now && now->ran && now->passed)) return false;
-  }
+  if (check_lost(before.checks, after.checks)) return false;
   const auto within = [&](const RemeshResult& r) {
     return std::abs(static_cast<double>(r.mesh.V.rows()) - sites) <= tolerance * sites;
   };
