@@ -209,6 +209,11 @@ TEST(IsotropicRemesh, ResultIsKeptOnlyWhenNoWorseOnAnyTargetOrBetterOnMore) {
   EXPECT_TRUE(sizing_no_worse(figures(1000, 5, 45, 0.05, 0), figures(600, 30, 44, 0, 0), o));
   EXPECT_FALSE(sizing_no_worse(figures(1000, 5, 43, 0.05, 0), figures(600, 30, 44, 0, 0), o));  // φm may not
   EXPECT_FALSE(sizing_no_worse(figures(1000, 5, 45, 0.05, 0), figures(800, 30, 44, 0, 0), o));  // 20 % off only
+  // ... and φm may drop by count_first_mean_slack_deg (2°) where φmin stays ≥ traded_min_angle_deg (20°).
+  EXPECT_TRUE(sizing_no_worse(figures(1000, 24, 42.6, 0.001, 0), figures(600, 26, 44.5, 0, 0), o));
+  EXPECT_FALSE(sizing_no_worse(figures(1000, 24, 42.4, 0.001, 0), figures(600, 26, 44.5, 0, 0), o));
+  EXPECT_FALSE(sizing_no_worse(figures(1000, 19, 44, 0.001, 0), figures(600, 26, 44.5, 0, 0), o));
+  EXPECT_FALSE(sizing_no_worse(figures(1000, 24, 43, 0.001, 0), figures(800, 26, 44.5, 0, 0), o));  // 20 % off only
   // A border brought onto the surface's own may cost up to 1° of φmin and φm; a border moved off
   // it is refused.
   EXPECT_TRUE(sizing_no_worse(figures(1000, 24.5, 51.5, 0.001, 0), figures(1000, 30, 53, 0, 2.5), o));

@@ -468,3 +468,19 @@ TEST(Cloud2MeshScans, ALargeCloudIsStreamedIntoAVoxelSummary) {
   ASSERT_GT(used10, 600 * 5);
   EXPECT_NEAR(used5 / used10, 0.5, 0.15) << used5 << " of " << used10;
 }
+
+// A room at a coarse count: the dual of 150 sites spread over walls, floor and furniture leaves
+// most sites out, and the sizing stage must still bring the mesh to the count asked for (its
+// rule keeps a complete mesh over a mostly missing one that is slightly better shaped).
+TEST(Cloud2MeshScans, ACoarseCountOnARoomScanIsStillMet) {
+  const PointCloud cloud = read_cloud(test::data_path("clouds/pcldata_room_scan1.pcd"));
+  ReconstructionOptions o;
+  o.sites = 150;
+  o.threads = 2;
+  const ReconstructionResult r = reconstruct_surface(cloud.P, o);
+  // Precondition: the dual left more than a quarter of the sites out (IsotropicRemeshOptions::count_first_error).
+  ASSERT_GT(r.unused_sites, o.sites / 4);
+  EXPECT_TRUE(r.validation.ok()) << r.validation.summary();
+  EXPECT_NEAR(static_cast<double>(r.mesh.V.rows()), o.sites, 0.02 * o.sites);
+  EXPECT_GE(r.min_angle_deg, 20.0);  // IsotropicRemeshOptions::traded_min_angle_deg
+}

@@ -745,7 +745,11 @@ bool sizing_no_worse(const SizingFigures& after, const SizingFigures& before, co
   const bool count_first = err_before > o.count_first_error * o.target_vertices && err_after < err_before;
   const bool min_angle = count_first || (before.min_angle >= target ? after.min_angle >= target - slack
                                                                     : after.below <= before.below);
-  const bool mean_angle = after.mean_angle >= std::min(before.mean_angle, o.mean_angle_deg * kDegree) - slack - 1e-12;
+  // A mostly missing mesh made nearly whole may also lose a little φm, where its φmin holds up.
+  const double mean_slack =
+      count_first && after.min_angle >= o.traded_min_angle_deg * kDegree ? o.count_first_mean_slack_deg * kDegree : 0.0;
+  const bool mean_angle =
+      after.mean_angle >= std::min(before.mean_angle, o.mean_angle_deg * kDegree) - std::max(slack, mean_slack) - 1e-12;
   const bool border = after.border_gap <= std::max(before.border_gap, o.border_tolerance);
   if (count && min_angle && mean_angle && border) return true;
   // A result that meets more of the three targets (count, φmin, φm) than before is kept as long

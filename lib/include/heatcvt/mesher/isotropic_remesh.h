@@ -50,6 +50,10 @@ struct IsotropicRemeshOptions {
   /// (the dual left most sites out): a result nearer the count is kept even where φmin drops
   /// (φm may not). Default 0.25.
   double count_first_error = 0.25;
+  /// ... and where such a result keeps φmin ≥ traded_min_angle_deg, its φm may be up to this
+  /// much lower than before: a coarse dual of a scene (a room at 150 sites) that keeps 40 % of
+  /// its sites is worse than a complete mesh with a slightly lower φm. Default 2°.
+  double count_first_mean_slack_deg = 2.0;
   /// A result that meets more of the three targets (count within count_tolerance, φmin ≥
   /// min_angle_deg, φm ≥ mean_angle_deg) than the mesh before is kept even where it is worse
   /// on the other, as long as its φmin is at least this (and its border no farther from the
@@ -145,7 +149,8 @@ SizingFigures sizing_figures(const WorkingMesh& mesh, const SurfaceProjector& su
 /// keeps its result: the count is within count_tolerance or nearer; φmin meets its target if it
 /// did, else the share of faces below it is no larger; φm meets its target or is no lower than
 /// before (both less border_fit_angle_slack_deg where the border was brought onto the surface's
-/// own; φmin not at all where the count was off by more than count_first_error); the border is on
+/// own; φmin not at all where the count was off by more than count_first_error, and then φm
+/// count_first_mean_slack_deg less where φmin stays ≥ traded_min_angle_deg); the border is on
 /// the surface's border within border_tolerance or no farther off than before. Or: it meets more
 /// of the three targets than before with φmin ≥ traded_min_angle_deg, the border no farther off.
 bool sizing_no_worse(const SizingFigures& after, const SizingFigures& before, const IsotropicRemeshOptions& options);
