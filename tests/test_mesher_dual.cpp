@@ -50,7 +50,7 @@ void expect_valid_closed(const DualSurfaceResult& r, int genus, int sites) {
     EXPECT_GE(seconds, 0.0);
   }
   const std::vector<std::string> expected = {"sites", "extraction and holes", "border growth", "untangle", "relaxation polish",
-                                             "angle polish", "sliver collapse", "long-edge split", "boundary sliver trim", "sizing", "compact",
+                                             "angle polish", "sliver collapse", "long-edge split", "boundary sliver trim", "sizing", "untangle after sizing", "compact",
                                              "validate"};
   EXPECT_EQ(names, expected);
 }

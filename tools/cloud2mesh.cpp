@@ -126,6 +126,7 @@ cli::Json make_report(const std::string& cloud_path, const std::vector<std::stri
   j["trimmed_faces"] = res.trimmed_faces;
   j["pieces_removed"] = res.pieces_removed;
   j["sized"] = res.sized;
+  j["crossing_after_sizing"] = res.crossing_after_sizing;
   j["flying_faces_removed"] = res.flying_faces;
   j["boundary_loops"] = res.validation.boundary_loops;
   j["components"] = res.validation.components;

@@ -330,6 +330,7 @@ void copy_stats(const MesherStats& st, ReconstructionResult& res) {
   res.split_edges = st.split_edges;
   res.faces_turned_outward = st.faces_turned_outward;
   res.sized = st.sized;
+  res.crossing_after_sizing = st.crossing_after_sizing;
   res.flying_faces = st.flying_faces;
   res.unused_sites = st.unused_vertices;
   res.stage_seconds.insert(res.stage_seconds.end(), st.stage_seconds.begin(), st.stage_seconds.end());

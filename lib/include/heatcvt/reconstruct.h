@@ -168,6 +168,7 @@ struct ReconstructionResult {
   std::vector<int> filled_hole_edges;  ///< edge count of each filled loop
   int flipped_edges = 0;           ///< edge flips on the extracted mesh (max-min-angle and valence)
   bool polish_fallback = false;    ///< the valence-flip polish self-intersected; redone with Delaunay flips only
+  long crossing_after_sizing = 0;  ///< intersecting face pairs the sizing left, untangled after it (MesherStats)
   int unused_sites = 0;            ///< sites that ended in no triangle (dropped from the mesh)
   bool angle_polish_undone = false;  ///< the smallest-angle polish self-intersected and was undone
   int collapsed_edges = 0;         ///< short edges of slivers (< 25 degrees) collapsed at the end

@@ -5,6 +5,8 @@
 #include <string>
 
 #include "heatcvt/errors.h"
+#include "heatcvt/mesher/mesh_checks.h"
+#include "heatcvt/mesher/untangle.h"
 
 namespace heatcvt {
 namespace {
@@ -106,6 +108,17 @@ TriangleMesh finish_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, con
       remove_small_pieces(mesh, options.min_piece_faces, options.min_piece_vertex_fraction, &stats.pieces_removed);
   stats.sized = size_mesh(mesh, surface, options, stats);
   timer.done("sizing");
+  // The sizing checks its own edits, but where it remeshed a dual that kept few of its sites
+  // (a cloud far sparser than -n asks for), faces may still cross: untangle()'s last step takes
+  // them out and refills the holes where the fill crosses nothing. No rounds that regrow borders:
+  // they would put the sites the sizing left out back into the mesh, off the count.
+  stats.crossing_after_sizing = self_intersecting_pairs(mesh);
+  if (stats.crossing_after_sizing > 0) {
+    UntangleOptions last_step = options.untangle;
+    last_step.rounds = 0;
+    untangle(mesh, surface, last_step, options.holes, options.manifold, stats);
+  }
+  timer.done("untangle after sizing");
   stats.faces_turned_outward += orient_closed_pieces_outward(mesh);
   if (mesh.empty())
     throw Error("surface mesher: no triangle could be extracted from the dual of " +

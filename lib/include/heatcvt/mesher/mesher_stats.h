@@ -26,6 +26,7 @@ struct MesherStats {
   int split_edges = 0;          ///< long edges of slivers split
   int flying_faces = 0;         ///< faces off the surface (across depth jumps) removed by the sizing
   bool sized = false;           ///< the mesh was remeshed to the vertex count asked for (size_to_target())
+  long crossing_after_sizing = 0;  ///< intersecting face pairs the sizing left, untangled after it
   int faces_turned_outward = 0; ///< faces of closed pieces reversed to face outward
   int unused_vertices = 0;      ///< vertices in no face (dropped by compaction)
   /// Wall time of each stage in pipeline order (name, seconds).

@@ -60,7 +60,9 @@ void mesh_from_candidates(WorkingMesh& mesh, const DualCandidates& candidates, c
                           const SurfaceMesherOptions& options, MesherStats& stats);
 
 /// Removes the small pieces, sizes the rest to options.sizing.target_vertices (size_to_target(),
-/// stage "sizing"), turns closed pieces outward and compacts ("compact").
+/// stage "sizing"), takes out faces the sizing left crossing and refills their holes (untangle()
+/// without its regrowing rounds, "untangle after sizing"), turns closed pieces outward and
+/// compacts ("compact").
 /// \throw Error when no face is left.
 TriangleMesh finish_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, const SurfaceMesherOptions& options,
                          MesherStats& stats);
