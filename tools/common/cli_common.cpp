@@ -1,5 +1,6 @@
 #include "cli_common.h"
 
+#include <malloc.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -80,8 +81,14 @@ int parse_command_line(CLI::App& app, int argc, char** argv, const std::string& 
   return -1;
 }
 
+void keep_freed_memory() {
+  mallopt(M_MMAP_THRESHOLD, static_cast<int>(kAllocatorRetainBytes));
+  mallopt(M_TRIM_THRESHOLD, static_cast<int>(kAllocatorRetainBytes));
+}
+
 int run_tool(const std::string& tool, const std::function<int()>& body) {
   remove_temporary_files_on_signals();
+  keep_freed_memory();
   auto report = [&](const std::string& what) {
     std::string line = what;
     for (char& c : line)

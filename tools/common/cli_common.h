@@ -47,7 +47,21 @@ class Progress {
   bool finished_ = false;
 };
 
-/// Runs the body of a tool: removes temporary output files on SIGINT/SIGTERM (atomic_file.h),
+/// Largest block (and freed top of the heap) that the allocator keeps in the process instead of
+/// handing it back to the OS: 1 GiB. glibc's defaults map every block above 128 KiB afresh and
+/// unmap it on free, so arrays of the point or vertex count that a stage allocates and frees in
+/// every pass (workspaces, candidate lists, sort buffers) are faulted in page by page each time;
+/// on 10⁶ points streamed to 20,000 vertices that was half the system time and 15 % of the wall
+/// time (docs/benchmarks.md). Freed memory stays reusable by the next allocation; the peak
+/// resident size grows by what is held between stages (about 100 MB there).
+constexpr long kAllocatorRetainBytes = 1L << 30;
+
+/// Sets the allocator to keep freed blocks up to kAllocatorRetainBytes (mallopt M_MMAP_THRESHOLD
+/// and M_TRIM_THRESHOLD). Called by run_tool(); results do not depend on it.
+void keep_freed_memory();
+
+/// Runs the body of a tool: keeps freed memory in the process (keep_freed_memory()), removes
+/// temporary output files on SIGINT/SIGTERM (atomic_file.h),
 /// catches every exception, prints "<tool>: error: <message>" as one line on stderr (control
 /// bytes replaced) and returns exit_bad_input for InvalidInputError / IOError, exit_failure
 /// otherwise. The body's own return value is passed through.
