@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "bench_util.h"
+#include "cli_common.h"
 #include "heatcvt/cloud_io.h"
 #include "heatcvt/dual_mesh.h"
 #include "heatcvt/mesh.h"
@@ -173,6 +174,10 @@ void print_row(std::int64_t points, int n, const char* method, const std::string
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Both children run with the allocator setting of the tools (cli::keep_freed_memory()), so
+  // the library is timed as cloud2mesh runs it and the peer under the same conditions.
+  if (argc >= 2 && (std::string(argv[1]) == "--child" || std::string(argv[1]) == "--peer-child"))
+    heatcvt::cli::keep_freed_memory();
   if (argc == 7 && std::string(argv[1]) == "--child")
     return run_child(argv[2], std::atoi(argv[3]), std::atof(argv[4]), std::atoi(argv[5]) != 0, std::atoi(argv[6]) != 0);
   if (argc == 4 && std::string(argv[1]) == "--peer-child") return run_peer_child(argv[2], std::atoi(argv[3]));
