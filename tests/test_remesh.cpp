@@ -13,6 +13,7 @@
 #include "heatcvt/errors.h"
 #include "heatcvt/mesh_io.h"
 #include "heatcvt/remesh.h"
+#include "heatcvt/shapes.h"
 #include "heatcvt/subdivision.h"
 #include "heatcvt/validate.h"
 #include "test_support.h"
@@ -132,6 +133,30 @@ TEST(RemeshCvt, UpsamplesACoarseTorusToAValidManifoldOfTheSameGenus) {
     EXPECT_GE(p.bary.minCoeff(), -1e-12);
   }
   EXPECT_LT(max_distance_to_surface(r.mesh.V, input), 1e-9);
+  EXPECT_EQ(r.input_self_intersections, -1);  // a result without crossings does not look at the input's
+}
+
+// Two sheets passing through each other in one mesh: no remesh that follows them can avoid
+// crossing itself, and the result says that the input crosses itself (the count of its
+// intersecting face pairs, named in the failed check's detail).
+TEST(RemeshCvt, AResultCrossingItselfWhereTheInputDoesSaysSo) {
+  const TriangleMesh input = interpenetrating_sheets_mesh(24);
+  ValidationOptions vo;
+  vo.require_closed = false;
+  const ValidationReport in = validate_triangle_mesh(input.V, input.F, vo);
+  ASSERT_GT(in.self_intersecting_pairs, 0);
+  RemeshOptions opt;
+  opt.cvt.sites = 300;
+  opt.cvt.threads = 2;
+  const RemeshResult r = remesh_cvt(input, opt);
+  const MeshCheck* crossing = r.checks.find("no_self_intersections");
+  ASSERT_NE(crossing, nullptr);
+  ASSERT_FALSE(crossing->passed) << "two crossing sheets remeshed without a crossing";
+  EXPECT_EQ(r.input_self_intersections, in.self_intersecting_pairs);
+  EXPECT_NE(crossing->detail.find("the input itself has " + std::to_string(in.self_intersecting_pairs) +
+                                  " intersecting face pairs"),
+            std::string::npos)
+      << crossing->detail;
 }
 
 TEST(RemeshCvt, UpsamplesAnIcosahedronToAValidSphere) {

@@ -260,6 +260,7 @@ int main(int argc, char** argv) {
     rep["output_vertices"] = res.mesh.V.rows();
     rep["post_cvt_kept"] = res.post_cvt_kept;
     if (!res.post_cvt_refusal.empty()) rep["post_cvt_refusal"] = res.post_cvt_refusal;
+    if (res.input_self_intersections >= 0) rep["input_self_intersections"] = res.input_self_intersections;
     rep["creases"] = {{"lines", res.creases.lines}, {"skipped_lines", res.creases.skipped_lines},
                       {"corners", res.creases.corners},
                       {"snapped_vertices", res.creases.snapped}, {"line_edges", res.creases.line_edges},
@@ -329,7 +330,10 @@ int main(int argc, char** argv) {
       std::printf("  checks (CGAL):\n");
       cli::print_checks(check_list);
     }
-    if (status != cli::exit_ok)
+    if (status != cli::exit_ok && res.input_self_intersections > 0)
+      log("warning: the result crosses itself where the input does (" + std::to_string(res.input_self_intersections) +
+          " intersecting face pairs in " + mesh_path + "; exit status 3): repair the input first");
+    else if (status != cli::exit_ok)
       log("warning: the dual triangulation failed some checks (exit status 3); try more sites or iterations");
     return status;
   });

@@ -360,6 +360,24 @@ bool improves_on(const RemeshResult& after, const RemeshResult& before, int site
          triangle_quality(before.mesh.V, before.mesh.F).min_angle_deg;
 }
 
+// Where the result fails its no_self_intersections check, whether the input crosses itself too:
+// out.input_self_intersections gets the input's intersecting face pairs and the check's detail
+// names them, so that the report says why no valid remesh was written.
+void explain_self_intersections(const TriangleMesh& input, RemeshResult& out) {
+  MeshCheck* check = nullptr;
+  for (MeshCheck& c : out.checks.checks)
+    if (c.name == "no_self_intersections" && c.ran && !c.passed) check = &c;
+  if (!check) return;
+  ValidationOptions o = dual_checks(out.input);
+  o.require_closed = false;
+  o.expected_genus = -1;
+  const ValidationReport rep = validate_triangle_mesh(input.V, input.F, o);
+  out.input_self_intersections = rep.self_intersecting_pairs;
+  if (out.input_self_intersections > 0)
+    check->detail += "; the input itself has " + std::to_string(out.input_self_intersections) +
+                     " intersecting face pairs, which a remesh close to it cannot avoid";
+}
+
 // The pipeline of remesh_cvt() on a mesh already in its unit frame.
 RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions& options, const CvtCallback& progress) {
   const int sites = options.cvt.sites;
@@ -421,6 +439,7 @@ RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions&
     }
   }
   if (options.cvt.build_dual && options.post_cvt_stages) keep_creases(mesh, options, out);
+  explain_self_intersections(mesh, out);
   out.quality = triangle_quality(out.mesh.V, out.mesh.F);
   out.iterations = static_cast<int>(out.cvt.iterations.size());
   out.converged = out.cvt.converged;
