@@ -50,10 +50,9 @@ class Progress {
 /// Largest block (and freed top of the heap) that the allocator keeps in the process instead of
 /// handing it back to the OS: 1 GiB. glibc's defaults map every block above 128 KiB afresh and
 /// unmap it on free, so arrays of the point or vertex count that a stage allocates and frees in
-/// every pass (workspaces, candidate lists, sort buffers) are faulted in page by page each time;
-/// on 10⁶ points streamed to 20,000 vertices that was half the system time and 15 % of the wall
-/// time (docs/benchmarks.md). Freed memory stays reusable by the next allocation; the peak
-/// resident size grows by what is held between stages (about 100 MB there).
+/// every pass (workspaces, candidate lists, sort buffers) are faulted in page by page each time
+/// (measured in docs/benchmarks.md). Freed memory stays reusable by the next allocation; the
+/// peak resident size grows by what is held between stages.
 constexpr long kAllocatorRetainBytes = 1L << 30;
 
 /// Sets the allocator to keep freed blocks up to kAllocatorRetainBytes (mallopt M_MMAP_THRESHOLD

@@ -156,9 +156,8 @@ struct RemeshResult {
   int cvt_vertices = 0;              ///< vertices of the mesh the CVT ran on
   int degenerate_faces = 0;          ///< faces without heat conduction (Laplacian::degenerate_faces)
   /// Face pairs of the input that intersect each other, counted only where `mesh` fails its
-  /// no_self_intersections check (−1 otherwise, or where the input is no polygon mesh
-  /// CGAL can check). Where it is > 0 the input itself
-  /// crosses itself (lips or folds pressed through each other, a scan's overlapping sheets, an
+  /// no_self_intersections check (−1 otherwise, or where CGAL cannot check the input). Where it
+  /// is > 0 the input itself crosses itself (lips or folds pressed through each other, an
   /// immersed surface), a remesh that follows it closely crosses itself too, and the check's
   /// detail says so.
   long input_self_intersections = -1;
