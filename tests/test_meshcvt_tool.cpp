@@ -15,6 +15,7 @@
 #include "heatcvt/closest_point.h"
 #include "heatcvt/mesh.h"
 #include "heatcvt/mesh_io.h"
+#include "heatcvt/shapes.h"
 #include "heatcvt/validate.h"
 #include "test_support.h"
 
@@ -174,6 +175,22 @@ TEST(MeshcvtTool, CreasesAreKeptUnlessNoFeatures) {
       "meshcvt", in + " -n 1000 -q --no-features -o " + dir.path("b.obj") + " --report " + dir.path("b.json"));
   ASSERT_EQ(without.exit_code, 0) << without.err;
   EXPECT_EQ(test::json_number(test::read_file(dir.path("b.json")), "lines"), 0);
+}
+
+// An input that crosses itself (two sheets through each other): the remesh crosses itself too,
+// the tool exits 3 with the output written, and its warning and report say that the input
+// crosses itself rather than suggesting more sites.
+TEST(MeshcvtTool, AnInputThatCrossesItselfIsNamedAsTheCause) {
+  test::ScratchDir dir("meshcvt");
+  const TriangleMesh sheets = interpenetrating_sheets_mesh(24);
+  const std::string in = dir.path("sheets.obj"), out = dir.path("out.obj"), report = dir.path("r.json");
+  write_mesh(in, sheets.V, sheets.F);
+  const auto r = test::run_tool("meshcvt", in + " -n 300 -o " + out + " --report " + report);
+  ASSERT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_TRUE(test::read_file(out).size() > 0);
+  EXPECT_NE(r.err.find("the result crosses itself where the input does"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("try more sites"), std::string::npos) << r.err;
+  EXPECT_GT(test::json_number(test::read_file(report), "input_self_intersections"), 0);
 }
 
 TEST(MeshcvtTool, MissingFile) {
