@@ -13,9 +13,10 @@
 //
 // Usage: bench_scale [--sizes 100000,1000000,10000000] [--huge] [--density-max 1000000]
 //                    [--peer-max 1000000] [--sites 3000] [--keep-dir DIR] [--fine F] [--plain-means]
-//                    [--plain-fit]
+//                    [--plain-fit] [--glibc-allocator]
 // (--fine: StreamOptions::fine_voxel_factor; --plain-means: project_to_surface = false;
-//  --plain-fit: the 3×3×3 voxel plane fit only, VoxelSurfaceFit max_levels = shift_steps = 0)
+//  --plain-fit: the 3×3×3 voxel plane fit only, VoxelSurfaceFit max_levels = shift_steps = 0;
+//  --glibc-allocator: both children keep glibc's allocator defaults instead of the tools' setting)
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -67,6 +68,13 @@ void write_sampled_ply(const std::string& path, const TriangleMesh& mesh, std::i
 }
 
 // "mean=… hausdorff=…": two-sided distances between `m` and the source mesh, in ‰ of its diagonal.
+// The child's system time and minor page faults (getrusage), as "sys=… faults=…".
+std::string fault_keys(const rusage& ru) {
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "sys=%.2f faults=%ld", ru.ru_stime.tv_sec + 1e-6 * ru.ru_stime.tv_usec, ru.ru_minflt);
+  return buf;
+}
+
 std::string distance_keys(const TriangleMesh& m) {
   const TriangleMesh source = read_mesh(std::string(HEATCVT_DATA_DIR) + "/meshes/armadillo.obj");
   const double diag = (source.V.colwise().maxCoeff() - source.V.colwise().minCoeff()).norm();
@@ -94,9 +102,9 @@ int run_child(const std::string& path, int sites, double fine_factor, bool proje
   rusage ru{};
   getrusage(RUSAGE_SELF, &ru);  // before the distance below, which is not part of the run
   const auto& v = r.result.validation;
-  std::printf("time=%.2f stream=%.2f peak_mb=%.0f used=%lld summarised=%d voxel=%.6g vertices=%ld boundary=%d genus=%d "
+  std::printf("%s time=%.2f stream=%.2f peak_mb=%.0f used=%lld summarised=%d voxel=%.6g vertices=%ld boundary=%d genus=%d "
               "phimin=%.1f phim=%.1f %s\n",
-              total, t_stream, static_cast<double>(ru.ru_maxrss) / 1024.0, static_cast<long long>(r.cloud.P.rows()),
+              fault_keys(ru).c_str(), total, t_stream, static_cast<double>(ru.ru_maxrss) / 1024.0, static_cast<long long>(r.cloud.P.rows()),
               r.summarised ? 1 : 0, r.voxel_size, static_cast<long>(r.result.mesh.V.rows()), v.boundary_loops, v.genus,
               r.result.min_angle_deg, r.result.mean_min_angle_deg, distance_keys(r.result.mesh).c_str());
   return 0;
@@ -118,9 +126,9 @@ int run_peer_child(const std::string& path, int sites) {
   vo.check_self_intersections = false;
   const ValidationReport rep = validate_triangle_mesh(m.V, m.F, vo);
   const TriangleQuality q = triangle_quality(m.V, m.F);
-  std::printf("time=%.2f stream=%.2f peak_mb=%.0f used=%lld summarised=0 voxel=- vertices=%ld boundary=%d genus=%d "
+  std::printf("%s time=%.2f stream=%.2f peak_mb=%.0f used=%lld summarised=0 voxel=- vertices=%ld boundary=%d genus=%d "
               "phimin=%.1f phim=%.1f %s\n",
-              total, t_read, static_cast<double>(ru.ru_maxrss) / 1024.0, static_cast<long long>(cloud.P.rows()),
+              fault_keys(ru).c_str(), total, t_read, static_cast<double>(ru.ru_maxrss) / 1024.0, static_cast<long long>(cloud.P.rows()),
               static_cast<long>(m.V.rows()), rep.boundary_loops, rep.genus, q.min_angle_deg, q.mean_min_angle_deg,
               distance_keys(m).c_str());
   return 0;
@@ -148,7 +156,7 @@ std::string run_command(const std::string& command) {
   char buf[4096];
   while (pipe && std::fgets(buf, sizeof buf, pipe)) {
     all += buf;
-    if (std::strncmp(buf, "time=", 5) == 0) line = buf;
+    if (std::strncmp(buf, "sys=", 4) == 0) line = buf;
   }
   const int status = pipe ? pclose(pipe) : -1;
   return status != 0 || line.empty() ? "failed: " + all : line;
@@ -161,9 +169,10 @@ void print_row(std::int64_t points, int n, const char* method, const std::string
   }
   const long vertices = std::stol(value_of(line, "vertices"));
   const bool closed = value_of(line, "boundary") == "0";
-  std::printf("| %lld | %d | %s | %s | %s | %s | %s%s | %s | %ld | %+.1f %% | %s | %s | %s | %s | %s | %s |\n",
+  std::printf("| %lld | %d | %s | %s | %s | %s | %s | %.0f | %s%s | %s | %ld | %+.1f %% | %s | %s | %s | %s | %s | %s |\n",
               static_cast<long long>(points), n, method, value_of(line, "time").c_str(), value_of(line, "stream").c_str(),
-              value_of(line, "peak_mb").c_str(), value_of(line, "used").c_str(),
+              value_of(line, "peak_mb").c_str(), value_of(line, "sys").c_str(),
+              std::stod(value_of(line, "faults")) / 1000.0, value_of(line, "used").c_str(),
               value_of(line, "summarised") == "1" ? " means" : " raw", value_of(line, "voxel").c_str(), vertices,
               100.0 * (static_cast<double>(vertices) - n) / n, closed ? "yes" : "no", value_of(line, "genus").c_str(),
               value_of(line, "phimin").c_str(), value_of(line, "phim").c_str(), value_of(line, "mean").c_str(),
@@ -173,10 +182,15 @@ void print_row(std::int64_t points, int n, const char* method, const std::string
 
 }  // namespace
 
+// Set by --glibc-allocator for the children: they keep glibc's allocator defaults.
+constexpr const char* kGlibcAllocatorEnv = "HEATCVT_BENCH_GLIBC_ALLOCATOR";
+
 int main(int argc, char** argv) {
   // Both children run with the allocator setting of the tools (cli::keep_freed_memory()), so
-  // the library is timed as cloud2mesh runs it and the peer under the same conditions.
-  if (argc >= 2 && (std::string(argv[1]) == "--child" || std::string(argv[1]) == "--peer-child"))
+  // the library is timed as cloud2mesh runs it and the peer under the same conditions; with
+  // --glibc-allocator (passed to the children in kGlibcAllocatorEnv) both keep glibc's defaults.
+  if (argc >= 2 && (std::string(argv[1]) == "--child" || std::string(argv[1]) == "--peer-child") &&
+      !std::getenv(kGlibcAllocatorEnv))
     heatcvt::cli::keep_freed_memory();
   if (argc == 7 && std::string(argv[1]) == "--child")
     return run_child(argv[2], std::atoi(argv[3]), std::atof(argv[4]), std::atoi(argv[5]) != 0, std::atoi(argv[6]) != 0);
@@ -200,6 +214,7 @@ int main(int argc, char** argv) {
     else if (a == "--fine" && i + 1 < argc) fine_factor = std::stod(argv[++i]);
     else if (a == "--plain-means") project = false;
     else if (a == "--plain-fit") plain_fit = true;
+    else if (a == "--glibc-allocator") setenv(kGlibcAllocatorEnv, "1", 1);
     else {
       std::fprintf(stderr, "bench_scale: error: %s: unknown option\n", a.c_str());
       return 2;
@@ -209,8 +224,9 @@ int main(int argc, char** argv) {
   const double diag = (mesh.V.colwise().maxCoeff() - mesh.V.colwise().minCoeff()).norm();
   const fs::path dir = keep_dir.empty() ? fs::temp_directory_path() / ("heatcvt_bench_scale_" + std::to_string(::getpid())) : fs::path(keep_dir);
   fs::create_directories(dir);
-  std::printf("| points | -n | method | time s | read s | peak MB | points reconstructed | voxel | V | V vs -n | closed | "
-              "genus | phi_min | phi_m | mean dist ‰ | Hausdorff ‰ |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("| points | -n | method | time s | read s | peak MB | sys s | page faults k | points reconstructed | voxel | V | "
+              "V vs -n | closed | genus | phi_min | phi_m | mean dist ‰ | Hausdorff ‰ |\n"
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   std::fflush(stdout);
   // popen runs through the shell: /proc/self/exe would be the shell, so name this binary.
   const std::string self = fs::read_symlink("/proc/self/exe").string();
@@ -240,7 +256,7 @@ int main(int argc, char** argv) {
               "points; time = wall time of the child process's work (heatcvt: reconstruct_surface_streamed, both read passes "
               "included; peer: read_cloud, PCA/MST normals, PCL Poisson depth 8, CGAL isotropic remeshing to -n), read = "
               "until the first reconstruction stage (heatcvt) or until the cloud is in memory (peer); peak MB = "
-              "ru_maxrss of the child process (taken before the distances); mean dist and Hausdorff: two-sided, "
+              "ru_maxrss of the child process (taken before the distances); sys s and page faults: its system time and minor page faults (ru_stime, ru_minflt); mean dist and Hausdorff: two-sided, "
               "between the output and armadillo.obj (20,000 samples each way), in ‰ of its bbox diagonal. The peer runs on clouds up to --peer-max points.\n",
               100 * kNoiseFraction, static_cast<long long>(kWriteChunk));
   return 0;
