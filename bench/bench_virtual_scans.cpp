@@ -7,7 +7,7 @@
 //           disparity steps Δz(z) = rgbd_step · z², and flying pixels: where neighbouring pixels
 //           differ by more than a jump, half of those pixels get a depth between the two;
 //   stereo: twice the noise, no quantisation, and speckle: 1 % of the pixels off by up to 3 σ more.
-// Every cloud is written to --keep-dir (XYZ, beside the scene as OBJ and the output as PLY) and
+// Every cloud is written to --keep-dir (an organised PCD with the camera as VIEWPOINT, beside the scene as OBJ and the output as PLY) and
 // reconstructed as cloud2mesh does, at -n N; the
 // table gives vertices, components, boundary loops, φmin, φ of boundary triangles, φm, the
 // checks (manifold, oriented, no self-intersections), the mean and largest distance from the
@@ -27,6 +27,7 @@
 #include <filesystem>
 #include <random>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -138,7 +139,8 @@ Eigen::MatrixX3d sense(DepthImage img, bool stereo, const ScanOptions& o, std::u
         if (a > 0 && b > 0 && std::abs(a - b) > o.flying_jump && unit(rng) < o.flying_share)
           z[y * W + x] = a + unit(rng) * (b - a);
       }
-  std::vector<Eigen::Vector3d> pts;
+  // Row-major W × H grid as a sensor writes it: NaN where the ray found nothing.
+  Eigen::MatrixX3d P = Eigen::MatrixX3d::Constant(static_cast<Eigen::Index>(W) * H, 3, std::nan(""));
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x) {
       double d = z[y * W + x];
@@ -152,11 +154,24 @@ Eigen::MatrixX3d sense(DepthImage img, bool stereo, const ScanOptions& o, std::u
       }
       const Eigen::Vector3d ray =
           img.forward + (img.right * (x + 0.5 - 0.5 * W) - img.up * (y + 0.5 - 0.5 * H)) / img.focal;
-      pts.push_back(img.eye + d * ray);
+      P.row(static_cast<Eigen::Index>(y) * W + x) = img.eye + d * ray;
     }
-  Eigen::MatrixX3d P(static_cast<Eigen::Index>(pts.size()), 3);
-  for (size_t i = 0; i < pts.size(); ++i) P.row(static_cast<Eigen::Index>(i)) = pts[i];
   return P;
+}
+
+/// Writes the grid as an organised ASCII PCD (WIDTH × HEIGHT, "nan" where there is no return)
+/// with the camera position as its VIEWPOINT, as RGB-D drivers save their frames.
+void write_organised_pcd(const std::string& path, const Eigen::MatrixX3d& P, int width, int height,
+                         const Eigen::Vector3d& eye) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (!f) throw std::runtime_error("cannot write " + path);
+  std::fprintf(f, "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n"
+               "COUNT 1 1 1\nWIDTH %d\nHEIGHT %d\nVIEWPOINT %.9g %.9g %.9g 1 0 0 0\nPOINTS %ld\nDATA ascii\n",
+               width, height, eye.x(), eye.y(), eye.z(), static_cast<long>(P.rows()));
+  for (Eigen::Index i = 0; i < P.rows(); ++i)
+    if (P.row(i).allFinite()) std::fprintf(f, "%.9g %.9g %.9g\n", P(i, 0), P(i, 1), P(i, 2));
+    else std::fprintf(f, "nan nan nan\n");
+  std::fclose(f);
 }
 
 std::vector<std::string> split(const std::string& s) {
@@ -244,17 +259,18 @@ int main(int argc, char** argv) {
       const DepthImage img = render(tree, view, so);
       for (const bool stereo : {false, true}) {
         if ((stereo && noise == "rgbd") || (!stereo && noise == "stereo")) continue;
-        PointCloud cloud;
-        cloud.P = sense(img, stereo, so, so.seed + 17 * v + (stereo ? 1 : 0));
+        const Eigen::MatrixX3d grid = sense(img, stereo, so, so.seed + 17 * v + (stereo ? 1 : 0));
+        long finite = 0;
+        for (Eigen::Index i = 0; i < grid.rows(); ++i) finite += grid.row(i).allFinite();
         const std::string label = std::string(stereo ? "stereo" : "rgbd");
         const std::filesystem::path path =
-            std::filesystem::path(keep_dir) / (name + "_v" + std::to_string(v) + "_" + label + ".xyz");
-        write_cloud_xyz(path.string(), cloud);
+            std::filesystem::path(keep_dir) / (name + "_v" + std::to_string(v) + "_" + label + ".pcd");
+        write_organised_pcd(path.string(), grid, so.width, so.height, img.eye);
         write_mesh((std::filesystem::path(keep_dir) / (name + "_v" + std::to_string(v) + "_scene.obj")).string(),
                    scene.V, scene.F);
         std::printf("| %s | %d%s | %s | %ld ", name.c_str(), v, view.floor ? " floor" : "", label.c_str(),
-                    static_cast<long>(cloud.P.rows()));
-        if (cloud.P.rows() < 10L * n) {
+                    finite);
+        if (finite < 10L * n) {
           std::printf("| fewer than 10 points per site |||||||||\n");
           continue;
         }

@@ -107,6 +107,7 @@ cli::Json make_report(const std::string& cloud_path, const std::vector<std::stri
   j["points_in_file"] = rr.points_in_file;
   j["non_finite_dropped"] = rr.non_finite_dropped;
   j["duplicates_merged"] = rr.duplicates_merged;
+  j["flying_pixels_removed"] = rr.flying_pixels_removed;
   j["points_denoised"] = res.points_denoised;
   j["points_voxel_removed"] = res.points_voxel_removed;
   j["points_used"] = res.points_used;
@@ -179,8 +180,11 @@ bool should_stream(const std::vector<ScanInput>& scans, const ReconstructionOpti
 }
 
 // The streamed reconstruction of one large file, with reading progress (bytes) per pass.
-StreamedReconstruction reconstruct_streamed(const std::string& path, const ReconstructionOptions& opt, bool quiet) {
+StreamedReconstruction reconstruct_streamed(const std::string& path, const ReconstructionOptions& opt,
+                                            const FlyingPixelOptions& flying, long long stream_above, bool quiet) {
   StreamOptions stream;
+  stream.max_raw_points = stream_above;
+  stream.flying_pixels = flying;
   // --points-per-site sizes the summary: the voxel points the CVT runs on, per site.
   if (opt.cvt_points_per_site > 0) stream.voxel.points_per_site = opt.cvt_points_per_site;
   std::unique_ptr<cli::Progress> reading;
@@ -225,6 +229,7 @@ int main(int argc, char** argv) {
   std::string conf_path, out_path, report_path;
   bool quiet = false, write_normals = false;
   long long stream_above = StreamOptions{}.max_raw_points;
+  CloudReadOptions read_options;
   app.add_option("CLOUD", cloud_paths,
                  "input point clouds (.pcd .ply .xyz .pwn .txt); several scans are merged into one surface");
   app.add_option("--pose", pose_paths,
@@ -245,6 +250,11 @@ int main(int argc, char** argv) {
   app.add_option("--stream-above", stream_above,
                  "a single cloud file with more points than this is streamed into a voxel summary sized for -n "
                  "(memory bounded by the output size) instead of being held whole (about 2.1 KB per point)")
+      ->capture_default_str();
+  app.add_option("--flying-pixels", read_options.flying_pixels.neighbour_distance_ratio,
+                 "organised PCD clouds (depth-camera frames): a pixel with fewer than 2 of its 8 grid neighbours "
+                 "within this fraction of its range from the sensor (the file's VIEWPOINT) is a flying pixel mixed "
+                 "from two depths at an edge, and is dropped; 0 keeps every pixel")
       ->capture_default_str();
   app.add_flag("--normals", write_normals, "write per-vertex normals (outward on closed pieces) with the mesh");
   app.add_flag("--keep-small", [&](std::int64_t) { opt.mesher.min_piece_faces = 0, opt.mesher.min_piece_vertex_fraction = 0; },
@@ -304,6 +314,7 @@ int main(int argc, char** argv) {
 
   return cli::run_tool("cloud2mesh", [&]() -> int {
     check_options(opt);
+    check_flying_pixel_options(read_options.flying_pixels);
     if (cloud_paths.empty() == conf_path.empty())
       throw InvalidInputError("give the input clouds either as CLOUD arguments or with --conf, not both");
     if (!pose_paths.empty() && pose_paths.size() != cloud_paths.size())
@@ -327,16 +338,18 @@ int main(int argc, char** argv) {
     if (stream_above < 0) throw InvalidInputError("--stream-above must be >= 0");
     const bool stream = should_stream(scans, opt, stream_above);
     if (stream) {
-      streamed = reconstruct_streamed(scans[0].path, opt, quiet);
+      streamed = reconstruct_streamed(scans[0].path, opt, read_options.flying_pixels, stream_above, quiet);
       res = std::move(streamed.result);
       cloud = std::move(streamed.cloud);
       rr.format = CloudChunkReader(scans[0].path).format();
       rr.points_in_file = streamed.points_read;
+      rr.flying_pixels_removed = static_cast<long>(streamed.flying_pixels_removed);
     } else {
-      cloud = read_scans(scans, &rr);
+      cloud = read_scans(scans, &rr, read_options);
       if (!quiet)
         std::cerr << "read " << cloud_path << ": " << rr.points_in_file << " points, " << rr.non_finite_dropped
-                  << " non-finite dropped, " << rr.duplicates_merged << " duplicates merged" << std::endl;
+                  << " non-finite dropped, " << rr.flying_pixels_removed << " flying pixels dropped, "
+                  << rr.duplicates_merged << " duplicates merged" << std::endl;
       reject_far_outliers(cloud.P, cloud_path);
       if (opt.sites > cloud.P.rows())
         throw InvalidInputError(cloud_path + ": -n " + std::to_string(opt.sites) + " exceeds the " +
@@ -377,9 +390,9 @@ int main(int argc, char** argv) {
     }
     if (!quiet) {
       std::printf("cloud2mesh: %s -> %s\n", cloud_path.c_str(), out_path.c_str());
-      std::printf("  points: %ld read, %ld non-finite dropped, %ld duplicates merged, %d outliers removed, "
-                  "%d voxel-merged, %d used\n",
-                  rr.points_in_file, rr.non_finite_dropped, rr.duplicates_merged + res.points_merged,
+      std::printf("  points: %ld read, %ld non-finite dropped, %ld flying pixels dropped, %ld duplicates merged, "
+                  "%d outliers removed, %d voxel-merged, %d used\n",
+                  rr.points_in_file, rr.non_finite_dropped, rr.flying_pixels_removed, rr.duplicates_merged + res.points_merged,
                   res.points_denoised, res.points_voxel_removed, res.points_used);
       std::printf("  time: Laplacian %.3f s, factor %.3f s, CVT %.3f s (%d heat iterations, %.3f s each), total %.3f s\n",
                   res.laplacian_seconds, res.factor_seconds, res.cvt_seconds, res.iterations, per_iter, total_s);

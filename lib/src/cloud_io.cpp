@@ -210,17 +210,19 @@ void read_pcd_colours(const std::string& path, const pcl::PCLPointCloud2& blob, 
   }
 }
 
-PointCloud read_pcd(const std::string& path, CloudReadReport& rep) {
+PointCloud read_pcd(const std::string& path, CloudReadReport& rep, const FlyingPixelOptions& flying) {
   std::string kind;
   long long header_points = 0;
   precheck_pcd(path, kind, header_points);
   pcl::PCLPointCloud2 blob;
+  Eigen::Vector4f origin = Eigen::Vector4f::Zero();
+  Eigen::Quaternionf orientation = Eigen::Quaternionf::Identity();
   int status = -1;
   // PCL prints its own diagnostics; we report one line ourselves, so silence it while loading.
   const pcl::console::VERBOSITY_LEVEL verbosity = pcl::console::getVerbosityLevel();
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
   try {
-    status = pcl::io::loadPCDFile(path, blob);
+    status = pcl::io::loadPCDFile(path, blob, origin, orientation);
   } catch (const std::exception& e) {
     pcl::console::setVerbosityLevel(verbosity);
     fail(path, std::string("PCL could not read the PCD file: ") + e.what());
@@ -258,6 +260,9 @@ PointCloud read_pcd(const std::string& path, CloudReadReport& rep) {
   rep.points_in_file = n;
   rep.width = static_cast<int>(blob.width);
   rep.height = static_cast<int>(blob.height);
+  if (blob.height > 1)
+    rep.flying_pixels_removed = remove_flying_pixels(cloud.P, static_cast<int>(blob.width), static_cast<int>(blob.height),
+                                                     origin.head<3>().cast<double>(), flying);
   return cloud;
 }
 
@@ -340,7 +345,7 @@ void clean_cloud(PointCloud& cloud, CloudReadReport* report) {
   rep.has_colours = cloud.has_colours();
 }
 
-PointCloud read_cloud(const std::string& path, CloudReadReport* report) {
+PointCloud read_cloud(const std::string& path, CloudReadReport* report, const CloudReadOptions& options) {
   CloudReadReport local;
   CloudReadReport& rep = report ? *report : local;
   rep = CloudReadReport();
@@ -349,11 +354,12 @@ PointCloud read_cloud(const std::string& path, CloudReadReport* report) {
   if (ext != ".pcd" && ext != ".ply" && ext != ".xyz" && ext != ".pwn" && ext != ".txt")
     fail(path, "unknown point-cloud format " + quote_excerpt(ext) + " (expected .pcd, .ply, .xyz, .pwn or .txt)");
   PointCloud cloud;
-  if (ext == ".pcd") cloud = read_pcd(path, rep);
+  if (ext == ".pcd") cloud = read_pcd(path, rep, options.flying_pixels);
   else if (ext == ".ply") cloud = read_ply_cloud(path, rep);
   else cloud = read_xyz(path, rep);
   if (rep.points_in_file == 0) throw InvalidInputError(path + ": no points in the file");
   clean_cloud(cloud, &rep);
+  rep.non_finite_dropped -= rep.flying_pixels_removed;  // finite pixels the flying-pixel rule set to NaN
   if (cloud.P.rows() == 0)
     throw InvalidInputError(path + ": no finite points (all " + std::to_string(rep.points_in_file) + " points are NaN/inf)");
   return cloud;

@@ -227,6 +227,9 @@ bool CloudChunkReader::has_normals() const { return decoder_->normals; }
 bool CloudChunkReader::has_colours() const { return decoder_->colours; }
 bool CloudChunkReader::all_points_had_normals() const { return decoder_->normals && decoder_->all_normals; }
 std::int64_t CloudChunkReader::points_in_file() const { return decoder_->points_total; }
+std::int64_t CloudChunkReader::grid_width() const { return decoder_->grid_width > 0 ? decoder_->grid_width : points_in_file(); }
+std::int64_t CloudChunkReader::grid_height() const { return decoder_->grid_height; }
+Eigen::Vector3d CloudChunkReader::sensor_origin() const { return decoder_->sensor; }
 std::int64_t CloudChunkReader::points_read() const { return decoder_->points_read; }
 std::int64_t CloudChunkReader::bytes_read() const { return decoder_->src.offset(); }
 std::int64_t CloudChunkReader::bytes_total() const { return decoder_->src.size(); }

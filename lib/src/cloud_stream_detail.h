@@ -73,6 +73,8 @@ class CloudChunkReader::Decoder {
   bool all_normals = true;
   std::int64_t points_total = -1;
   std::int64_t points_read = 0;
+  std::int64_t grid_width = 0, grid_height = 1;  // PCD organisation; height 1 = unorganised
+  Eigen::Vector3d sensor = Eigen::Vector3d::Zero();  // PCD VIEWPOINT position
 };
 
 namespace stream_detail {

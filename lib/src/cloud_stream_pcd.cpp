@@ -136,6 +136,9 @@ void PcdDecoder::read_header() {
   kind_ = h.data_kind;
   header_lines_ = h.lines;
   points_ = h.points;
+  grid_width = h.width;
+  grid_height = h.height;
+  sensor = Eigen::Vector3d(h.viewpoint[0], h.viewpoint[1], h.viewpoint[2]);
   for (std::size_t k = 0; k < h.field_names.size(); ++k) {
     PcdField f;
     f.name = h.field_names[k];

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cmath>
 #include <sstream>
 
 #include "heatcvt/errors.h"
@@ -73,7 +74,14 @@ PcdHeader read_pcd_header(const std::string& path, const std::function<bool(std:
       ls >> h.data_kind;
       have_data = true;
       break;
-    } else if (key != "VERSION" && key != "VIEWPOINT") {
+    } else if (key == "VIEWPOINT") {
+      // tx ty tz qw qx qy qz: only the sensor position is used (ranges of organised clouds).
+      for (double& t : h.viewpoint) {
+        std::string tok;
+        if (!(ls >> tok) || !parse_double(tok, t) || !std::isfinite(t))
+          fail(path, "malformed PCD VIEWPOINT " + quote_excerpt(line));
+      }
+    } else if (key != "VERSION") {
       fail(path, "not a PCD file (unexpected header line " + quote_excerpt(line) + ")");
     }
   }

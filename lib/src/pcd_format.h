@@ -20,6 +20,7 @@ struct PcdHeader {
   std::vector<long long> counts;         // COUNT, one per field, or empty (1 each)
   std::vector<char> kinds;               // TYPE entries ('?' for one that is not a single letter)
   long long width = -1, height = 1;
+  double viewpoint[3] = {0, 0, 0};  // VIEWPOINT translation: the sensor position (origin if absent)
   long long points = 0;   // POINTS, = width * height
   std::string data_kind;  // DATA: "ascii", "binary", "binary_compressed" or another (rejected later)
   int lines = 0;          // header lines read, the DATA line included

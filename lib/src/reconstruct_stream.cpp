@@ -87,12 +87,14 @@ void check_stream_options(const StreamOptions& s) {
   if (!(s.min_points_per_fine_voxel > 0 && std::isfinite(s.min_points_per_fine_voxel)))
     throw InvalidInputError("reconstruct_surface_streamed: min_points_per_fine_voxel must be finite and > 0");
   if (s.sample_points < 10) throw InvalidInputError("reconstruct_surface_streamed: sample_points must be >= 10");
+  check_flying_pixel_options(s.flying_pixels);
 }
 
 // The exact path: read_cloud's clean-up, then the whole-cloud reconstruction.
 StreamedReconstruction reconstruct_raw(const CloudChunkSource& source, PointCloud cloud, const ReconstructionOptions& options,
                                        const ReconstructionCallback& progress) {
-  const auto* reader = dynamic_cast<const CloudChunkReader*>(&source);
+  const auto* filter = dynamic_cast<const FlyingPixelFilter*>(&source);
+  const auto* reader = dynamic_cast<const CloudChunkReader*>(filter ? &filter->source() : &source);
   if (reader && reader->has_normals() && !reader->all_points_had_normals()) cloud.N.resize(0, 3);  // as read_cloud
   const Eigen::Index in_source = cloud.P.rows();
   if (in_source == 0) throw InvalidInputError(source.name() + ": no points in the file");
@@ -186,7 +188,14 @@ StreamedReconstruction reconstruct_surface_streamed(const std::string& path, con
     reader_options.progress = [&](const StreamProgress& p) { stream.progress(reader_seen ? reader_seen->passes() : 1, p); };
   CloudChunkReader reader(path, reader_options);
   reader_seen = &reader;
-  return reconstruct_surface_streamed(static_cast<CloudChunkSource&>(reader), options, stream, progress);
+  if (reader.grid_height() < 2 || !stream.flying_pixels.enabled())
+    return reconstruct_surface_streamed(static_cast<CloudChunkSource&>(reader), options, stream, progress);
+  // An organised cloud: its flying pixels go (as read_cloud drops them).
+  FlyingPixelFilter filter(reader, static_cast<int>(reader.grid_width()), static_cast<int>(reader.grid_height()),
+                           reader.sensor_origin(), stream.flying_pixels);
+  StreamedReconstruction out = reconstruct_surface_streamed(static_cast<CloudChunkSource&>(filter), options, stream, progress);
+  out.flying_pixels_removed = filter.removed();
+  return out;
 }
 
 }  // namespace heatcvt

@@ -119,7 +119,7 @@ void transform_cloud(PointCloud& cloud, const Eigen::Isometry3d& pose) {
   if (cloud.has_normals()) cloud.N = (cloud.N * R.transpose()).eval();
 }
 
-PointCloud read_scans(const std::vector<ScanInput>& scans, CloudReadReport* report) {
+PointCloud read_scans(const std::vector<ScanInput>& scans, CloudReadReport* report, const CloudReadOptions& options) {
   if (scans.empty()) throw InvalidInputError("read_scans: no scan given");
   std::vector<PointCloud> clouds;
   CloudReadReport total;
@@ -127,7 +127,7 @@ PointCloud read_scans(const std::vector<ScanInput>& scans, CloudReadReport* repo
   bool normals = true, colours = true;
   for (const ScanInput& scan : scans) {
     CloudReadReport r;
-    clouds.push_back(read_cloud(scan.path, &r));
+    clouds.push_back(read_cloud(scan.path, &r, options));
     if (clouds.size() == 1) total = r;
     else {
       total.points_in_file += r.points_in_file;
@@ -135,6 +135,7 @@ PointCloud read_scans(const std::vector<ScanInput>& scans, CloudReadReport* repo
       total.non_finite_dropped += r.non_finite_dropped;
       total.duplicates_merged += r.duplicates_merged;
       total.invalid_normals_zeroed += r.invalid_normals_zeroed;
+      total.flying_pixels_removed += r.flying_pixels_removed;
     }
     transform_cloud(clouds.back(), scan.pose);
     n += clouds.back().P.rows();

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <string>
 
+#include "heatcvt/flying_pixels.h"
 #include "heatcvt/normalize.h"
 
 namespace heatcvt {
@@ -33,6 +34,15 @@ struct CloudReadReport {
   bool has_colours = false;     ///< the result has colours
   bool normals_all_zero = false;///< the file had normal columns but every normal was zero: treated as absent
   long invalid_normals_zeroed = 0; ///< finite points whose normal was NaN/inf; normal set to zero
+  long flying_pixels_removed = 0;  ///< pixels of an organised cloud dropped as flying (flying_pixels.h)
+};
+
+/// Options of read_cloud.
+struct CloudReadOptions {
+  /// The flying-pixel rule applied to organised PCD clouds (HEIGHT > 1) before the clean-up,
+  /// ranges measured from the file's VIEWPOINT (flying_pixels.h). Default on (3 % of the range);
+  /// neighbour_distance_ratio = 0 keeps every pixel.
+  FlyingPixelOptions flying_pixels;
 };
 
 /// Reads a point cloud, format by extension (case-insensitive):
@@ -42,12 +52,13 @@ struct CloudReadReport {
 ///                   faces and other elements are ignored.
 ///   .xyz .pwn .txt  text lines "x y z [nx ny nz ...]"; blank lines and '#' comments skipped, a single
 ///                   leading count line is accepted; normals only if every line has >= 6 columns.
+/// Organised PCD clouds first lose their flying pixels (options.flying_pixels).
 /// Clean-up (deterministic): drop points with a non-finite coordinate, merge exact duplicates keeping
 /// the first occurrence (file order is otherwise preserved), all-zero normals => no normals.
 /// Coordinates are read as double (float32 data converted exactly).
 /// \throw IOError "<path>: <problem>" for a missing/unreadable/empty file, unknown extension or
 ///        malformed/truncated content; InvalidInputError "<path>: <problem>" when no finite point remains.
-PointCloud read_cloud(const std::string& path, CloudReadReport* report = nullptr);
+PointCloud read_cloud(const std::string& path, CloudReadReport* report = nullptr, const CloudReadOptions& options = {});
 
 /// Drops non-finite points and merges exact duplicates in place (the clean-up of read_cloud).
 /// Counts are added to `report` if given.

@@ -102,6 +102,12 @@ class CloudChunkReader : public CloudChunkSource {
   bool all_points_had_normals() const;
   /// Points announced by the header (PLY vertex count, PCD POINTS); -1 for XYZ text.
   std::int64_t points_in_file() const;
+  /// Organisation of a PCD cloud (WIDTH × HEIGHT, row-major; HEIGHT > 1 is an image grid);
+  /// other formats: points_in_file() × 1.
+  std::int64_t grid_width() const;
+  std::int64_t grid_height() const;
+  /// The sensor position of a PCD cloud (its VIEWPOINT translation); the origin otherwise.
+  Eigen::Vector3d sensor_origin() const;
   /// Points handed out so far.
   std::int64_t points_read() const;
   /// Bytes of the file consumed so far and the file size.

@@ -21,6 +21,7 @@
 #include "heatcvt/centroid.h"
 #include "heatcvt/closest_point.h"
 #include "heatcvt/cloud_io.h"
+#include "heatcvt/flying_pixels.h"
 #include "heatcvt/cvt.h"
 #include "heatcvt/dual_mesh.h"
 #include "heatcvt/errors.h"

@@ -49,6 +49,9 @@ struct StreamOptions {
   /// on armadillo). Defaults 1.5 and 10.
   double fine_voxel_factor = 1.5;
   double min_points_per_fine_voxel = 10.0;
+  /// The flying-pixel rule applied to an organised PCD file (flying_pixels.h; read_cloud applies
+  /// the same). Default on; neighbour_distance_ratio = 0 keeps every pixel.
+  FlyingPixelOptions flying_pixels;
   /// Seed of the reservoir sampling (std::mt19937_64). Default 1.
   std::uint64_t sample_seed = 1;
   /// Reading progress: pass 1 (raw points / sample) or 2 (voxel summary), and the reader's counters.
@@ -66,6 +69,7 @@ struct StreamedReconstruction {
   double voxel_size = 0;         ///< of the summary (0 when not summarised)
   std::int64_t points_read = 0;  ///< points handed out by the source (one pass)
   int passes = 0;                ///< passes over the source (1 or 2)
+  std::int64_t flying_pixels_removed = 0;  ///< by StreamOptions::flying_pixels (path version only)
 };
 
 /// Streams `source` and reconstructs its surface:

@@ -46,6 +46,7 @@ void transform_cloud(PointCloud& cloud, const Eigen::Isometry3d& pose);
 /// normals (colours) only if every scan has them. Reports are added up into `report` if given
 /// (format of the first scan).
 /// \throw as read_cloud; InvalidInputError if `scans` is empty.
-PointCloud read_scans(const std::vector<ScanInput>& scans, CloudReadReport* report = nullptr);
+PointCloud read_scans(const std::vector<ScanInput>& scans, CloudReadReport* report = nullptr,
+                      const CloudReadOptions& options = {});
 
 }  // namespace heatcvt
