@@ -2,6 +2,8 @@
 // the streamed filter against the whole-grid rule for any chunk size, read_cloud on organised
 // and unorganised PCD files, and cloud2mesh on a frame whose edges fly (no curtain in the mesh).
 #include <gtest/gtest.h>
+#include <pcl/io/pcd_io.h>
+#include <pcl/point_types.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -15,6 +17,8 @@
 #include "heatcvt/errors.h"
 #include "heatcvt/flying_pixels.h"
 #include "heatcvt/mesh_io.h"
+#include "heatcvt/pcl/heat_cvt_reconstruction.h"
+#include "heatcvt/reconstruct.h"
 #include "test_support.h"
 
 using namespace heatcvt;
@@ -281,4 +285,34 @@ TEST(FlyingPixels, Cloud2meshMakesNoCurtainFromADepthFrameWithMixedEdges) {
   EXPECT_LT(farthest_from_scene(run("", "filtered.ply")), bound);
   // The streamed path (summarised) drops the same pixels.
   EXPECT_LT(farthest_from_scene(run(" --stream-above 1000", "streamed.ply")), bound);
+}
+
+TEST(FlyingPixels, ThePclClassDropsThemFromAnOrganisedCloudAsReadCloudDoes) {
+  test::ScratchDir dir("flying_pcl");
+  const Eigen::Vector3d eye(0.5, 0.25, -1);
+  const Frame f = depth_frame(160, 120, eye);
+  write_pcd(dir.path("frame.pcd"), f.P, f.width, f.height, eye);
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+  ASSERT_EQ(pcl::io::loadPCDFile(dir.path("frame.pcd"), *cloud), 0);  // as a PCL user loads a frame
+  EXPECT_TRUE(cloud->sensor_origin_.head<3>().isApprox(Eigen::Vector3f(0.5f, 0.25f, -1.f)));
+  ASSERT_TRUE(cloud->isOrganized());
+  auto run = [&](double ratio) {
+    heatcvt::HeatCVTReconstruction<pcl::PointXYZ> rec;
+    rec.setInputCloud(cloud);
+    rec.setNumberOfSites(300);
+    FlyingPixelOptions o;
+    o.neighbour_distance_ratio = ratio;
+    rec.setFlyingPixels(o);
+    std::vector<pcl::Vertices> polygons;
+    pcl::PointCloud<pcl::PointXYZ> points;
+    rec.reconstruct(points, polygons);
+    return rec.getReconstructionResult().mesh;
+  };
+  ReconstructionOptions o;
+  o.sites = 300;
+  const TriangleMesh from_file = reconstruct_surface(read_cloud(dir.path("frame.pcd")).P, o).mesh;
+  const TriangleMesh filtered = run(FlyingPixelOptions{}.neighbour_distance_ratio), kept = run(0);
+  ASSERT_GT(from_file.F.rows(), 0);
+  EXPECT_TRUE(filtered.V == from_file.V && filtered.F == from_file.F);
+  EXPECT_FALSE(kept.V.rows() == from_file.V.rows() && kept.V == from_file.V);  // the rule changed the input
 }

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "heatcvt/flying_pixels.h"
 #include "heatcvt/reconstruct.h"
 
 namespace heatcvt {
@@ -28,9 +29,11 @@ namespace heatcvt {
 /// `cloud2mesh`, as a PCL surface reconstruction class.
 ///
 /// Input: the points of `setInputCloud()` restricted to `setIndices()` (all points if none
-/// given). Points with a NaN/inf coordinate are skipped and exact duplicates merged (first
-/// occurrence kept), exactly as `cloud2mesh` does after reading a file, so the same points,
-/// options and seed give the same mesh as `cloud2mesh` (and as reconstruct_surface()).
+/// given). An organised cloud (height > 1, a depth-camera frame) first loses its flying pixels
+/// (flying_pixels.h, ranges from the cloud's sensor_origin_; setFlyingPixels()). Points with a
+/// NaN/inf coordinate are skipped and exact duplicates merged (first occurrence kept), exactly as
+/// `cloud2mesh` does after reading a file, so the same points, options and seed give the same
+/// mesh as `cloud2mesh`.
 /// Normals and other fields of the input are not used by the reconstruction (it estimates its
 /// own normals).
 ///
@@ -119,6 +122,11 @@ class HeatCVTReconstruction : public pcl::SurfaceReconstruction<PointT> {
   void setVoxelSize(double size) { options_.voxel_size = size; }
   double getVoxelSize() const { return options_.voxel_size; }
 
+  /// The flying-pixel rule for organised input clouds (cloud2mesh --flying-pixels). Default on
+  /// (3 % of the range); neighbour_distance_ratio = 0 keeps every pixel.
+  void setFlyingPixels(const FlyingPixelOptions& options) { flying_ = options; }
+  const FlyingPixelOptions& getFlyingPixels() const { return flying_; }
+
   /// All options at once (the same struct as reconstruct_surface() and cloud2mesh).
   void setOptions(const ReconstructionOptions& options) { options_ = options; }
   const ReconstructionOptions& getOptions() const { return options_; }
@@ -150,6 +158,7 @@ class HeatCVTReconstruction : public pcl::SurfaceReconstruction<PointT> {
   /// Placeholder input of a new object: empty, recognised as "no input given".
   const typename PointCloud::ConstPtr no_input_{new PointCloud};
   ReconstructionOptions options_;
+  FlyingPixelOptions flying_;
   ReconstructionCallback progress_;
   ReconstructionResult result_;
 };

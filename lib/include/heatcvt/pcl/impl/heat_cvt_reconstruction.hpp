@@ -1,6 +1,7 @@
 #pragma once
 /// \file pcl/impl/heat_cvt_reconstruction.hpp
 /// Template bodies of heatcvt::HeatCVTReconstruction (see heat_cvt_reconstruction.h).
+#include <limits>
 #include <pcl/common/io.h>
 #include <pcl/conversions.h>
 #include <pcl/point_traits.h>
@@ -70,6 +71,18 @@ bool HeatCVTReconstruction<PointT>::run(pcl::PointCloud<PointT>& points, std::ve
       const PointT& p = (*input_)[static_cast<std::size_t>(idx)];
       xyz.row(static_cast<Eigen::Index>(i)) << p.x, p.y, p.z;
       cloud_index[i] = idx;
+    }
+    // A depth-camera frame: its flying pixels go first (as read_cloud drops them from a PCD frame).
+    if (input_->isOrganized() && flying_.enabled()) {
+      Eigen::MatrixX3d grid(static_cast<Eigen::Index>(input_->size()), 3);
+      for (std::size_t i = 0; i < input_->size(); ++i)
+        grid.row(static_cast<Eigen::Index>(i)) << (*input_)[i].x, (*input_)[i].y, (*input_)[i].z;
+      const std::vector<char> flying =
+          flying_pixel_mask(grid, static_cast<int>(input_->width), static_cast<int>(input_->height),
+                            input_->sensor_origin_.template head<3>().template cast<double>(), flying_);
+      for (std::size_t i = 0; i < g; ++i)
+        if (flying[static_cast<std::size_t>(cloud_index[i])])
+          xyz.row(static_cast<Eigen::Index>(i)).setConstant(std::numeric_limits<double>::quiet_NaN());
     }
     const pcl_detail::CleanPoints clean = pcl_detail::clean_points(xyz, cloud_index);
     const Eigen::Index usable = clean.P.rows();
