@@ -5,8 +5,6 @@
 // downsampled to about the same number of vertices.
 //
 // Usage: bench_shared_clouds [N = 2000] [--no-peer] [--threads T] [--mean-tolerance T]
-#include <pcl/filters/voxel_grid.h>
-
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
@@ -53,22 +51,7 @@ Row describe(const TriangleMesh& m, double seconds) {
 // cloud voxel-downsampled to about `target` points, with the peers' normals.
 Row greedy_projection(const Eigen::MatrixX3d& P, int target) {
   const double t0 = bench::now_seconds();
-  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
-  for (Eigen::Index i = 0; i < P.rows(); ++i) cloud->push_back(pcl::PointXYZ(P(i, 0), P(i, 1), P(i, 2)));
-  const Eigen::Vector3d extent = P.colwise().maxCoeff() - P.colwise().minCoeff();
-  double leaf = extent.maxCoeff() / std::sqrt(static_cast<double>(target));
-  pcl::PointCloud<pcl::PointXYZ>::Ptr down(new pcl::PointCloud<pcl::PointXYZ>);
-  for (int step = 0; step < 8; ++step) {  // secant steps on the leaf size: occupied voxels ~ area / leaf²
-    pcl::VoxelGrid<pcl::PointXYZ> vg;
-    vg.setInputCloud(cloud);
-    vg.setLeafSize(leaf, leaf, leaf);
-    vg.filter(*down);
-    if (std::abs(static_cast<double>(down->size()) - target) <= 0.02 * target) break;
-    leaf *= std::sqrt(static_cast<double>(down->size()) / target);
-  }
-  Eigen::MatrixX3d D(static_cast<Eigen::Index>(down->size()), 3);
-  for (size_t i = 0; i < down->size(); ++i) D.row(i) << (*down)[i].x, (*down)[i].y, (*down)[i].z;
-  const TriangleMesh m = test::pcl_greedy_projection(D, test::peer_normals(D), 3.0 * leaf);
+  const TriangleMesh m = test::pcl_greedy_projection_at_count(P, target);
   return describe(m, bench::now_seconds() - t0);
 }
 

@@ -14,7 +14,9 @@
 // output surface to the scanned scene (‰ of the diagonal) and the time.
 //
 // Usage: bench_virtual_scans [N = 2000] [--only a,b] [--noise rgbd|stereo|both] [--views K]
-//                            [--keep-dir D] [--threads T]
+//                            [--keep-dir D] [--threads T] [--no-peer]
+// Beside each row, in the same run: PCL's greedy projection triangulation of the frame's points
+// voxel-downsampled to about -n (the usual PCL meshing of a scan; peer_pipelines.h).
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
 #include <CGAL/AABB_triangle_primitive.h>
@@ -39,6 +41,7 @@
 #include "heatcvt/reconstruct.h"
 #include "heatcvt/reconstruct_stream.h"
 #include "heatcvt/validate.h"
+#include "peer_pipelines.h"
 
 namespace {
 
@@ -198,23 +201,47 @@ std::pair<double, double> distance_to_truth(const TriangleMesh& out, const Close
   return {1000 * sum / S.rows(), 1000 * worst};
 }
 
+/// One table row: vertices against -n, pieces, loops, angles, failed checks (manifold,
+/// orientation, self-intersections; an open mesh is expected), distances to the scene, time.
+void print_row(const std::string& row, const char* method, const TriangleMesh& out, const ClosestPointTree& truth,
+               const TriangleMesh& scene, int n, double seconds) {
+  if (out.F.rows() == 0) {
+    std::printf("%s| %s | no faces |||||||||\n", row.c_str(), method);
+    return;
+  }
+  ValidationOptions vo;
+  vo.require_closed = false;
+  const ValidationReport rep = validate_triangle_mesh(out.V, out.F, vo);
+  const TriangleQuality q = triangle_quality(out.V, out.F);
+  std::string checks;
+  for (const MeshCheck& c : rep.checks)
+    if (!c.passed && c.name != "closed") checks += (checks.empty() ? "" : ",") + c.name;
+  const auto [mean, worst] = distance_to_truth(out, truth, scene);
+  std::printf("%s| %s | %d (%+.1f %%) | %d | %d | %.1f | %.1f | %.1f | %s | %.2f | %.1f | %.2f |\n", row.c_str(), method,
+              rep.vertices, 100.0 * (rep.vertices - n) / n, rep.components, rep.boundary_loops, q.min_angle_deg,
+              q.boundary_min_angle_deg, q.mean_min_angle_deg, checks.empty() ? "ok" : checks.c_str(), mean, worst,
+              seconds);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   int n = 2000, threads = 0, views = 4;
   std::string noise = "both", keep_dir = "/tmp/virtual_scans";
+  bool peer = true;
   std::vector<std::string> only;
   for (int a = 1; a < argc; ++a) {
     const std::string s = argv[a];
     if (s == "--only" && a + 1 < argc) only = split(argv[++a]);
     else if (s == "--noise" && a + 1 < argc) noise = argv[++a];
+    else if (s == "--no-peer") peer = false;
     else if (s == "--views" && a + 1 < argc) views = std::atoi(argv[++a]);
     else if (s == "--keep-dir" && a + 1 < argc) keep_dir = argv[++a];
     else if (s == "--threads" && a + 1 < argc) threads = std::atoi(argv[++a]);
     else if (!s.empty() && std::isdigit(static_cast<unsigned char>(s[0]))) n = std::atoi(s.c_str());
     else {
       std::fprintf(stderr, "usage: bench_virtual_scans [N = 2000] [--only a,b] [--noise rgbd|stereo|both] "
-                           "[--views K] [--keep-dir D] [--threads T]\n");
+                           "[--views K] [--keep-dir D] [--threads T] [--no-peer]\n");
       return 2;
     }
   }
@@ -235,8 +262,8 @@ int main(int argc, char** argv) {
               "centre; rgbd sigma %.4f z^2, step %.4f z^2, flying pixels; stereo sigma x%.0f, speckle. "
               "Distances: output to the scanned mesh, permille of the diagonal.\n\n",
               n, so.width, so.height, so.distance, so.rgbd_sigma, so.rgbd_step, so.stereo_sigma_factor);
-  std::printf("| mesh | view | noise | points | V (vs -n) | comp | loops | phi_min | phi_b | phi_m | checks | "
-              "mean | max | time s |\n|---|---|---|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|\n");
+  std::printf("| mesh | view | noise | points | method | V (vs -n) | comp | loops | phi_min | phi_b | phi_m | checks | "
+              "mean | max | time s |\n|---|---|---|---:|---|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|\n");
   for (const auto& f : files) {
     const std::string name = f.stem().string();
     if (!only.empty() && std::find(only.begin(), only.end(), name) == only.end()) continue;
@@ -268,35 +295,32 @@ int main(int argc, char** argv) {
         write_organised_pcd(path.string(), grid, so.width, so.height, img.eye);
         write_mesh((std::filesystem::path(keep_dir) / (name + "_v" + std::to_string(v) + "_scene.obj")).string(),
                    scene.V, scene.F);
-        std::printf("| %s | %d%s | %s | %ld ", name.c_str(), v, view.floor ? " floor" : "", label.c_str(),
-                    finite);
+        const std::string row = "| " + name + " | " + std::to_string(v) + (view.floor ? " floor" : "") + " | " + label +
+                                " | " + std::to_string(finite) + " ";
         if (finite < 10L * n) {
-          std::printf("| fewer than 10 points per site |||||||||\n");
+          std::printf("%s| heatcvt | fewer than 10 points per site |||||||||\n", row.c_str());
           continue;
         }
         ReconstructionOptions o;
         o.sites = n;
         o.threads = threads;
-        const double t0 = bench::now_seconds();
+        double t0 = bench::now_seconds();
         try {
           const StreamedReconstruction r = reconstruct_surface_streamed(path.string(), o, StreamOptions{});
           const double seconds = bench::now_seconds() - t0;
-          const TriangleMesh& out = r.result.mesh;
-          ValidationOptions vo;
-          vo.require_closed = false;
-          const ValidationReport rep = validate_triangle_mesh(out.V, out.F, vo);
-          const TriangleQuality q = triangle_quality(out.V, out.F);
-          std::string checks;
-          for (const MeshCheck& c : rep.checks)
-            if (!c.passed && c.name != "closed") checks += (checks.empty() ? "" : ",") + c.name;
-          const auto [mean, worst] = distance_to_truth(out, truth, scene);
-          write_mesh(std::filesystem::path(path).replace_extension(".out.ply").string(), out.V, out.F);
-          std::printf("| %d (%+.1f %%) | %d | %d | %.1f | %.1f | %.1f | %s | %.2f | %.1f | %.2f |\n", rep.vertices,
-                      100.0 * (rep.vertices - n) / n, rep.components, rep.boundary_loops, q.min_angle_deg,
-                      q.boundary_min_angle_deg, q.mean_min_angle_deg, checks.empty() ? "ok" : checks.c_str(), mean,
-                      worst, seconds);
+          write_mesh(std::filesystem::path(path).replace_extension(".out.ply").string(), r.result.mesh.V,
+                     r.result.mesh.F);
+          print_row(row, "heatcvt", r.result.mesh, truth, scene, n, seconds);
         } catch (const std::exception& e) {
-          std::printf("| failed: %s |||||||||\n", e.what());
+          std::printf("%s| heatcvt | failed: %s |||||||||\n", row.c_str(), e.what());
+        }
+        if (peer) {  // the peer reads the same frame: its finite points, flying pixels included
+          Eigen::MatrixX3d P(finite, 3);
+          for (Eigen::Index i = 0, k = 0; i < grid.rows(); ++i)
+            if (grid.row(i).allFinite()) P.row(k++) = grid.row(i);
+          t0 = bench::now_seconds();
+          const TriangleMesh m = test::pcl_greedy_projection_at_count(P, n);
+          print_row(row, "PCL GP3", m, truth, scene, n, bench::now_seconds() - t0);
         }
         std::fflush(stdout);
       }

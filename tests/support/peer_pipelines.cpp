@@ -1,5 +1,6 @@
 #include "peer_pipelines.h"
 
+#include <pcl/filters/voxel_grid.h>
 #include <pcl/search/kdtree.h>
 #include <pcl/surface/gp3.h>
 
@@ -156,6 +157,25 @@ TriangleMesh pcl_greedy_projection(const Eigen::MatrixX3d& P, const Eigen::Matri
   pcl::PolygonMesh pm;
   gp3.reconstruct(pm);
   return compact(from_pcl(pm));
+}
+
+TriangleMesh pcl_greedy_projection_at_count(const Eigen::MatrixX3d& P, int target) {
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+  for (Eigen::Index i = 0; i < P.rows(); ++i) cloud->push_back(pcl::PointXYZ(P(i, 0), P(i, 1), P(i, 2)));
+  const Eigen::Vector3d extent = P.colwise().maxCoeff() - P.colwise().minCoeff();
+  double leaf = extent.maxCoeff() / std::sqrt(static_cast<double>(target));
+  pcl::PointCloud<pcl::PointXYZ>::Ptr down(new pcl::PointCloud<pcl::PointXYZ>);
+  for (int step = 0; step < 8; ++step) {  // secant steps on the leaf size: occupied voxels ~ area / leaf²
+    pcl::VoxelGrid<pcl::PointXYZ> vg;
+    vg.setInputCloud(cloud);
+    vg.setLeafSize(leaf, leaf, leaf);
+    vg.filter(*down);
+    if (std::abs(static_cast<double>(down->size()) - target) <= 0.02 * target) break;
+    leaf *= std::sqrt(static_cast<double>(down->size()) / target);
+  }
+  Eigen::MatrixX3d D(static_cast<Eigen::Index>(down->size()), 3);
+  for (size_t i = 0; i < down->size(); ++i) D.row(static_cast<Eigen::Index>(i)) << (*down)[i].x, (*down)[i].y, (*down)[i].z;
+  return pcl_greedy_projection(D, peer_normals(D), 3.0 * leaf);
 }
 
 }  // namespace heatcvt::test

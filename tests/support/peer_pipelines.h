@@ -44,6 +44,11 @@ TriangleMesh remesh_to(const TriangleMesh& m, int target_vertices);
 /// surface angle 45°, triangle angles 10–120°, no normal consistency), compacted.
 TriangleMesh pcl_greedy_projection(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N, double radius);
 
+/// The usual PCL meshing of an open scan at about `target` vertices: the cloud voxel-downsampled
+/// (pcl::VoxelGrid, leaf found by secant steps on the occupied-voxel count) to within 2 % of
+/// `target` points, peer_normals, then pcl_greedy_projection with a radius of 3 leaves.
+TriangleMesh pcl_greedy_projection_at_count(const Eigen::MatrixX3d& P, int target);
+
 /// One two-step peer result: its name and mesh.
 struct PeerMesh {
   std::string method;
