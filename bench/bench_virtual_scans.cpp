@@ -17,19 +17,13 @@
 //                            [--keep-dir D] [--threads T] [--no-peer]
 // Beside each row, in the same run: PCL's greedy projection triangulation of the frame's points
 // voxel-downsampled to about -n (the usual PCL meshing of a scan; peer_pipelines.h).
-#include <CGAL/AABB_traits.h>
-#include <CGAL/AABB_tree.h>
-#include <CGAL/AABB_triangle_primitive.h>
-#include <CGAL/Simple_cartesian.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
-#include <random>
 #include <sstream>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -42,140 +36,14 @@
 #include "heatcvt/reconstruct_stream.h"
 #include "heatcvt/validate.h"
 #include "peer_pipelines.h"
+#include "virtual_scanner.h"
 
 namespace {
 
 using namespace heatcvt;
-using K = CGAL::Simple_cartesian<double>;
-using Triangles = std::vector<K::Triangle_3>;
-using Primitive = CGAL::AABB_triangle_primitive<K, Triangles::const_iterator>;
-using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
-
-/// The camera and sensor constants of the simulation (scene in metres, diagonal 1).
-struct ScanOptions {
-  int width = 320, height = 240;       ///< pixels
-  double fov_deg = 50;                 ///< horizontal field of view
-  double distance = 1.3;               ///< camera to object centre
-  double rgbd_sigma = 0.0015;          ///< σ(z) = rgbd_sigma · z² (m)
-  double rgbd_step = 0.0025;           ///< quantisation step Δz(z) = rgbd_step · z² (m)
-  double flying_jump = 0.05;           ///< neighbour depth jump (m) that makes flying pixels
-  double flying_share = 0.5;           ///< share of the pixels at a jump that fly
-  double stereo_sigma_factor = 2.0;    ///< stereo σ over the rgbd σ
-  double speckle_share = 0.01;         ///< stereo pixels off by up to 3 σ more
-  std::uint32_t seed = 1;
-};
-
-struct View {
-  double azimuth_deg, elevation_deg;
-  bool floor;
-};
-
-/// The mesh (scaled to diagonal 1, centred at the origin) with a floor quad under it
-/// (z = min z, 1.6 diagonals wide) when `floor` is set.
-TriangleMesh scene_mesh(const TriangleMesh& m, bool floor) {
-  if (!floor) return m;
-  TriangleMesh s;
-  const Eigen::Index nv = m.V.rows(), nf = m.F.rows();
-  s.V.resize(nv + 4, 3);
-  s.F.resize(nf + 2, 3);
-  s.V.topRows(nv) = m.V;
-  s.F.topRows(nf) = m.F;
-  const double z = m.V.col(2).minCoeff(), r = 0.8;
-  s.V.bottomRows(4) << -r, -r, z, r, -r, z, r, r, z, -r, r, z;
-  s.F.bottomRows(2) << nv, nv + 1, nv + 2, nv, nv + 2, nv + 3;
-  return s;
-}
-
-Triangles triangles(const TriangleMesh& m) {
-  Triangles t;
-  auto p = [&](int v) { return K::Point_3(m.V(v, 0), m.V(v, 1), m.V(v, 2)); };
-  for (Eigen::Index f = 0; f < m.F.rows(); ++f) t.emplace_back(p(m.F(f, 0)), p(m.F(f, 1)), p(m.F(f, 2)));
-  return t;
-}
-
-/// Depth image of the scene from one view: for every pixel the hit point's depth along the
-/// optical axis (0 where the ray misses), and the camera frame.
-struct DepthImage {
-  std::vector<double> z;
-  Eigen::Vector3d eye, forward, right, up;
-  double focal = 0;
-};
-
-DepthImage render(const Tree& tree, const View& view, const ScanOptions& o) {
-  DepthImage img;
-  const double az = view.azimuth_deg * M_PI / 180, el = view.elevation_deg * M_PI / 180;
-  const Eigen::Vector3d dir(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
-  img.eye = o.distance * dir;
-  img.forward = -dir;
-  img.right = img.forward.cross(Eigen::Vector3d::UnitZ()).normalized();
-  img.up = img.right.cross(img.forward);
-  img.focal = 0.5 * o.width / std::tan(0.5 * o.fov_deg * M_PI / 180);
-  img.z.assign(static_cast<size_t>(o.width) * o.height, 0.0);
-  const K::Point_3 eye(img.eye.x(), img.eye.y(), img.eye.z());
-#pragma omp parallel for schedule(dynamic, 8)
-  for (int y = 0; y < o.height; ++y)
-    for (int x = 0; x < o.width; ++x) {
-      const Eigen::Vector3d d = (img.forward * img.focal + img.right * (x + 0.5 - 0.5 * o.width) -
-                                 img.up * (y + 0.5 - 0.5 * o.height)).normalized();
-      const K::Ray_3 ray(eye, K::Vector_3(d.x(), d.y(), d.z()));
-      const auto hit = tree.first_intersection(ray);
-      if (!hit) continue;
-      const K::Point_3* q = boost::get<K::Point_3>(&hit->first);
-      if (!q) continue;
-      const Eigen::Vector3d h(q->x(), q->y(), q->z());
-      img.z[static_cast<size_t>(y) * o.width + x] = (h - img.eye).dot(img.forward);
-    }
-  return img;
-}
-
-/// The sensor model on the depth image, then back-projection to points.
-Eigen::MatrixX3d sense(DepthImage img, bool stereo, const ScanOptions& o, std::uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> gauss(0.0, 1.0);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  const int W = o.width, H = o.height;
-  std::vector<double> z = img.z;
-  if (!stereo)  // flying pixels between a pixel and a neighbour across a depth jump
-    for (int y = 0; y < H; ++y)
-      for (int x = 0; x + 1 < W; ++x) {
-        const double a = img.z[y * W + x], b = img.z[y * W + x + 1];
-        if (a > 0 && b > 0 && std::abs(a - b) > o.flying_jump && unit(rng) < o.flying_share)
-          z[y * W + x] = a + unit(rng) * (b - a);
-      }
-  // Row-major W × H grid as a sensor writes it: NaN where the ray found nothing.
-  Eigen::MatrixX3d P = Eigen::MatrixX3d::Constant(static_cast<Eigen::Index>(W) * H, 3, std::nan(""));
-  for (int y = 0; y < H; ++y)
-    for (int x = 0; x < W; ++x) {
-      double d = z[y * W + x];
-      if (d <= 0) continue;
-      const double sigma = (stereo ? o.stereo_sigma_factor : 1.0) * o.rgbd_sigma * d * d;
-      d += sigma * gauss(rng);
-      if (stereo && unit(rng) < o.speckle_share) d += 3 * sigma * (2 * unit(rng) - 1);
-      if (!stereo) {
-        const double step = o.rgbd_step * d * d;
-        d = step * std::round(d / step);
-      }
-      const Eigen::Vector3d ray =
-          img.forward + (img.right * (x + 0.5 - 0.5 * W) - img.up * (y + 0.5 - 0.5 * H)) / img.focal;
-      P.row(static_cast<Eigen::Index>(y) * W + x) = img.eye + d * ray;
-    }
-  return P;
-}
-
-/// Writes the grid as an organised ASCII PCD (WIDTH × HEIGHT, "nan" where there is no return)
-/// with the camera position as its VIEWPOINT, as RGB-D drivers save their frames.
-void write_organised_pcd(const std::string& path, const Eigen::MatrixX3d& P, int width, int height,
-                         const Eigen::Vector3d& eye) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (!f) throw std::runtime_error("cannot write " + path);
-  std::fprintf(f, "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n"
-               "COUNT 1 1 1\nWIDTH %d\nHEIGHT %d\nVIEWPOINT %.9g %.9g %.9g 1 0 0 0\nPOINTS %ld\nDATA ascii\n",
-               width, height, eye.x(), eye.y(), eye.z(), static_cast<long>(P.rows()));
-  for (Eigen::Index i = 0; i < P.rows(); ++i)
-    if (P.row(i).allFinite()) std::fprintf(f, "%.9g %.9g %.9g\n", P(i, 0), P(i, 1), P(i, 2));
-    else std::fprintf(f, "nan nan nan\n");
-  std::fclose(f);
-}
+using test::DepthFrame;
+using test::ScanOptions;
+using test::View;
 
 std::vector<std::string> split(const std::string& s) {
   std::vector<std::string> out;
@@ -274,25 +142,22 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "%s: %s\n", f.filename().c_str(), e.what());
       continue;
     }
-    const Eigen::RowVector3d lo = m.V.colwise().minCoeff(), hi = m.V.colwise().maxCoeff();
-    m.V = ((m.V.rowwise() - 0.5 * (lo + hi)) / (hi - lo).norm()).eval();
+    m = test::normalised(m);
     for (int v = 0; v < std::min<int>(views, static_cast<int>(all_views.size())); ++v) {
       const View& view = all_views[v];
-      const TriangleMesh scene = scene_mesh(m, view.floor);
+      const TriangleMesh scene = test::scene_mesh(m, view.floor);
       const ClosestPointTree truth(scene.V, scene.F);
-      const Triangles tri = triangles(scene);
-      Tree tree(tri.begin(), tri.end());
-      tree.accelerate_distance_queries();
-      const DepthImage img = render(tree, view, so);
       for (const bool stereo : {false, true}) {
         if ((stereo && noise == "rgbd") || (!stereo && noise == "stereo")) continue;
-        const Eigen::MatrixX3d grid = sense(img, stereo, so, so.seed + 17 * v + (stereo ? 1 : 0));
+        // Seeds 1, 2 for the first view's two frames, then 17 apart per view.
+        const DepthFrame frame = test::virtual_scan(scene, view, stereo, so, 1 + 17 * v + (stereo ? 1 : 0));
+        const Eigen::MatrixX3d& grid = frame.P;
         long finite = 0;
         for (Eigen::Index i = 0; i < grid.rows(); ++i) finite += grid.row(i).allFinite();
         const std::string label = std::string(stereo ? "stereo" : "rgbd");
         const std::filesystem::path path =
             std::filesystem::path(keep_dir) / (name + "_v" + std::to_string(v) + "_" + label + ".pcd");
-        write_organised_pcd(path.string(), grid, so.width, so.height, img.eye);
+        test::write_organised_pcd(path.string(), frame);
         write_mesh((std::filesystem::path(keep_dir) / (name + "_v" + std::to_string(v) + "_scene.obj")).string(),
                    scene.V, scene.F);
         const std::string row = "| " + name + " | " + std::to_string(v) + (view.floor ? " floor" : "") + " | " + label +

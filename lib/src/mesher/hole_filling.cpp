@@ -193,10 +193,11 @@ struct PieceBoundaries {
 };
 
 // Whether the triangles close the loop's piece (it is the piece's only boundary) into a surface
-// that encloses a volume of at least min_ratio · area^(3/2): a closed object missing a cap, not
-// the two sides of a flat piece pressed together.
+// that encloses a volume of at least min_ratio · area^(3/2), with a fill of at most max_cap_share
+// of the piece's area: a closed object missing a cap, not the two sides of a flat piece pressed
+// together, nor one view of a round object whose unseen back the fill would stand for.
 bool closes_a_volume(const WorkingMesh& mesh, const PieceBoundaries& pieces, const std::vector<int>& loop,
-                     const std::vector<MeshFace>& tris, double min_ratio) {
+                     const std::vector<MeshFace>& tris, double min_ratio, double max_cap_share) {
   const int f0 = mesh.half_edge_face(loop[0], loop[1]);
   if (f0 < 0) return false;
   const int piece = pieces.components.of_face[f0];
@@ -209,8 +210,9 @@ bool closes_a_volume(const WorkingMesh& mesh, const PieceBoundaries& pieces, con
   };
   for (int f = 0; f < mesh.num_faces(); ++f)
     if (pieces.components.of_face[f] == piece) add(mesh.face(f));
+  const double piece_area = area;
   for (const MeshFace& t : tris) add(t);
-  return std::abs(volume) >= min_ratio * std::pow(area, 1.5);
+  return std::abs(volume) >= min_ratio * std::pow(area, 1.5) && area - piece_area <= max_cap_share * piece_area;
 }
 
 // Vertices in no face, and a lookup of those near a point.
@@ -347,7 +349,8 @@ int fill_pass(WorkingMesh& mesh, const SurfaceProjector& surface, const HoleFill
     // Beyond the extraction's own small gaps, a loop is filled only when the fill does not face
     // against its corners' normals (closing the border of a piece would turn its back side up).
     if (L > o.max_hole_edges && !faces_agree_with_normals(mesh, tris, o.min_fill_normal_agreement) &&
-        !closes_a_volume(mesh, pieces, loop, tris, o.min_closed_volume))
+        !closes_a_volume(mesh, pieces, loop, tris, o.min_closed_volume,
+                         o.policy == HolePolicy::fill ? std::numeric_limits<double>::infinity() : o.max_cap_area_fraction))
       continue;
     if (sites_ok) unused.take(with_sites.interior_sites);
     added.insert(added.end(), tris.begin(), tris.end());

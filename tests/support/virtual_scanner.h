@@ -1,0 +1,62 @@
+#pragma once
+// A virtual depth camera for benchmarks and tests: partial views of a mesh (scaled to a bounding
+// diagonal of 1 m) with a floor under it, taken by a pinhole camera of W × H pixels whose depth
+// gets a sensor model:
+//   rgbd:   structured-light / time-of-flight camera: depth noise σ(z) = rgbd_sigma · z², depth
+//           quantised to disparity steps Δz(z) = rgbd_step · z², and flying pixels: where
+//           horizontal neighbours differ by more than flying_jump, flying_share of those pixels
+//           get a depth between the two;
+//   stereo: stereo_sigma_factor times the noise, no quantisation, and speckle: speckle_share of
+//           the pixels off by up to 3 σ more.
+// The frame is organised (row-major, NaN where the ray hits nothing), as depth drivers save it.
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+
+#include "heatcvt/mesh.h"
+
+namespace heatcvt::test {
+
+/// The camera and sensor constants of the simulation (scene in metres, diagonal 1).
+struct ScanOptions {
+  int width = 320, height = 240;       ///< pixels
+  double fov_deg = 50;                 ///< horizontal field of view
+  double distance = 1.3;               ///< camera to object centre
+  double rgbd_sigma = 0.0015;          ///< σ(z) = rgbd_sigma · z² (m)
+  double rgbd_step = 0.0025;           ///< quantisation step Δz(z) = rgbd_step · z² (m)
+  double flying_jump = 0.05;           ///< neighbour depth jump (m) that makes flying pixels
+  double flying_share = 0.5;           ///< share of the pixels at a jump that fly
+  double stereo_sigma_factor = 2.0;    ///< stereo σ over the rgbd σ
+  double speckle_share = 0.01;         ///< stereo pixels off by up to 3 σ more
+};
+
+/// Where the camera stands (azimuth and elevation around the object's centre, z up) and whether
+/// the scene has a floor.
+struct View {
+  double azimuth_deg, elevation_deg;
+  bool floor;
+};
+
+/// `m` scaled to bounding diagonal 1 and centred at the origin.
+TriangleMesh normalised(const TriangleMesh& m);
+
+/// The (normalised) mesh with a floor quad under it (z = min z, 1.6 diagonals wide) when `floor`.
+TriangleMesh scene_mesh(const TriangleMesh& m, bool floor);
+
+/// One organised frame of the scene.
+struct DepthFrame {
+  int width = 0, height = 0;
+  Eigen::Vector3d eye = Eigen::Vector3d::Zero();  ///< the camera position
+  Eigen::MatrixX3d P;                             ///< width·height rows, NaN where nothing was hit
+};
+
+/// The frame of `scene` seen from `view` with the rgbd or stereo sensor model; `seed` drives the
+/// noise (std::mt19937).
+DepthFrame virtual_scan(const TriangleMesh& scene, const View& view, bool stereo, const ScanOptions& options,
+                        std::uint32_t seed);
+
+/// Writes the frame as an organised ASCII PCD ("nan" where there is no return) with the camera
+/// position as its VIEWPOINT. \throw std::runtime_error when the file cannot be written.
+void write_organised_pcd(const std::string& path, const DepthFrame& frame);
+
+}  // namespace heatcvt::test
