@@ -74,6 +74,19 @@ bool is_away_from_sample_border(const WorkingMesh& mesh, const SurfaceProjector&
   return true;
 }
 
+// Whether at least half of the loop's vertices lie within sample_border_clearance·h of the border
+// of a cloud's samples (h its mean edge length): the loop follows the edge of what was scanned.
+bool follows_sample_border(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop,
+                           const HoleFillingOptions& o) {
+  if (surface.border_known()) return false;
+  const int L = static_cast<int>(loop.size());
+  double h = 0;
+  for (int i = 0; i < L; ++i) h += (mesh.V.row(loop[i]) - mesh.V.row(loop[(i + 1) % L])).norm() / L;
+  int near = 0;
+  for (int v : loop) near += surface.distance_to_sample_border(mesh.V.row(v).transpose()) <= o.sample_border_clearance * h;
+  return 2 * near >= L;
+}
+
 // Whether the loop is a hole inside the surface: where the surface's own border is known (an
 // input mesh), every vertex of the loop is farther than interior_hole_clearance·h from it (always,
 // on a closed surface); where the border of the samples is, farther than sample_border_clearance·h.
@@ -194,8 +207,9 @@ struct PieceBoundaries {
 
 // Whether the triangles close the loop's piece (it is the piece's only boundary) into a surface
 // that encloses a volume of at least min_ratio · area^(3/2), with a fill of at most max_cap_share
-// of the piece's area: a closed object missing a cap, not the two sides of a flat piece pressed
-// together, nor one view of a round object whose unseen back the fill would stand for.
+// of the piece's area or more than all of it: a closed object missing a cap, not the two sides of
+// a flat piece pressed together, nor one view of a round object whose unseen back the fill would
+// stand for.
 bool closes_a_volume(const WorkingMesh& mesh, const PieceBoundaries& pieces, const std::vector<int>& loop,
                      const std::vector<MeshFace>& tris, double min_ratio, double max_cap_share) {
   const int f0 = mesh.half_edge_face(loop[0], loop[1]);
@@ -212,7 +226,11 @@ bool closes_a_volume(const WorkingMesh& mesh, const PieceBoundaries& pieces, con
     if (pieces.components.of_face[f] == piece) add(mesh.face(f));
   const double piece_area = area;
   for (const MeshFace& t : tris) add(t);
-  return std::abs(volume) >= min_ratio * std::pow(area, 1.5) && area - piece_area <= max_cap_share * piece_area;
+  // A fill larger than the piece itself is not limited: the piece is then a ring round a gap of
+  // the extraction (coarse site counts), not what was seen of an object (a rim's fill is at most
+  // as large as the part of a ball or a can seen from one side).
+  const double share = (area - piece_area) / piece_area;
+  return std::abs(volume) >= min_ratio * std::pow(area, 1.5) && (share <= max_cap_share || share > 1.0);
 }
 
 // Vertices in no face, and a lookup of those near a point.
@@ -350,7 +368,9 @@ int fill_pass(WorkingMesh& mesh, const SurfaceProjector& surface, const HoleFill
     // against its corners' normals (closing the border of a piece would turn its back side up).
     if (L > o.max_hole_edges && !faces_agree_with_normals(mesh, tris, o.min_fill_normal_agreement) &&
         !closes_a_volume(mesh, pieces, loop, tris, o.min_closed_volume,
-                         o.policy == HolePolicy::fill ? std::numeric_limits<double>::infinity() : o.max_cap_area_fraction))
+                         o.policy != HolePolicy::fill && follows_sample_border(mesh, surface, loop, o)
+                             ? o.max_cap_area_fraction
+                             : std::numeric_limits<double>::infinity()))
       continue;
     if (sites_ok) unused.take(with_sites.interior_sites);
     added.insert(added.end(), tris.begin(), tris.end());

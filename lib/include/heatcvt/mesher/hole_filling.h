@@ -80,10 +80,13 @@ struct HoleFillingOptions {
   /// closed piece encloses at least this times its area^(3/2) (a sphere: 0.094; two sides of a
   /// flat piece pressed together: about 0). Default 0.005.
   double min_closed_volume = 0.005;
-  /// ... and, except under HolePolicy::fill, when the fill's area is at most this fraction of the
-  /// piece's: the cap of a closed object (the end of a tube, the base it stood on). One view of a
-  /// ball or a can has a rim whose fill is half as large as what was seen or more; closing it
-  /// would stand for the unseen back. Default 0.25.
+  /// ... and, where the loop follows the border of a cloud's samples (half of its vertices within
+  /// sample_border_clearance·h of it; not under HolePolicy::fill), when the fill's area is at most
+  /// this fraction of the piece's: the cap of a closed object (the end of a tube, the base it
+  /// stood on). One view of a ball or a can has a rim along the edge of the scan whose fill is
+  /// half as large as what was seen or more (but not larger); closing it would stand for the
+  /// unseen back. A fill larger than its piece (a ring of surface round a gap of the extraction,
+  /// at coarse site counts) and a hole inside sampled surface are not limited. Default 0.25.
   double max_cap_area_fraction = 0.25;
   /// On an open surface (below), the fill of a loop longer than max_hole_edges that runs
   /// counter-clockwise seen from its sites' mean normal (LoopShape::outer_border: the border of a
