@@ -1,17 +1,12 @@
-// Virtual range scans: partial views of every shared mesh taken by a simulated depth camera, so
-// that cloud2mesh meets scans of shapes it was never tuned on. Each view is a pinhole camera of
-// W × H pixels looking at the mesh (scaled to a bounding-box diagonal of 1 m) from a fixed set of
-// directions, with a floor under the object in the "scene" views. Each pixel's ray hits the
-// scene (CGAL AABB tree) and the depth gets a sensor model:
-//   rgbd:   structured-light camera: depth noise σ(z) = rgbd_sigma · z², depth quantised to
-//           disparity steps Δz(z) = rgbd_step · z², and flying pixels: where neighbouring pixels
-//           differ by more than a jump, half of those pixels get a depth between the two;
-//   stereo: twice the noise, no quantisation, and speckle: 1 % of the pixels off by up to 3 σ more.
-// Every cloud is written to --keep-dir (an organised PCD with the camera as VIEWPOINT, beside the scene as OBJ and the output as PLY) and
-// reconstructed as cloud2mesh does, at -n N; the
-// table gives vertices, components, boundary loops, φmin, φ of boundary triangles, φm, the
-// checks (manifold, oriented, no self-intersections), the mean and largest distance from the
-// output surface to the scanned scene (‰ of the diagonal) and the time.
+// Virtual range scans: partial views of every shared mesh taken by the simulated depth camera of
+// tests/support/virtual_scanner.h (rgbd: noise, quantisation and flying pixels; stereo: noise and
+// speckle; a floor under the object in the scene views), so that cloud2mesh meets scans of shapes
+// it was never tuned on. Every frame is written to --keep-dir (an organised PCD with the camera as
+// VIEWPOINT, beside the scene as OBJ and the output as PLY) and reconstructed as cloud2mesh does,
+// at -n N. The table gives vertices, components, boundary loops, φmin, φ of boundary triangles,
+// φm, the failed checks (manifold, oriented, no self-intersections; an open mesh is expected),
+// the mean and largest distance from the output surface to the scanned scene (‰ of the
+// diagonal) and the time.
 //
 // Usage: bench_virtual_scans [N = 2000] [--only a,b] [--noise rgbd|stereo|both] [--views K]
 //                            [--keep-dir D] [--threads T] [--no-peer]
