@@ -28,6 +28,7 @@ using namespace heatcvt;
 struct Row {
   int vertices = 0, components = 0, loops = 0, genus = -1;
   double phi_min = 0, phi_boundary = 180, phi_mean = 0, seconds = 0;
+  long flying_pixels = -1;  // dropped by the flying-pixel rule; −1 on the peer row (it meshes read_cloud's points, the same ones dropped)
 };
 
 Row describe(const TriangleMesh& m, double seconds) {
@@ -56,9 +57,9 @@ Row greedy_projection(const Eigen::MatrixX3d& P, int target) {
 }
 
 void print(const char* method, const Row& r, int n) {
-  std::printf("| %s | %d (%+.1f %%) | %d | %d | %d | %.1f | %.1f | %.1f | %.2f |\n", method, r.vertices,
+  std::printf("| %s | %d (%+.1f %%) | %d | %d | %d | %.1f | %.1f | %.1f | %.2f | %s |\n", method, r.vertices,
               100.0 * (r.vertices - n) / n, r.components, r.loops, r.genus, r.phi_min, r.phi_boundary, r.phi_mean,
-              r.seconds);
+              r.seconds, r.flying_pixels < 0 ? "-" : std::to_string(r.flying_pixels).c_str());
 }
 
 }  // namespace
@@ -93,11 +94,11 @@ int main(int argc, char** argv) {
     if (e.path().extension() != ".md") files.push_back(e.path());
   std::sort(files.begin(), files.end());
   std::printf("cloud2mesh defaults, -n %d, every shared cloud with at least %d points; phi_b = smallest angle of the "
-              "triangles on a boundary. Peer: PCL GreedyProjectionTriangulation on the cloud voxel-downsampled to about "
+              "triangles on a boundary; flying px = pixels of an organised frame dropped by the flying-pixel rule. Peer: PCL GreedyProjectionTriangulation on the cloud voxel-downsampled to about "
               "-n points (PCA/MST normals, radius 3 voxels, mu 2.5, 10-120 deg).\n\n",
               n, 10 * n);
-  std::printf("| cloud | method | V (vs -n) | components | loops | genus | phi_min | phi_b | phi_m | time s |\n");
-  std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  std::printf("| cloud | method | V (vs -n) | components | loops | genus | phi_min | phi_b | phi_m | time s | flying px |\n");
+  std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   for (const auto& f : files) {
     PointCloud cloud;
     try {
@@ -117,9 +118,11 @@ int main(int argc, char** argv) {
       // As cloud2mesh runs it: a file of more than StreamOptions::max_raw_points points is
       // streamed into a voxel summary, a smaller one reconstructed from its raw points.
       const StreamedReconstruction r = reconstruct_surface_streamed(f.string(), o, StreamOptions{});
-      print("heatcvt", describe(r.result.mesh, bench::now_seconds() - t0), n);
+      Row row = describe(r.result.mesh, bench::now_seconds() - t0);
+      row.flying_pixels = static_cast<long>(r.flying_pixels_removed);
+      print("heatcvt", row, n);
     } catch (const std::exception& e) {
-      std::printf("| heatcvt | failed: %s |||||||\n", e.what());
+      std::printf("| heatcvt | failed: %s ||||||||\n", e.what());
     }
     if (peer) {
       std::printf("| %s ", f.filename().c_str());

@@ -316,3 +316,20 @@ TEST(FlyingPixels, ThePclClassDropsThemFromAnOrganisedCloudAsReadCloudDoes) {
   EXPECT_TRUE(filtered.V == from_file.V && filtered.F == from_file.F);
   EXPECT_FALSE(kept.V.rows() == from_file.V.rows() && kept.V == from_file.V);  // the rule changed the input
 }
+
+TEST(FlyingPixels, BadOptionOrViewpointGivesOneErrorLineAndNoOutput) {
+  test::ScratchDir dir("flying_bad");
+  const Frame f = depth_frame(40, 30, Eigen::Vector3d::Zero());
+  write_pcd(dir.path("frame.pcd"), f.P, f.width, f.height, f.eye);
+  auto r = test::run_tool("cloud2mesh", dir.path("frame.pcd") + " -n 50 -o " + dir.path("out.ply") + " --flying-pixels -1");
+  test::expect_tool_failure("cloud2mesh", r, {"--flying-pixels", ">= 0"}, dir, 1);
+  // A VIEWPOINT that is not seven numbers: the file is named, whole-file and streamed paths alike.
+  std::ifstream in(dir.path("frame.pcd"));
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  text.replace(text.find("VIEWPOINT"), 9, "VIEWPOINT x");
+  std::ofstream(dir.path("frame.pcd")) << text;
+  for (const char* extra : {"", " --stream-above 100"}) {
+    r = test::run_tool("cloud2mesh", dir.path("frame.pcd") + " -n 50 -o " + dir.path("out.ply") + extra);
+    test::expect_tool_failure("cloud2mesh", r, {"frame.pcd", "VIEWPOINT"}, dir, 1);
+  }
+}

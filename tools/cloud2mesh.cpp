@@ -314,7 +314,8 @@ int main(int argc, char** argv) {
 
   return cli::run_tool("cloud2mesh", [&]() -> int {
     check_options(opt);
-    check_flying_pixel_options(read_options.flying_pixels);
+    if (const double r = read_options.flying_pixels.neighbour_distance_ratio; !(r >= 0) || !std::isfinite(r))
+      throw InvalidInputError("--flying-pixels must be a finite number >= 0 (0 keeps every pixel)");
     if (cloud_paths.empty() == conf_path.empty())
       throw InvalidInputError("give the input clouds either as CLOUD arguments or with --conf, not both");
     if (!pose_paths.empty() && pose_paths.size() != cloud_paths.size())

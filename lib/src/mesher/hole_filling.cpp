@@ -65,6 +65,13 @@ bool is_sampled_hole(const WorkingMesh& mesh, const SurfaceProjector& surface, c
   return true;
 }
 
+// Mean edge length of the loop.
+double mean_edge_length(const WorkingMesh& mesh, const std::vector<int>& loop) {
+  double h = 0;
+  for (size_t i = 0; i < loop.size(); ++i) h += (mesh.V.row(loop[i]) - mesh.V.row(loop[(i + 1) % loop.size()])).norm();
+  return h / static_cast<double>(loop.size());
+}
+
 // Whether every vertex of the loop is farther than sample_border_clearance·h from the border of
 // the samples (a cloud's scan edge), i.e. the loop is a hole in sampled surface.
 bool is_away_from_sample_border(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop,
@@ -79,12 +86,10 @@ bool is_away_from_sample_border(const WorkingMesh& mesh, const SurfaceProjector&
 bool follows_sample_border(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop,
                            const HoleFillingOptions& o) {
   if (surface.border_known()) return false;
-  const int L = static_cast<int>(loop.size());
-  double h = 0;
-  for (int i = 0; i < L; ++i) h += (mesh.V.row(loop[i]) - mesh.V.row(loop[(i + 1) % L])).norm() / L;
+  const double h = mean_edge_length(mesh, loop);
   int near = 0;
   for (int v : loop) near += surface.distance_to_sample_border(mesh.V.row(v).transpose()) <= o.sample_border_clearance * h;
-  return 2 * near >= L;
+  return 2 * near >= static_cast<int>(loop.size());
 }
 
 // Whether the loop is a hole inside the surface: where the surface's own border is known (an
@@ -92,9 +97,7 @@ bool follows_sample_border(const WorkingMesh& mesh, const SurfaceProjector& surf
 // on a closed surface); where the border of the samples is, farther than sample_border_clearance·h.
 bool is_inside_surface(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop,
                        const HoleFillingOptions& o) {
-  double h = 0;
-  for (size_t i = 0; i < loop.size(); ++i) h += (mesh.V.row(loop[i]) - mesh.V.row(loop[(i + 1) % loop.size()])).norm();
-  h /= static_cast<double>(loop.size());
+  const double h = mean_edge_length(mesh, loop);
   if (!surface.border_known()) return is_away_from_sample_border(mesh, surface, loop, h, o);
   if (!surface.has_border()) return true;
   for (int v : loop) {
