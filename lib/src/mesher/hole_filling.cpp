@@ -108,7 +108,8 @@ bool is_inside_surface(const WorkingMesh& mesh, const SurfaceProjector& surface,
   return true;
 }
 
-// Beyond enough of the loop's edges, one edge length outward, the surface is sampled.
+// Beyond enough of the loop's edges, one edge length outward, the surface is sampled, and the
+// surface there lies along the loop's own faces (surrounded_normal_agreement).
 bool is_surrounded_hole(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop,
                         const HoleFillingOptions& o) {
   const Eigen::MatrixX3d& S = mesh.V;
@@ -126,7 +127,12 @@ bool is_surrounded_hole(const WorkingMesh& mesh, const SurfaceProjector& surface
     const Eigen::Vector3d out = e.cross(fn).normalized();
     const double len = e.norm();
     const Eigen::Vector3d probe = 0.5 * (S.row(a) + S.row(b)).transpose() + len * out;
-    if (surface.distance_to_samples(probe) < o.sample_gap * len) ++sampled;
+    if (!(surface.distance_to_samples(probe) < o.sample_gap * len)) continue;
+    // The surface found there continues the loop's own (another object beside it does not).
+    int hint = -1;
+    Eigen::Vector3d pos, nrm;
+    surface.project(probe, hint, pos, nrm);
+    if (std::abs(nrm.dot(fn.normalized())) >= o.surrounded_normal_agreement) ++sampled;
   }
   return sampled >= o.surrounded_fraction * L;
 }

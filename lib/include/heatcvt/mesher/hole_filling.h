@@ -61,6 +61,14 @@ struct HoleFillingOptions {
   /// tip find it; across the border of an open scan none does). Default 8.
   int surrounded_hole_factor = 8;
   double surrounded_fraction = 0.3;  ///< Default 0.3.
+  /// ... where an edge counts only when the surface found beyond it lies along the edge's own
+  /// triangle: the absolute cosine between that triangle's normal and the surface normal there
+  /// is at least this. Beyond the shadow an object casts on the floor of a scene, what is found
+  /// is the object's silhouette, seen edge-on (about 90° from the floor); closing the shadow
+  /// would put a floor under the object, through whatever of it touches the floor. Around the
+  /// tip of a thin part the surface turns by less than that within one edge length. Default 0.5
+  /// (60°).
+  double surrounded_normal_agreement = 0.5;
   /// On a nearly closed surface (not open, below), loops of up to surrounded_hole_factor·
   /// max_hole_edges edges whose sites' normals cancel out (LoopShape::unknown: the open end of a
   /// tube, where the cells at the tip of a thin part gave no triangles) are filled when the sampled surface is met within `sample_gap`·h of the
