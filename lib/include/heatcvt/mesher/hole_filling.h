@@ -66,8 +66,8 @@ struct HoleFillingOptions {
   /// is at least this. Beyond the shadow an object casts on the floor of a scene, what is found
   /// is the object's silhouette, seen edge-on (about 90° from the floor); closing the shadow
   /// would put a floor under the object, through whatever of it touches the floor. Around the
-  /// tip of a thin part the surface turns by less than that within one edge length (at 0.5, an
-  /// armadillo sampled at 17 points per site kept a hole at a tip). Default 0.25 (75.5°).
+  /// tip of a thin part the surface may turn by nearly as much within one edge length, so the
+  /// bound is loose. Default 0.25 (75.5°).
   double surrounded_normal_agreement = 0.25;
   /// On a nearly closed surface (not open, below), loops of up to surrounded_hole_factor·
   /// max_hole_edges edges whose sites' normals cancel out (LoopShape::unknown: the open end of a
