@@ -43,18 +43,26 @@ class NearbyFaces {
   double reach_ = 0;
 };
 
+// Mean edge length of the loop.
+double mean_edge_length(const WorkingMesh& mesh, const std::vector<int>& loop) {
+  double h = 0;
+  for (size_t i = 0; i < loop.size(); ++i) h += (mesh.V.row(loop[i]) - mesh.V.row(loop[(i + 1) % loop.size()])).norm();
+  return h / static_cast<double>(loop.size());
+}
+
+// Mean position of the loop's vertices.
+Eigen::Vector3d loop_centroid(const WorkingMesh& mesh, const std::vector<int>& loop) {
+  Eigen::Vector3d g = Eigen::Vector3d::Zero();
+  for (int v : loop) g += mesh.V.row(v).transpose();
+  return g / static_cast<double>(loop.size());
+}
+
 // The loop's centre is away from every triangle (> clearance·h) but near the sampled surface.
 bool is_sampled_hole(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop,
                      NearbyFaces& nearby, const HoleFillingOptions& o) {
   const Eigen::MatrixX3d& S = mesh.V;
-  Eigen::Vector3d g = Eigen::Vector3d::Zero();
-  double h = 0;
-  for (size_t i = 0; i < loop.size(); ++i) {
-    g += S.row(loop[i]).transpose();
-    h += (S.row(loop[i]) - S.row(loop[(i + 1) % loop.size()])).norm();
-  }
-  g /= static_cast<double>(loop.size());
-  h /= static_cast<double>(loop.size());
+  const Eigen::Vector3d g = loop_centroid(mesh, loop);
+  const double h = mean_edge_length(mesh, loop);
   if (!(surface.distance_to_samples(g) < o.sample_gap * h)) return false;
   for (int fi : nearby.within(g, o.clearance * h)) {
     const MeshFace& f = mesh.face(fi);
@@ -63,13 +71,6 @@ bool is_sampled_hole(const WorkingMesh& mesh, const SurfaceProjector& surface, c
     if ((bc[0] * a + bc[1] * b + bc[2] * c - g).norm() < o.clearance * h) return false;
   }
   return true;
-}
-
-// Mean edge length of the loop.
-double mean_edge_length(const WorkingMesh& mesh, const std::vector<int>& loop) {
-  double h = 0;
-  for (size_t i = 0; i < loop.size(); ++i) h += (mesh.V.row(loop[i]) - mesh.V.row(loop[(i + 1) % loop.size()])).norm();
-  return h / static_cast<double>(loop.size());
 }
 
 // Whether every vertex of the loop is farther than sample_border_clearance·h from the border of
@@ -143,10 +144,9 @@ bool is_surrounded_hole(const WorkingMesh& mesh, const SurfaceProjector& surface
 bool is_sampled_tube_end(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop,
                          const HoleFillingOptions& o) {
   const int L = static_cast<int>(loop.size());
-  Eigen::Vector3d g = Eigen::Vector3d::Zero(), area = Eigen::Vector3d::Zero();
+  const Eigen::Vector3d g = loop_centroid(mesh, loop);
+  Eigen::Vector3d area = Eigen::Vector3d::Zero();
   double h = 0, radius = 0;
-  for (int v : loop) g += mesh.V.row(v).transpose();
-  g /= L;
   for (int i = 0; i < L; ++i) {
     const Eigen::Vector3d a = mesh.V.row(loop[i]).transpose() - g, b = mesh.V.row(loop[(i + 1) % L]).transpose() - g;
     area += a.cross(b);
@@ -354,9 +354,7 @@ int fill_pass(WorkingMesh& mesh, const SurfaceProjector& surface, const HoleFill
     HoleTriangulation with_sites;
     bool sites_ok = false;
     if (o.sites.enabled) {
-      Eigen::Vector3d g = Eigen::Vector3d::Zero();
-      for (int v : loop) g += mesh.V.row(v).transpose();
-      g /= L;
+      const Eigen::Vector3d g = loop_centroid(mesh, loop);
       double radius = 0;
       for (int v : loop) radius = std::max(radius, (mesh.V.row(v).transpose() - g).norm());
       sites_ok = triangulate_hole_with_sites(mesh, loop, unused.near(g, radius), o.sites, with_sites);
