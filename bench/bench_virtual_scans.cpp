@@ -16,6 +16,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cctype>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
@@ -64,13 +65,48 @@ std::pair<double, double> distance_to_truth(const TriangleMesh& out, const Close
   return {1000 * sum / S.rows(), 1000 * worst};
 }
 
+/// The figures of one reconstructed frame, for the summary.
+struct FrameFigures {
+  bool valid = false, count_ok = false;
+  double min_angle = 0, mean_angle = 0, mean_dist = 0, max_dist = 0, seconds = 0;
+};
+
+/// The frames of one method and one sensor model.
+struct Summary {
+  std::vector<FrameFigures> frames;
+  void print(const char* method, const char* noise) const {
+    if (frames.empty()) return;
+    auto count = [&](auto pred) { return std::count_if(frames.begin(), frames.end(), pred); };
+    auto values = [&](double FrameFigures::*field) {
+      std::vector<double> v;
+      for (const FrameFigures& f : frames) v.push_back(f.*field);
+      std::sort(v.begin(), v.end());
+      return v;
+    };
+    const auto lo_hi = [&](double FrameFigures::*field) {
+      const std::vector<double> v = values(field);
+      return std::make_pair(v.front(), v.back());
+    };
+    const auto median = [&](double FrameFigures::*field) { return values(field)[frames.size() / 2]; };
+    const auto [phi_lo, phi_hi] = lo_hi(&FrameFigures::min_angle);
+    const auto [phim_lo, phim_hi] = lo_hi(&FrameFigures::mean_angle);
+    std::printf("| %s, %s | %zu | %ld | %ld | %ld | %ld | %.1f-%.1f | %.1f-%.1f | %.2f / %.2f | %.1f / %.1f | %.2f |\n",
+                method, noise, frames.size(), count([](const FrameFigures& f) { return f.valid; }),
+                count([](const FrameFigures& f) { return f.count_ok; }),
+                count([](const FrameFigures& f) { return f.min_angle >= 25; }),
+                count([](const FrameFigures& f) { return f.mean_angle >= 52; }), phi_lo, phi_hi, phim_lo, phim_hi,
+                median(&FrameFigures::mean_dist), lo_hi(&FrameFigures::mean_dist).second,
+                median(&FrameFigures::max_dist), lo_hi(&FrameFigures::max_dist).second, median(&FrameFigures::seconds));
+  }
+};
+
 /// One table row: vertices against -n, pieces, loops, angles, failed checks (manifold,
 /// orientation, self-intersections; an open mesh is expected), distances to the scene, time.
-void print_row(const std::string& row, const char* method, const TriangleMesh& out, const ClosestPointTree& truth,
-               const TriangleMesh& scene, int n, double seconds) {
+FrameFigures print_row(const std::string& row, const char* method, const TriangleMesh& out, const ClosestPointTree& truth,
+                       const TriangleMesh& scene, int n, double seconds) {
   if (out.F.rows() == 0) {
     std::printf("%s| %s | no faces |||||||||\n", row.c_str(), method);
-    return;
+    return {};
   }
   ValidationOptions vo;
   vo.require_closed = false;
@@ -84,6 +120,8 @@ void print_row(const std::string& row, const char* method, const TriangleMesh& o
               rep.vertices, 100.0 * (rep.vertices - n) / n, rep.components, rep.boundary_loops, q.min_angle_deg,
               q.boundary_min_angle_deg, q.mean_min_angle_deg, checks.empty() ? "ok" : checks.c_str(), mean, worst,
               seconds);
+  return {checks.empty(), std::abs(rep.vertices - n) <= 0.02 * n, q.min_angle_deg, q.mean_min_angle_deg, mean, worst,
+          seconds};
 }
 
 }  // namespace
@@ -121,6 +159,7 @@ int main(int argc, char** argv) {
   const std::vector<View> all_views = {{30, 25, true}, {150, 40, true}, {260, 10, false}, {0, 80, true},
                                        {90, -30, false}, {200, 60, false}};
   const ScanOptions so;
+  Summary ours[2], peers[2];  // by sensor model: [0] rgbd, [1] stereo
   std::printf("Virtual scans at -n %d: %dx%d depth camera, mesh scaled to diagonal 1 m, camera %.1f m from its "
               "centre; rgbd sigma %.4f z^2, step %.4f z^2, flying pixels; stereo sigma x%.0f, speckle. "
               "Distances: output to the scanned mesh, permille of the diagonal.\n\n",
@@ -170,9 +209,10 @@ int main(int argc, char** argv) {
           const double seconds = bench::now_seconds() - t0;
           write_mesh(std::filesystem::path(path).replace_extension(".out.ply").string(), r.result.mesh.V,
                      r.result.mesh.F);
-          print_row(row, "heatcvt", r.result.mesh, truth, scene, n, seconds);
+          ours[stereo].frames.push_back(print_row(row, "heatcvt", r.result.mesh, truth, scene, n, seconds));
         } catch (const std::exception& e) {
           std::printf("%s| heatcvt | failed: %s |||||||||\n", row.c_str(), e.what());
+          ours[stereo].frames.push_back({});
         }
         if (peer) {  // the peer reads the same frame: its finite points, flying pixels included
           Eigen::MatrixX3d P(finite, 3);
@@ -180,11 +220,17 @@ int main(int argc, char** argv) {
             if (grid.row(i).allFinite()) P.row(k++) = grid.row(i);
           t0 = bench::now_seconds();
           const TriangleMesh m = test::pcl_greedy_projection_at_count(P, n);
-          print_row(row, "PCL GP3", m, truth, scene, n, bench::now_seconds() - t0);
+          peers[stereo].frames.push_back(print_row(row, "PCL GP3", m, truth, scene, n, bench::now_seconds() - t0));
         }
         std::fflush(stdout);
       }
     }
   }
+  std::printf("\nSummary over the frames with at least 10 points per site (a failed run counts as invalid, 0°):\n\n"
+              "| method | frames | valid | count within 2 %% | phi_min >= 25 | phi_m >= 52 | phi_min | phi_m | "
+              "mean distance, median / largest | largest distance, median / largest | time s, median |\n"
+              "|---|---:|---:|---:|---:|---:|---|---|---|---|---:|\n");
+  for (const bool stereo : {false, true}) ours[stereo].print("heatcvt", stereo ? "stereo" : "rgbd");
+  for (const bool stereo : {false, true}) peers[stereo].print("PCL GP3", stereo ? "stereo" : "rgbd");
   return 0;
 }
