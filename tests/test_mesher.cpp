@@ -205,6 +205,32 @@ TEST(Projector, MeshProjectorGivesTheClosestPointAndNormal) {
   EXPECT_NEAR(proj.distance_to_samples(x), x.norm() - 1.0, 2e-3);
 }
 
+// A thin plate (1 × 1 × 0.02): a point that moved off its top face to just below the plate's
+// mid-plane is nearest the bottom face, but with the top face as its hint it stays on the top.
+TEST(Projector, MeshProjectorStaysOnTheSheetOfItsHintAcrossAThinPart) {
+  TriangleMesh plate;
+  plate.V.resize(8, 3);
+  for (int i = 0; i < 8; ++i) plate.V.row(i) << (i & 1), ((i >> 1) & 1), 0.02 * ((i >> 2) & 1);
+  plate.F.resize(12, 3);
+  plate.F << 0, 2, 1, 1, 2, 3,  // bottom (z = 0, facing −z)
+      4, 5, 6, 5, 7, 6,         // top (z = 0.02, facing +z)
+      0, 1, 5, 0, 5, 4, 2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5;
+  ASSERT_EQ(mesh_topology(plate.F, 8).inconsistent_edges, 0);
+  const MeshSurfaceProjector proj(plate.V, plate.F);
+  const Eigen::Vector3d x(0.4, 0.55, 0.008);
+  Eigen::Vector3d pos, nrm;
+  int hint = -1;  // precondition: the closest point is on the bottom face
+  proj.project(x, hint, pos, nrm);
+  ASSERT_NEAR(pos.z(), 0.0, 1e-12);
+  hint = 2;  // a top face
+  proj.project(x, hint, pos, nrm);
+  EXPECT_NEAR(pos.z(), 0.02, 1e-12);
+  EXPECT_NEAR(pos.x(), 0.4, 1e-12);
+  EXPECT_NEAR(pos.y(), 0.55, 1e-12);
+  EXPECT_GT(nrm.z(), 0.5);
+  EXPECT_GE(plate.F(hint, 0), 4);  // the hint is a top face again
+}
+
 TEST(Projector, CloudFitProjectsOntoTheSampledSphere) {
   const TriangleMesh s = test::icosphere(4);  // 2562 points on the unit sphere
   const Eigen::MatrixX3d P = s.V;
@@ -400,6 +426,38 @@ TEST(HoleFilling, HolesInsideAnInputMeshAreFilledAndItsBorderKept) {
   WorkingMesh near = with_hole();
   EXPECT_EQ(fill_holes(near, surface, o, {}, removed), 0);
   EXPECT_EQ(validate(near, false).boundary_loops, 2);
+}
+
+// A loop of the mesh around a hole of the input mesh (one grid cell, in the middle of a 5 × 5
+// block of cells the mesh lacks) stays open under keep, though every vertex of the loop is
+// farther than interior_hole_clearance · h from the input's border; fill closes it.
+TEST(HoleFilling, ALoopAroundAHoleOfTheInputMeshStaysOpen) {
+  const TriangleMesh g = test::grid(10);
+  const auto without = [&](double lo, double hi) {
+    WorkingMesh w = test::working_mesh(g);
+    std::vector<char> drop(w.num_faces(), 0);
+    for (int f = 0; f < w.num_faces(); ++f) {
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      for (int v : w.face(f)) c += w.V.row(v).transpose() / 3.0;
+      drop[f] = c.x() > lo && c.x() < hi && c.y() > lo && c.y() < hi;
+    }
+    w.remove_faces(drop);
+    return w;
+  };
+  const TriangleMesh input = compact_mesh(without(0.4, 0.5));
+  const MeshSurfaceProjector surface(input.V, input.F);
+  ASSERT_TRUE(surface.has_border());
+  HoleFillingOptions o;
+  o.policy = HolePolicy::keep;
+  int removed = 0;
+  WorkingMesh kept = without(0.2, 0.7);
+  ASSERT_EQ(validate(kept, false).boundary_loops, 2);
+  EXPECT_EQ(fill_holes(kept, surface, o, {}, removed), 0);
+  EXPECT_EQ(validate(kept, false).boundary_loops, 2);
+  o.policy = HolePolicy::fill;
+  WorkingMesh filled = without(0.2, 0.7);
+  EXPECT_EQ(fill_holes(filled, surface, o, {}, removed), 1);
+  EXPECT_EQ(validate(filled, false).boundary_loops, 1);
 }
 
 // The projector of a closed input mesh knows it has no border: every loop is a hole inside it.

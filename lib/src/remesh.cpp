@@ -347,15 +347,35 @@ void run_cvt(const TriangleMesh& work, const Laplacian& laplacian, const Eigen::
   out.stage_seconds.emplace_back("checks", seconds_since(t));
 }
 
+// Which of the targets of mesher.sizing a result meets: its vertex count within count_tolerance
+// of the `sites` asked for, φmin ≥ min_angle_deg, φm ≥ mean_angle_deg.
+struct TargetsMet {
+  bool count = false, min_angle = false, mean_angle = false;
+  bool covers(const TargetsMet& o) const {
+    return (count || !o.count) && (min_angle || !o.min_angle) && (mean_angle || !o.mean_angle);
+  }
+  bool operator==(const TargetsMet& o) const {
+    return count == o.count && min_angle == o.min_angle && mean_angle == o.mean_angle;
+  }
+};
+
+TargetsMet targets_met(const RemeshResult& r, int sites, const IsotropicRemeshOptions& targets) {
+  const TriangleQuality q = triangle_quality(r.mesh.V, r.mesh.F);
+  TargetsMet m;
+  m.count = std::abs(static_cast<double>(r.mesh.V.rows()) - sites) <= targets.count_tolerance * sites;
+  m.min_angle = q.min_angle_deg >= targets.min_angle_deg;
+  m.mean_angle = q.mean_min_angle_deg >= targets.mean_angle_deg;
+  return m;
+}
+
 // Whether the result `after` is better than `before` (both of `sites` sites asked for): it passes
-// every check that `before` passed, its vertex count is within `tolerance` where that of `before`
-// is, and its φmin is larger.
-bool improves_on(const RemeshResult& after, const RemeshResult& before, int sites, double tolerance) {
+// every check that `before` passed and meets every target (targets_met()) that `before` meets;
+// then it is better where it meets one more, or the same ones with a larger φmin.
+bool improves_on(const RemeshResult& after, const RemeshResult& before, int sites, const IsotropicRemeshOptions& targets) {
   if (check_lost(before.checks, after.checks)) return false;
-  const auto within = [&](const RemeshResult& r) {
-    return std::abs(static_cast<double>(r.mesh.V.rows()) - sites) <= tolerance * sites;
-  };
-  if (within(before) && !within(after)) return false;
+  const TargetsMet a = targets_met(after, sites, targets), b = targets_met(before, sites, targets);
+  if (!a.covers(b)) return false;
+  if (!(a == b)) return true;
   return triangle_quality(after.mesh.V, after.mesh.F).min_angle_deg >
          triangle_quality(before.mesh.V, before.mesh.F).min_angle_deg;
 }
@@ -432,7 +452,7 @@ RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions&
         out.post_cvt_refusal = "not run again: after heat iterations the dual passes every check and meets the targets";
       else if (out.mesh.F.rows() > 0)
         run_post_cvt_stages(mesh, again, out);
-      if (!improves_on(out, first, sites, options.mesher.sizing.count_tolerance)) {
+      if (!improves_on(out, first, sites, options.mesher.sizing)) {
         first.stage_seconds = std::move(out.stage_seconds);
         out = std::move(first);
       }

@@ -112,7 +112,9 @@ struct RemeshOptions {
   /// component of an input mesh is real, however small; sizing.remove_flying = false: no face
   /// of the dual is taken for one across a depth jump; and sizing.min_angle_deg = 30 with
   /// sizing.repair.sliver_angle_deg = 30: a remesh aims at φmin ≥ 30° (a scan's mesh at 25°), so
-  /// the stages run on a dual below that and treat faces below it as slivers.
+  /// the stages run on a dual below that and treat faces below it as slivers; and
+  /// keep_manifold_dual = true: a dual that is an oriented manifold keeps its faces (the triangles
+  /// around thin parts coarser than the site spacing included).
   SurfaceMesherOptions mesher = [] {
     SurfaceMesherOptions m;
     m.holes.policy = HolePolicy::keep;
@@ -120,6 +122,7 @@ struct RemeshOptions {
     m.sizing.remove_flying = false;  // an input mesh's faces are its surface
     m.sizing.min_angle_deg = 30;
     m.sizing.repair.sliver_angle_deg = 30;
+    m.keep_manifold_dual = true;
     return m;
   }();
   /// Sharp creases of the input (dihedral angle above creases.min_dihedral_deg, default 60°) kept

@@ -109,6 +109,18 @@ bool is_inside_surface(const WorkingMesh& mesh, const SurfaceProjector& surface,
   return true;
 }
 
+// Where the surface's own border is known (an input mesh), whether that border passes nearer the
+// loop's centre than the loop's farthest vertex: the loop goes around a hole of the surface
+// itself (one smaller than the site spacing included), which is one of its boundaries.
+bool surrounds_surface_border(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop) {
+  if (!surface.border_known() || !surface.has_border()) return false;
+  const Eigen::Vector3d g = loop_centroid(mesh, loop);
+  double radius = 0;
+  for (int v : loop) radius = std::max(radius, (mesh.V.row(v).transpose() - g).norm());
+  Eigen::Vector3d pos, nrm;
+  return surface.project_to_border(g, pos, nrm) && (pos - g).norm() < radius;
+}
+
 // Beyond enough of the loop's edges, one edge length outward, the surface is sampled, and the
 // surface there lies along the loop's own faces (surrounded_normal_agreement).
 bool is_surrounded_hole(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop,
@@ -351,6 +363,7 @@ int fill_pass(WorkingMesh& mesh, const SurfaceProjector& surface, const HoleFill
     std::sort(sorted.begin(), sorted.end());
     if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) continue;
     if (L == 3 && is_back_of_face(mesh, loop)) continue;  // would duplicate that face
+    if (o.policy == HolePolicy::keep && surrounds_surface_border(mesh, surface, loop)) continue;
     HoleTriangulation with_sites;
     bool sites_ok = false;
     if (o.sites.enabled) {

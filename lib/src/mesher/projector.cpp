@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "heatcvt/closest_point.h"
+#include "heatcvt/cvt/surface_graph.h"
 #include "heatcvt/errors.h"
 #include "heatcvt/mesh.h"
 #include "heatcvt/normals.h"
@@ -162,6 +163,7 @@ double CloudSurfaceProjector::distance_to_sample_border(const Eigen::Vector3d& x
 MeshSurfaceProjector::MeshSurfaceProjector(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F)
     : V_(V), F_(F), tree_(std::make_unique<ClosestPointTree>(V, F)) {
   VN_ = vertex_normals(V, F);
+  vfaces_ = vertex_faces(static_cast<int>(V.rows()), F);
   std::map<std::pair<int, int>, int> faces_of_edge;
   for (Eigen::Index f = 0; f < F.rows(); ++f)
     for (int k = 0; k < 3; ++k) {
@@ -192,9 +194,21 @@ bool MeshSurfaceProjector::project_to_border(const Eigen::Vector3d& x, Eigen::Ve
 
 MeshSurfaceProjector::~MeshSurfaceProjector() = default;
 
+Eigen::Vector3d MeshSurfaceProjector::face_normal(int f) const {
+  const Eigen::Vector3d a = V_.row(F_(f, 0)), b = V_.row(F_(f, 1)), c = V_.row(F_(f, 2));
+  return (b - a).cross(c - a);
+}
+
 void MeshSurfaceProjector::project(const Eigen::Vector3d& x, int& hint, Eigen::Vector3d& position,
                                    Eigen::Vector3d& normal) const {
-  const SurfacePoint sp = tree_->closest(x);
+  SurfacePoint sp = tree_->closest(x);
+  // The other side of a thin part: stay on the hint's sheet.
+  if (hint >= 0 && hint < F_.rows() && sp.face != hint && face_normal(sp.face).dot(face_normal(hint)) < 0) {
+    SurfacePoint start;
+    start.face = hint;
+    start.bary = Eigen::Vector3d::Constant(1.0 / 3.0);
+    sp = project_local(V_, F_, vfaces_, start, x);
+  }
   position = heatcvt::position(V_, F_, sp);
   Eigen::Vector3d nrm = Eigen::Vector3d::Zero();
   for (int k = 0; k < 3; ++k) nrm += sp.bary[k] * VN_.row(F_(sp.face, k)).transpose();

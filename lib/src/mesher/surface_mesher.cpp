@@ -3,6 +3,8 @@
 
 #include <chrono>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "heatcvt/errors.h"
 #include "heatcvt/mesher/mesh_checks.h"
@@ -28,14 +30,24 @@ class StageTimer {
   Clock::time_point t_;
 };
 
+// Whether the dual triangles F form an oriented 2-manifold (every edge on at most two faces,
+// once in each direction) whose components or Euler characteristic the extraction's result
+// `mesh` does not have: it cut or closed the surface (an ear thinner than a cell cut off).
+bool changes_topology(const WorkingMesh& mesh, const Eigen::MatrixX3i& F) {
+  const MeshTopology dual = mesh_topology(F, mesh.num_vertices());
+  if (F.rows() == 0 || dual.nonmanifold_edges > 0 || dual.inconsistent_edges > 0) return false;
+  Eigen::MatrixX3i E(mesh.num_faces(), 3);
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) E(f, k) = mesh.face(f)[k];
+  const MeshTopology extracted = mesh_topology(E, mesh.num_vertices());
+  return extracted.components != dual.components ||
+         extracted.euler_characteristic() != dual.euler_characteristic();
+}
+
 }  // namespace
 
-void mesh_from_candidates(WorkingMesh& mesh, const DualCandidates& candidates, const SurfaceProjector& surface,
-                          const SurfaceMesherOptions& options, MesherStats& stats) {
-  PolishOptions polish = options.polish;
-  polish.threads = options.threads;
-  EdgeSplitOptions split = options.split;
-  split.threads = options.threads;
+void extract_from_candidates(WorkingMesh& mesh, const DualCandidates& candidates, const SurfaceProjector& surface,
+                             const SurfaceMesherOptions& options, MesherStats& stats) {
   StageTimer timer(stats);
   stats.candidate_triangles = static_cast<int>(candidates.coherent.size());
   stats.rejected_triangles += extract_manifold(mesh, candidates.coherent);
@@ -45,6 +57,21 @@ void mesh_from_candidates(WorkingMesh& mesh, const DualCandidates& candidates, c
   stats.holes_filled +=
       fill_holes(mesh, surface, options.holes, options.manifold, stats.removed_triangles, &stats.filled_hole_edges);
   timer.done("extraction and holes");
+}
+
+void mesh_from_candidates(WorkingMesh& mesh, const DualCandidates& candidates, const SurfaceProjector& surface,
+                          const SurfaceMesherOptions& options, MesherStats& stats) {
+  extract_from_candidates(mesh, candidates, surface, options, stats);
+  polish_extracted(mesh, surface, options, stats);
+}
+
+void polish_extracted(WorkingMesh& mesh, const SurfaceProjector& surface, const SurfaceMesherOptions& options,
+                      MesherStats& stats) {
+  PolishOptions polish = options.polish;
+  polish.threads = options.threads;
+  EdgeSplitOptions split = options.split;
+  split.threads = options.threads;
+  StageTimer timer(stats);
   BorderGrowthOptions borders = options.borders;
   borders.threads = options.threads;
   stats.border_triangles += grow_borders(mesh, borders);
@@ -147,7 +174,19 @@ DualSurfaceResult mesh_dual_surface(const Eigen::MatrixX3d& sites, const Eigen::
   candidate_options.threads = options.threads;
   const DualCandidates candidates = dual_candidates_from_faces(dual_faces, mesh, candidate_options);
   timer.done("sites");
-  mesh_from_candidates(mesh, candidates, surface, options, out.stats);
+  const MesherStats unextracted = out.stats;
+  extract_from_candidates(mesh, candidates, surface, options, out.stats);
+  if (options.keep_manifold_dual && changes_topology(mesh, dual_faces)) {
+    std::vector<MeshFace> faces(static_cast<std::size_t>(dual_faces.rows()));
+    for (Eigen::Index f = 0; f < dual_faces.rows(); ++f)
+      faces[static_cast<std::size_t>(f)] = {dual_faces(f, 0), dual_faces(f, 1), dual_faces(f, 2)};
+    const std::vector<std::pair<std::string, double>> seconds = std::move(out.stats.stage_seconds);
+    out.stats = unextracted;
+    out.stats.stage_seconds = seconds;
+    out.stats.candidate_triangles = static_cast<int>(faces.size());
+    mesh.set_faces(std::move(faces));
+  }
+  polish_extracted(mesh, surface, options, out.stats);
   out.mesh = finish_mesh(mesh, surface, options, out.stats);
   StageTimer finish_timer(out.stats);
   ValidationOptions vo;

@@ -18,7 +18,10 @@ namespace heatcvt {
 ///   fill       every simple loop of up to max_fill_edges edges: watertight output wherever the
 ///              cloud encloses a volume (3D printing, volumes).
 ///   keep       only loops whose inside is sampled (is the scanned surface): no invented
-///              surface; every scan hole stays open (inspection).
+///              surface; every scan hole stays open (inspection). Where the surface's own
+///              border is known (an input mesh), a loop around a piece of that border (the
+///              border passes nearer the loop's centre than its farthest vertex: a hole of the
+///              input, however small) is one of its boundaries and stays open.
 enum class HolePolicy { automatic, fill, keep };
 
 /// Options of fill_holes(). h is the mean edge length of a loop.

@@ -119,7 +119,11 @@ class CloudSurfaceProjector final : public SurfaceProjector {
 class ClosestPointTree;
 
 /// The surface of a triangle mesh: exact closest point (CGAL AABB tree) and the normal
-/// interpolated there from the mesh's area-weighted vertex normals. `hint` is not used.
+/// interpolated there from the mesh's area-weighted vertex normals. `hint` (a face of the mesh,
+/// or −1) is the face the point was on before it moved: where the closest point lies on a face
+/// facing against the hint's (the other side of a part thinner than the move: an ear, a fin),
+/// the point stays on the hint's side, at the closest point a walk over the faces from the
+/// hint reaches (project_local()). On return `hint` is the face of the result.
 class MeshSurfaceProjector final : public SurfaceProjector {
  public:
   /// \throw InvalidInputError on a mesh without faces.
@@ -133,8 +137,10 @@ class MeshSurfaceProjector final : public SurfaceProjector {
   bool project_to_border(const Eigen::Vector3d& x, Eigen::Vector3d& position, Eigen::Vector3d& normal) const override;
 
  private:
+  Eigen::Vector3d face_normal(int f) const;  // not normalised
   Eigen::MatrixX3d V_, VN_;
   Eigen::MatrixX3i F_;
+  std::vector<std::vector<int>> vfaces_;
   std::vector<std::pair<int, int>> border_;
   std::unique_ptr<ClosestPointTree> tree_;
 };

@@ -47,6 +47,16 @@ struct SurfaceMesherOptions {
   /// clutter, flying pixels, a few sites cut off at a depth jump); 0 keeps them
   /// (cloud2mesh --keep-small). Default 0.01.
   double min_piece_vertex_fraction = 0.01;
+  /// Where the dual triangles given to mesh_dual_surface() form an oriented 2-manifold (every
+  /// edge on at most two faces, once in each direction; a heat Voronoi diagram with the
+  /// closed-ball property on an input mesh) and the extraction's result has other components or
+  /// another Euler characteristic, the dual's own triangles replace that result before
+  /// polish_extracted(). The extraction orients every triangle by its sites' normals and sets
+  /// aside those whose normal is far from a site's (candidates.coherent_min_dot): the triangles
+  /// that turn around a part thinner than the site spacing (an ear at 300 sites), which it then
+  /// cuts off. Where it keeps the topology its result stays (it also mends the dual's shape at
+  /// sharp creases). Default false (a cloud's dual is never trusted); meshcvt sets it.
+  bool keep_manifold_dual = false;
   /// Worker threads of the parallel stages (overrides polish.threads and split.threads);
   /// 0 = all cores. Results do not depend on it. Default 0.
   int threads = 0;
@@ -58,6 +68,16 @@ struct SurfaceMesherOptions {
 /// "angle polish", "sliver collapse", "long-edge split").
 void mesh_from_candidates(WorkingMesh& mesh, const DualCandidates& candidates, const SurfaceProjector& surface,
                           const SurfaceMesherOptions& options, MesherStats& stats);
+
+/// The first stage of mesh_from_candidates(), timed as "extraction and holes": the manifold
+/// extraction of the coherent candidates, the compatible candidates and stars added, holes filled.
+void extract_from_candidates(WorkingMesh& mesh, const DualCandidates& candidates, const SurfaceProjector& surface,
+                             const SurfaceMesherOptions& options, MesherStats& stats);
+
+/// The stages of mesh_from_candidates() after the extraction and hole filling, from the border
+/// growth to the long-edge split, on a mesh that has its faces.
+void polish_extracted(WorkingMesh& mesh, const SurfaceProjector& surface, const SurfaceMesherOptions& options,
+                      MesherStats& stats);
 
 /// Removes the small pieces, sizes the rest to options.sizing.target_vertices (size_to_target(),
 /// stage "sizing"), takes out faces the sizing left crossing and refills their holes (untangle()
@@ -77,7 +97,8 @@ struct DualSurfaceResult {
 /// The post-CVT stages on a dual triangulation: `sites` (#S by 3, e.g. CvtResult::dual.V) are
 /// projected to `surface` (positions and normals), the triangles of `dual_faces` (#F by 3 site
 /// indices, e.g. CvtResult::dual.F) are the candidates (dual_candidates_from_faces()), then
-/// mesh_from_candidates() and finish_mesh().
+/// mesh_from_candidates() (with options.keep_manifold_dual, the faces themselves where the
+/// extraction changed their topology) and finish_mesh().
 /// \note The defaults are the reconstruction's. Two of them trade the vertex count and thin parts
 /// for robustness on noisy clouds: candidates.coherent_min_dot = 0.25 drops dual triangles whose
 /// normal is more than about 75° from a site's normal, which on a coarse dual of a thin handle
