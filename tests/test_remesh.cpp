@@ -295,6 +295,22 @@ TEST(RemeshCvt, ADualFarOffTheCountGivesWayToTheStagesResultAtTheCount) {
   EXPECT_GE(r.quality.min_angle_deg, 30.0);
 }
 
+// redwood_frag_115_open3d (a scan fragment of 10 pieces) at 300 sites: the dual is more than
+// 25 % off the count, and the stages' result at the count has lost pieces (other components
+// and Euler characteristic). It does not replace the dual: the output keeps the dual's pieces.
+TEST(RemeshCvt, AResultThatLosesPiecesDoesNotReplaceADualFarOffTheCount) {
+  const TriangleMesh input = read_mesh(test::data_path("meshes/redwood_frag_115_open3d.ply"));
+  RemeshOptions o;
+  o.cvt.sites = 300;
+  o.cvt.threads = 2;
+  const RemeshResult r = remesh_cvt(input, o);
+  ASSERT_GT(std::abs(static_cast<double>(r.mesh.V.rows()) - 300.0), o.far_count_error * 300)
+      << "the dual must be far off the count for the test";
+  EXPECT_FALSE(r.post_cvt_kept);
+  EXPECT_EQ(r.checks.components, mesh_topology(r.cvt.dual.F, static_cast<int>(r.cvt.dual.V.rows())).components);
+  EXPECT_GT(r.checks.components, 1);
+}
+
 // fertility at 1,000 sites: the dual passes every check with φmin between a scan's 25° and a
 // remesh's 30°. With the scan's target the stages are skipped and the dual is the output; with
 // meshcvt's (RemeshOptions' mesher.sizing.min_angle_deg, 30°) they run and their result is kept:

@@ -218,10 +218,15 @@ std::string post_cvt_refusal(const Eigen::MatrixX3d& samples, double spacing, co
   }
   if (!is_manifold(out.checks)) return "";  // a dual that is no manifold is no alternative
   // Nor is a dual far off the vertex count asked for (sites added for thin parts), where the
-  // stages' result has the count: its coverage is that of a coarser mesh.
+  // stages' result has the count and the dual's components and Euler characteristic: its
+  // coverage is that of a coarser mesh.
   const int sites = options.cvt.sites;
   const auto off_by = [&](const TriangleMesh& m) { return std::abs(static_cast<double>(m.V.rows()) - sites) / sites; };
-  if (off_by(out.mesh) > options.far_count_error && off_by(post) <= options.mesher.sizing.count_tolerance) return "";
+  const bool same_topology = after.components == out.checks.components &&
+                             after.euler_characteristic == out.checks.euler_characteristic;
+  if (same_topology && off_by(out.mesh) > options.far_count_error &&
+      off_by(post) <= options.mesher.sizing.count_tolerance)
+    return "";
   const double post_gap = farthest_input_vertex(samples, post), dual_gap = farthest_input_vertex(samples, out.mesh);
   if (post_gap > options.max_coverage_ratio * dual_gap + options.coverage_slack * spacing)
     return "it covers the input less well: an input vertex is " + std::to_string(post_gap / spacing) +

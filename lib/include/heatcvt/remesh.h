@@ -93,9 +93,10 @@ struct RemeshOptions {
   double coverage_slack = 0.25;
   /// ... except where the dual's vertex count is off the sites asked for by more than this
   /// fraction (sites added to cells too big for thin parts: armadillo at 300 sites has a valid
-  /// dual of 555 vertices) and the stages' result is within mesher.sizing.count_tolerance of it:
-  /// that result is kept when it passes every check the dual passed, whatever its coverage (a
-  /// coarser mesh covers thin parts less). Default 0.25.
+  /// dual of 555 vertices) and the stages' result is within mesher.sizing.count_tolerance of it
+  /// with the dual's components and Euler characteristic: that result is kept when it passes
+  /// every check the dual passed, whatever its coverage (a coarser mesh covers thin parts
+  /// less). Default 0.25.
   double far_count_error = 0.25;
   /// Where the post-CVT stages' result is refused (the dual is then the output), the CVT goes on
   /// from its sites with the φmin target raised to this (heat iterations until the dual's own
