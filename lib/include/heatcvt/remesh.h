@@ -101,8 +101,10 @@ struct RemeshOptions {
   /// Where the post-CVT stages' result is refused (the dual is then the output), the CVT goes on
   /// from its sites with the φmin target raised to this (heat iterations until the dual's own
   /// φmin reaches it, or the CVT's stops), then the stages run again on the new dual. This second
-  /// result is kept where it passes every check the first passed, keeps the count within
-  /// mesher.sizing.count_tolerance where the first did, and has a larger φmin. 0 = off. Default 25.
+  /// result is kept where it passes every check the first passed and meets every target of
+  /// mesher.sizing the first meets (the count within count_tolerance, φmin ≥ min_angle_deg,
+  /// φm ≥ mean_angle_deg), and then one more, or the same ones with a larger φmin.
+  /// 0 = off. Default 25.
   double fallback_phi_min_deg = 25.0;
   /// Run the shared post-CVT stages (mesh_dual_surface(), mesher/surface_mesher.h) on the dual with
   /// the input mesh as the projector: the vertices are then projected onto the input and may be
@@ -120,8 +122,9 @@ struct RemeshOptions {
   /// of the dual is taken for one across a depth jump; and sizing.min_angle_deg = 30 with
   /// sizing.repair.sliver_angle_deg = 30: a remesh aims at φmin ≥ 30° (a scan's mesh at 25°), so
   /// the stages run on a dual below that and treat faces below it as slivers; and
-  /// keep_manifold_dual = true: a dual that is an oriented manifold keeps its faces (the triangles
-  /// around thin parts coarser than the site spacing included).
+  /// keep_manifold_dual = true: a dual that is an oriented manifold keeps its faces where the
+  /// extraction would change its topology (the triangles around thin parts coarser than the site
+  /// spacing, which it would cut off).
   SurfaceMesherOptions mesher = [] {
     SurfaceMesherOptions m;
     m.holes.policy = HolePolicy::keep;
