@@ -62,6 +62,22 @@ double max_distance_to_surface(const Eigen::MatrixX3d& P, const TriangleMesh& me
 // The icosahedron: icosphere without subdivision (12 vertices, 20 faces).
 TriangleMesh icosahedron() { return test::icosphere(0); }
 
+// meshcvt's options at `sites` sites on two threads.
+RemeshOptions remesh_options(int sites) {
+  RemeshOptions o;
+  o.cvt.sites = sites;
+  o.cvt.threads = 2;
+  return o;
+}
+
+// The targets of a remesh: every check passed, the count within 2 % of `sites`, φmin at least
+// `min_angle_deg`.
+void expect_valid_at_count(const RemeshResult& r, int sites, double min_angle_deg) {
+  EXPECT_TRUE(r.checks.ok()) << r.checks.summary();
+  EXPECT_NEAR(static_cast<double>(r.mesh.V.rows()), sites, 0.02 * sites);
+  EXPECT_GE(r.quality.min_angle_deg, min_angle_deg);
+}
+
 }  // namespace
 
 TEST(MidpointSubdivision, KeepsTheSurfaceTopologyAndArea) {
@@ -224,9 +240,7 @@ TEST(RemeshCvt, RepairGivesAManifoldWhereCellsWrapAThinTube) {
 // run again: φmin at least the fallback's target, every check passed, the count within 2 %.
 TEST(RemeshCvt, ARefusedPostCvtResultGetsHeatIterationsAndASecondRun) {
   const TriangleMesh input = read_mesh(test::data_path("meshes/bunny_libigl.off"));
-  RemeshOptions no_fallback;
-  no_fallback.cvt.sites = 300;
-  no_fallback.cvt.threads = 2;
+  RemeshOptions no_fallback = remesh_options(300);
   no_fallback.fallback_phi_min_deg = 0;
   // the stages' extraction rebuilds the dual's faces, so that their first result is refused
   no_fallback.mesher.keep_manifold_dual = false;
@@ -238,9 +252,7 @@ TEST(RemeshCvt, ARefusedPostCvtResultGetsHeatIterationsAndASecondRun) {
   with.fallback_phi_min_deg = RemeshOptions{}.fallback_phi_min_deg;
   ASSERT_EQ(with.fallback_phi_min_deg, 25.0);
   const RemeshResult r = remesh_cvt(input, with);
-  EXPECT_TRUE(r.checks.ok()) << r.checks.summary();
-  EXPECT_NEAR(static_cast<double>(r.mesh.V.rows()), 300.0, 6.0);
-  EXPECT_GE(r.quality.min_angle_deg, with.fallback_phi_min_deg);
+  expect_valid_at_count(r, 300, with.fallback_phi_min_deg);
 }
 
 // bunny_pmp at 300 sites: its ears are about two cells wide. Where the stages rebuild the dual
@@ -250,9 +262,7 @@ TEST(RemeshCvt, ARefusedPostCvtResultGetsHeatIterationsAndASecondRun) {
 // check, the count within 2 %, φmin ≥ 30°, φm ≥ 52°.
 TEST(RemeshCvt, TheStagesKeepAManifoldDualAroundEarsThinnerThanACell) {
   const TriangleMesh input = read_mesh(test::data_path("meshes/bunny_pmp.off"));
-  RemeshOptions rebuilt;
-  rebuilt.cvt.sites = 300;
-  rebuilt.cvt.threads = 2;
+  RemeshOptions rebuilt = remesh_options(300);
   rebuilt.mesher.keep_manifold_dual = false;
   const RemeshResult before = remesh_cvt(input, rebuilt);
   ASSERT_LT(before.quality.mean_min_angle_deg, 52.0) << "the output without the option must miss the target";
@@ -262,11 +272,9 @@ TEST(RemeshCvt, TheStagesKeepAManifoldDualAroundEarsThinnerThanACell) {
   ASSERT_TRUE(o.mesher.keep_manifold_dual);
   const RemeshResult r = remesh_cvt(input, o);
   EXPECT_TRUE(r.post_cvt_kept) << r.post_cvt_refusal;
-  EXPECT_TRUE(r.checks.ok()) << r.checks.summary();
+  expect_valid_at_count(r, 300, 30.0);
   EXPECT_EQ(r.checks.components, 1);
   EXPECT_EQ(r.checks.euler_characteristic, 2);
-  EXPECT_NEAR(static_cast<double>(r.mesh.V.rows()), 300.0, 6.0);
-  EXPECT_GE(r.quality.min_angle_deg, 30.0);
   EXPECT_GE(r.quality.mean_min_angle_deg, 52.0);
 }
 
@@ -278,9 +286,7 @@ TEST(RemeshCvt, TheStagesKeepAManifoldDualAroundEarsThinnerThanACell) {
 // φmin ≥ 30°.
 TEST(RemeshCvt, ADualFarOffTheCountGivesWayToTheStagesResultAtTheCount) {
   const TriangleMesh input = read_mesh(test::data_path("meshes/armadillo_remeshed_14k.obj"));
-  RemeshOptions compared;
-  compared.cvt.sites = 300;
-  compared.cvt.threads = 2;
+  RemeshOptions compared = remesh_options(300);
   compared.far_count_error = std::numeric_limits<double>::infinity();
   const RemeshResult dual = remesh_cvt(input, compared);
   ASSERT_FALSE(dual.post_cvt_kept);
@@ -290,9 +296,7 @@ TEST(RemeshCvt, ADualFarOffTheCountGivesWayToTheStagesResultAtTheCount) {
   o.far_count_error = RemeshOptions{}.far_count_error;
   const RemeshResult r = remesh_cvt(input, o);
   EXPECT_TRUE(r.post_cvt_kept) << r.post_cvt_refusal;
-  EXPECT_TRUE(r.checks.ok()) << r.checks.summary();
-  EXPECT_NEAR(static_cast<double>(r.mesh.V.rows()), 300.0, 6.0);
-  EXPECT_GE(r.quality.min_angle_deg, 30.0);
+  expect_valid_at_count(r, 300, 30.0);
 }
 
 // redwood_frag_115_open3d (a scan fragment of 10 pieces) at 300 sites: the dual is more than
@@ -300,9 +304,7 @@ TEST(RemeshCvt, ADualFarOffTheCountGivesWayToTheStagesResultAtTheCount) {
 // and Euler characteristic). It does not replace the dual: the output keeps the dual's pieces.
 TEST(RemeshCvt, AResultThatLosesPiecesDoesNotReplaceADualFarOffTheCount) {
   const TriangleMesh input = read_mesh(test::data_path("meshes/redwood_frag_115_open3d.ply"));
-  RemeshOptions o;
-  o.cvt.sites = 300;
-  o.cvt.threads = 2;
+  const RemeshOptions o = remesh_options(300);
   const RemeshResult r = remesh_cvt(input, o);
   ASSERT_GT(std::abs(static_cast<double>(r.mesh.V.rows()) - 300.0), o.far_count_error * 300)
       << "the dual must be far off the count for the test";
@@ -317,9 +319,7 @@ TEST(RemeshCvt, AResultThatLosesPiecesDoesNotReplaceADualFarOffTheCount) {
 // every check, the count within 2 %, φmin ≥ 30°, φm ≥ 52°.
 TEST(RemeshCvt, ADualBelowThirtyDegreesGoesThroughTheStages) {
   const TriangleMesh input = read_mesh(test::data_path("meshes/fertility.off"));
-  RemeshOptions scan_target;
-  scan_target.cvt.sites = 1000;
-  scan_target.cvt.threads = 2;
+  RemeshOptions scan_target = remesh_options(1000);
   scan_target.mesher.sizing.min_angle_deg = 25;
   const RemeshResult dual = remesh_cvt(input, scan_target);
   ASSERT_FALSE(dual.post_cvt_kept);
@@ -332,8 +332,6 @@ TEST(RemeshCvt, ADualBelowThirtyDegreesGoesThroughTheStages) {
   ASSERT_EQ(o.mesher.sizing.min_angle_deg, 30.0);
   const RemeshResult r = remesh_cvt(input, o);
   EXPECT_TRUE(r.post_cvt_kept) << r.post_cvt_refusal;
-  EXPECT_TRUE(r.checks.ok()) << r.checks.summary();
-  EXPECT_NEAR(static_cast<double>(r.mesh.V.rows()), 1000.0, 20.0);
-  EXPECT_GE(r.quality.min_angle_deg, 30.0);
+  expect_valid_at_count(r, 1000, 30.0);
   EXPECT_GE(r.quality.mean_min_angle_deg, 52.0);
 }

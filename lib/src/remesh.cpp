@@ -183,18 +183,41 @@ bool is_manifold(const ValidationReport& r) {
   return true;
 }
 
+// How far the vertex count of `mesh` is off the `sites` asked for, as a fraction of them.
+double count_error(const TriangleMesh& mesh, int sites) {
+  return std::abs(static_cast<double>(mesh.V.rows()) - sites) / sites;
+}
+
+// Which of the targets of mesher.sizing a result meets: its vertex count within count_tolerance
+// of the `sites` asked for, φmin ≥ min_angle_deg, φm ≥ mean_angle_deg.
+struct TargetsMet {
+  bool count = false, min_angle = false, mean_angle = false;
+  bool all() const { return count && min_angle && mean_angle; }
+  bool covers(const TargetsMet& o) const {
+    return (count || !o.count) && (min_angle || !o.min_angle) && (mean_angle || !o.mean_angle);
+  }
+  bool operator==(const TargetsMet& o) const {
+    return count == o.count && min_angle == o.min_angle && mean_angle == o.mean_angle;
+  }
+};
+
+TargetsMet targets_met(const RemeshResult& r, int sites, const IsotropicRemeshOptions& targets) {
+  const TriangleQuality q = triangle_quality(r.mesh.V, r.mesh.F);
+  TargetsMet m;
+  m.count = count_error(r.mesh, sites) <= targets.count_tolerance;
+  m.min_angle = q.min_angle_deg >= targets.min_angle_deg;
+  m.mean_angle = q.mean_min_angle_deg >= targets.mean_angle_deg;
+  return m;
+}
+
 // Whether the dual of a closed input already is what the post-CVT stages aim at: every check
 // passed (closed, manifold, the input's genus, no self-intersection), the vertex count within the
 // sizing's tolerance of the sites asked for, φmin and φm at the sizing's targets. The stages
 // would only move its vertices, and their relaxation rounds off tips. (On an open input they
 // also bring the dual's border, inset by about a cell, onto the input's.)
 bool dual_meets_targets(const RemeshResult& out, const RemeshOptions& options) {
-  const IsotropicRemeshOptions& targets = options.mesher.sizing;
   if (out.input.topology.boundary_edges > 0 || !out.checks.ok() || out.mesh.F.rows() == 0) return false;
-  const TriangleQuality q = triangle_quality(out.mesh.V, out.mesh.F);
-  const int sites = options.cvt.sites;
-  return std::abs(static_cast<int>(out.mesh.V.rows()) - sites) <= targets.count_tolerance * sites &&
-         q.min_angle_deg >= targets.min_angle_deg && q.mean_min_angle_deg >= targets.mean_angle_deg;
+  return targets_met(out, options.cvt.sites, options.mesher.sizing).all();
 }
 
 // Why the post-CVT stages' result `post` (its checks `after`) does not replace the dual
@@ -220,12 +243,10 @@ std::string post_cvt_refusal(const Eigen::MatrixX3d& samples, double spacing, co
   // Nor is a dual far off the vertex count asked for (sites added for thin parts), where the
   // stages' result has the count and the dual's components and Euler characteristic: its
   // coverage is that of a coarser mesh.
-  const int sites = options.cvt.sites;
-  const auto off_by = [&](const TriangleMesh& m) { return std::abs(static_cast<double>(m.V.rows()) - sites) / sites; };
   const bool same_topology = after.components == out.checks.components &&
                              after.euler_characteristic == out.checks.euler_characteristic;
-  if (same_topology && off_by(out.mesh) > options.far_count_error &&
-      off_by(post) <= options.mesher.sizing.count_tolerance)
+  if (same_topology && count_error(out.mesh, options.cvt.sites) > options.far_count_error &&
+      count_error(post, options.cvt.sites) <= options.mesher.sizing.count_tolerance)
     return "";
   const double post_gap = farthest_input_vertex(samples, post), dual_gap = farthest_input_vertex(samples, out.mesh);
   if (post_gap > options.max_coverage_ratio * dual_gap + options.coverage_slack * spacing)
@@ -355,27 +376,6 @@ void run_cvt(const TriangleMesh& work, const Laplacian& laplacian, const Eigen::
   out.mesh.F = out.cvt.dual.F;
   out.checks = check_result(out.mesh, out.input, options.cvt.build_dual);
   out.stage_seconds.emplace_back("checks", seconds_since(t));
-}
-
-// Which of the targets of mesher.sizing a result meets: its vertex count within count_tolerance
-// of the `sites` asked for, φmin ≥ min_angle_deg, φm ≥ mean_angle_deg.
-struct TargetsMet {
-  bool count = false, min_angle = false, mean_angle = false;
-  bool covers(const TargetsMet& o) const {
-    return (count || !o.count) && (min_angle || !o.min_angle) && (mean_angle || !o.mean_angle);
-  }
-  bool operator==(const TargetsMet& o) const {
-    return count == o.count && min_angle == o.min_angle && mean_angle == o.mean_angle;
-  }
-};
-
-TargetsMet targets_met(const RemeshResult& r, int sites, const IsotropicRemeshOptions& targets) {
-  const TriangleQuality q = triangle_quality(r.mesh.V, r.mesh.F);
-  TargetsMet m;
-  m.count = std::abs(static_cast<double>(r.mesh.V.rows()) - sites) <= targets.count_tolerance * sites;
-  m.min_angle = q.min_angle_deg >= targets.min_angle_deg;
-  m.mean_angle = q.mean_min_angle_deg >= targets.mean_angle_deg;
-  return m;
 }
 
 // Whether the result `after` is better than `before` (both of `sites` sites asked for): it passes

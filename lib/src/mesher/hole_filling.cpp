@@ -57,6 +57,13 @@ Eigen::Vector3d loop_centroid(const WorkingMesh& mesh, const std::vector<int>& l
   return g / static_cast<double>(loop.size());
 }
 
+// Distance from `g` to the loop's farthest vertex.
+double loop_radius(const WorkingMesh& mesh, const std::vector<int>& loop, const Eigen::Vector3d& g) {
+  double radius = 0;
+  for (int v : loop) radius = std::max(radius, (mesh.V.row(v).transpose() - g).norm());
+  return radius;
+}
+
 // The loop's centre is away from every triangle (> clearance·h) but near the sampled surface.
 bool is_sampled_hole(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop,
                      NearbyFaces& nearby, const HoleFillingOptions& o) {
@@ -115,10 +122,8 @@ bool is_inside_surface(const WorkingMesh& mesh, const SurfaceProjector& surface,
 bool surrounds_surface_border(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop) {
   if (!surface.border_known() || !surface.has_border()) return false;
   const Eigen::Vector3d g = loop_centroid(mesh, loop);
-  double radius = 0;
-  for (int v : loop) radius = std::max(radius, (mesh.V.row(v).transpose() - g).norm());
   Eigen::Vector3d pos, nrm;
-  return surface.project_to_border(g, pos, nrm) && (pos - g).norm() < radius;
+  return surface.project_to_border(g, pos, nrm) && (pos - g).norm() < loop_radius(mesh, loop, g);
 }
 
 // Beyond enough of the loop's edges, one edge length outward, the surface is sampled, and the
@@ -368,9 +373,7 @@ int fill_pass(WorkingMesh& mesh, const SurfaceProjector& surface, const HoleFill
     bool sites_ok = false;
     if (o.sites.enabled) {
       const Eigen::Vector3d g = loop_centroid(mesh, loop);
-      double radius = 0;
-      for (int v : loop) radius = std::max(radius, (mesh.V.row(v).transpose() - g).norm());
-      sites_ok = triangulate_hole_with_sites(mesh, loop, unused.near(g, radius), o.sites, with_sites);
+      sites_ok = triangulate_hole_with_sites(mesh, loop, unused.near(g, loop_radius(mesh, loop, g)), o.sites, with_sites);
     }
     const bool sampled_by_sites = sites_ok && !with_sites.interior_sites.empty() && L <= o.max_fill_edges &&
                                   with_sites.interior_sites.size() >= o.sites.sampled_fraction * with_sites.expected_sites;
