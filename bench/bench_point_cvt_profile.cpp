@@ -63,4 +63,7 @@ int main(int argc, char** argv) {
   });
   std::printf("factor %.3f s %.1f MB, graph Lloyd %.3f s, setup %.3f s, total %.3f s\n", r.factor_seconds,
               r.factor_bytes / 1e6, r.graph_lloyd_seconds, r.setup_seconds, r.total_seconds);
+  std::printf("start: surface Lloyd %d iterations %.3f s, evaluations and split rounds %.3f s (%d rounds, %d sites inserted)\n",
+              r.surface_lloyd_iterations, r.surface_lloyd_seconds, r.start_quality_seconds, r.start_rounds,
+              r.inserted_sites);
 }

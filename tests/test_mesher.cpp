@@ -704,6 +704,53 @@ TEST(Polish, AnglePolishDoesNotDependOnTheThreadCount) {
   EXPECT_EQ((a.V - b.V).cwiseAbs().maxCoeff(), 0.0);
 }
 
+TEST(Polish, AnglePolishPassesOverSettledVerticesWithoutChangingTheResult) {
+  // A vertex whose last search kept no move is searched again only once a vertex of its ring
+  // moved (angle_polish()). Searching every vertex in every round must give the same mesh:
+  // R one-round calls (each searches every vertex) against one call of R rounds, and polish
+  // cycles with flips in between, marks carried across them or not.
+  const TriangleMesh fine = test::icosphere(5);
+  const MeshSurfaceProjector surface(fine.V, fine.F);
+  const WorkingMesh start = jittered_sphere(test::icosphere(3), 0.04);
+  const std::vector<char> frozen(start.num_vertices(), 0);
+  WorkingMesh every = start, skipping = start;
+  const std::vector<std::vector<int>> vf = start.vertex_faces();
+  int passed_over = 0;  // vertices that no vertex of their ring moved in a round (skipped in the next)
+  const int rounds = 20;
+  for (int r = 0; r < rounds; ++r) {
+    const Eigen::MatrixX3d before = every.V;
+    angle_polish(every, surface, 1, frozen, {}, 2);
+    if (r == rounds - 1) break;
+    for (int v = 0; v < start.num_vertices(); ++v) {
+      bool still = true;
+      for (int id : vf[v])
+        for (int w : start.face(id)) still = still && every.V.row(w) == before.row(w);
+      passed_over += still;
+    }
+  }
+  ASSERT_GT(passed_over, 0);  // precondition: the skipping run passes over some searches
+  angle_polish(skipping, surface, rounds, frozen, {}, 2);
+  EXPECT_EQ((every.V - skipping.V).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(every.anchor, skipping.anchor);
+
+  FlipOptions flips;
+  flips.valence_mode = false;
+  WorkingMesh fresh = start, carried = start;
+  std::vector<char> settled;
+  int flipped = 0;
+  for (int cycle = 0; cycle < 4; ++cycle) {
+    angle_polish(fresh, surface, 2, frozen, {}, 2);
+    flipped += flip_edges(fresh, flips);
+    angle_polish(carried, surface, 2, frozen, {}, 2, &settled);
+    const std::vector<MeshFace> unflipped = carried.faces();
+    flip_edges(carried, flips);
+    unsettle_changed_faces(unflipped, carried, settled);
+  }
+  ASSERT_GT(flipped, 0);  // precondition: the flips changed rings between the calls
+  EXPECT_EQ(fresh.faces(), carried.faces());
+  EXPECT_EQ((fresh.V - carried.V).cwiseAbs().maxCoeff(), 0.0);
+}
+
 // ---------------------------------------------------------------------------------------------
 
 TEST(SliverCollapse, CollapsesTheShortEdgeOfSlivers) {

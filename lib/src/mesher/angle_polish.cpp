@@ -198,11 +198,13 @@ class VertexMover {
     }
     if (best.squaredNorm() == 0) return false;
     Eigen::Vector3d pos, nrm;
-    surface_.project(x + best.x() * u + best.y() * w, mesh_.anchor[v], pos, nrm);
+    int hint = mesh_.anchor[v];  // kept only with the move, so a rejected search can be skipped
+    surface_.project(x + best.x() * u + best.y() * w, hint, pos, nrm);
     if (!pos.allFinite() || !nrm.allFinite()) return false;
     if (!better(ring3(v, pos, nrm), ring3(v, x, nv))) return false;
     mesh_.V.row(v) = pos.transpose();
     mesh_.N.row(v) = nrm.transpose();
+    mesh_.anchor[v] = hint;
     return true;
   }
 
@@ -217,10 +219,15 @@ class VertexMover {
 }  // namespace
 
 int angle_polish(WorkingMesh& mesh, const SurfaceProjector& surface, int rounds, const std::vector<char>& frozen,
-                 const AnglePolishOptions& options, int threads) {
+                 const AnglePolishOptions& options, int threads, std::vector<char>* settled) {
+  const int nv = mesh.num_vertices();
   const std::vector<std::vector<int>> vf = mesh.vertex_faces();
   const std::vector<std::vector<int>> by_colour = colour_classes(mesh, vf);
+  std::vector<char> local;
+  std::vector<char>& done = settled ? *settled : local;  // 1: last search kept no move, ring unchanged since
+  if (static_cast<int>(done.size()) != nv) done.assign(nv, 0);
   VertexMover mover(mesh, surface, vf, options);
+  std::vector<char> moved(nv, 0);
   int moves = 0;
   for (int round = 0; round < rounds; ++round) {
     int round_moves = 0;
@@ -228,14 +235,36 @@ int angle_polish(WorkingMesh& mesh, const SurfaceProjector& surface, int rounds,
 #pragma omp parallel for num_threads(resolve_threads(threads)) schedule(dynamic, 16) reduction(+ : round_moves)
       for (size_t gi = 0; gi < group.size(); ++gi) {
         const int v = group[gi];
-        if (vf[v].size() < 3 || frozen[v]) continue;
-        if (mover.move(v)) ++round_moves;
+        if (vf[v].size() < 3 || frozen[v] || done[v]) continue;
+        moved[v] = mover.move(v);
+        done[v] = !moved[v];
+        if (moved[v]) ++round_moves;
+      }
+      // A move changes the rings of the vertices that share a face with it (serial, in index
+      // order within the colour: the same marks for any thread count).
+      for (int v : group) {
+        if (!moved[v]) continue;
+        moved[v] = 0;
+        for (int id : vf[v])
+          for (int w : mesh.face(id)) done[w] = 0;
       }
     }
     moves += round_moves;
     if (round_moves == 0) break;
   }
   return moves;
+}
+
+void unsettle_changed_faces(const std::vector<MeshFace>& before, const WorkingMesh& mesh, std::vector<char>& settled) {
+  if (before.size() != mesh.faces().size() || static_cast<int>(settled.size()) != mesh.num_vertices()) {
+    std::fill(settled.begin(), settled.end(), 0);
+    return;
+  }
+  for (size_t f = 0; f < before.size(); ++f) {
+    const MeshFace& now = mesh.face(static_cast<int>(f));
+    if (now == before[f]) continue;
+    for (int k = 0; k < 3; ++k) settled[before[f][k]] = settled[now[k]] = 0;
+  }
 }
 
 }  // namespace heatcvt

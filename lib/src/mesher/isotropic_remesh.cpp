@@ -655,9 +655,12 @@ class Sizer {
     const std::vector<char> movable = flippable();
     int flips = flip_edges(mesh_, f, &movable), moves = 0;
     const std::vector<char> fixed = held();
+    std::vector<char> settled;  // vertices whose search would find no move (angle_polish())
     for (int cycle = 0; cycle < o_.polish_cycles; ++cycle) {
-      moves += angle_polish(mesh_, surface_, 2, fixed, o_.angle, o_.threads);
+      moves += angle_polish(mesh_, surface_, 2, fixed, o_.angle, o_.threads, &settled);
+      const std::vector<MeshFace> unflipped = mesh_.faces();
       flips += flip_edges(mesh_, f, &movable);
+      unsettle_changed_faces(unflipped, mesh_, settled);
     }
     moves += snap_border();
     stats_.flipped_edges += flips;

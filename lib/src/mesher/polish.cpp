@@ -63,9 +63,12 @@ void angle_polish_stage(WorkingMesh& mesh, const SurfaceProjector& surface, cons
   std::vector<char> frozen(mesh.num_vertices(), 0);
   for (int attempt = 0; attempt < options.angle_attempts; ++attempt) {
     if (remove_valence3(mesh, options.valence3) > 0) stats.flipped_edges += delaunay_flips(mesh, options, options.flip_passes);
+    std::vector<char> settled;  // vertices whose search would find no move (angle_polish())
     for (int r = 0; r < options.angle_cycles; ++r) {
-      angle_polish(mesh, surface, options.angle_rounds, frozen, options.angle, options.threads);
+      angle_polish(mesh, surface, options.angle_rounds, frozen, options.angle, options.threads, &settled);
+      const std::vector<MeshFace> unflipped = mesh.faces();
       stats.flipped_edges += delaunay_flips(mesh, options, options.flip_passes);
+      unsettle_changed_faces(unflipped, mesh, settled);
     }
     const std::vector<int> bad = self_intersecting_faces(mesh);
     if (bad.empty()) break;

@@ -32,7 +32,21 @@ struct AnglePolishOptions {
 /// the target is projected to the surface and kept only if, measured in 3D, (ring min capped,
 /// ring sum) improves and no ring triangle turns against the vertex normal. Stops after `rounds`
 /// or a round without moves. Returns the moves kept.
+///
+/// A search depends only on the vertex's ring (its faces, their corners' positions), its normal
+/// and its projector hint, which a rejected move leaves as they were. So a vertex whose last
+/// search kept no move is passed over until a vertex of its ring moves: the result is the same
+/// as searching again. `settled` (optional, #V entries) carries these marks between calls: on
+/// entry, vertices marked 1 are passed over until their ring changes; on return, it marks the
+/// vertices whose last search kept no move and whose ring has not moved since. A caller that
+/// changes faces between calls (flips) clears the marks of those faces' corners
+/// (unsettle_changed_faces()); without `settled` every vertex is searched in the first round.
 int angle_polish(WorkingMesh& mesh, const SurfaceProjector& surface, int rounds, const std::vector<char>& frozen,
-                 const AnglePolishOptions& options = {}, int threads = 0);
+                 const AnglePolishOptions& options = {}, int threads = 0, std::vector<char>* settled = nullptr);
+
+/// Clears the `settled` marks (see angle_polish()) of the corners of every face of `mesh` that
+/// differs from `before` (the faces before a change that kept their number and vertices, such as
+/// edge flips), old corners and new; clears every mark when the numbers differ.
+void unsettle_changed_faces(const std::vector<MeshFace>& before, const WorkingMesh& mesh, std::vector<char>& settled);
 
 }  // namespace heatcvt
