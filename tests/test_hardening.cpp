@@ -359,6 +359,24 @@ TEST(Hardening, TwoOutputsOnOnePathAreRejected) {
                    "meshcvt", dir.path("alias.ply"), dir, 2);
 }
 
+TEST(Hardening, AnOutputOnAnInputIsRejectedAndTheInputKept) {
+  test::ScratchDir dir("hard");
+  const TriangleMesh m = bumpy_sphere();
+  write_obj(dir.path("m.obj"), m.V, m.F);
+  write_mesh(dir.path("c.ply"), m.V, m.F);  // read by cloud2mesh as a cloud of its vertices
+  const std::string mesh_before = slurp(dir.path("m.obj")), cloud_before = slurp(dir.path("c.ply"));
+  expect_bad_input(test::run_tool("meshcvt", dir.path("m.obj") + " -n 50 -o " + dir.path("m.obj")), "meshcvt",
+                   dir.path("m.obj"), dir, 2);
+  expect_bad_input(test::run_tool("cloud2mesh", dir.path("c.ply") + " -n 50 -o " + dir.path("c.ply")), "cloud2mesh",
+                   dir.path("c.ply"), dir, 2);
+  // Also through a symbolic link to the input.
+  fs::create_symlink(dir.path("m.obj"), dir.path("alias.obj"));
+  expect_bad_input(test::run_tool("heatvoronoi", dir.path("alias.obj") + " --sites 5 -o " + dir.path("m.obj")),
+                   "heatvoronoi", dir.path("m.obj"), dir, 3);
+  EXPECT_EQ(slurp(dir.path("m.obj")), mesh_before);
+  EXPECT_EQ(slurp(dir.path("c.ply")), cloud_before);
+}
+
 TEST(Hardening, AFailingLaterOutputLeavesNoEarlierOne) {
   test::ScratchDir dir("hard");
   write_obj(dir.path("m.obj"), bumpy_sphere().V, bumpy_sphere().F);

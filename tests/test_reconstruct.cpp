@@ -262,6 +262,7 @@ TEST(Reconstruct, DenoiseRemovesOutliers) {
   // The same cloud without denoising: every point is used, the outliers included, and the mesh
   // is no longer a clean sphere.
   opt.denoise = false;
+  opt.stray.ratio = 0;  // every point used, as the comment says
   const ReconstructionResult raw = reconstruct_surface(Q, opt);
   EXPECT_EQ(raw.points_denoised, 0);
   EXPECT_EQ(raw.points_used, Q.rows());

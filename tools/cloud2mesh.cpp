@@ -86,6 +86,8 @@ void check_options(const ReconstructionOptions& opt) {
   if (opt.denoise_neighbors < 2) throw InvalidInputError("--denoise-k must be >= 2");
   if (!(opt.denoise_stddev > 0) || !std::isfinite(opt.denoise_stddev))
     throw InvalidInputError("--denoise-stddev must be a positive number");
+  if (!std::isfinite(opt.stray.ratio) || opt.stray.ratio < 0 || (opt.stray.ratio > 0 && opt.stray.ratio <= 1))
+    throw InvalidInputError("--stray-ratio must be 0 (off) or above 1");
 }
 
 // PCL's voxel grid indexes at most 2^31 voxels; a smaller voxel would silently do nothing.
@@ -109,6 +111,7 @@ cli::Json make_report(const std::string& cloud_path, const std::vector<std::stri
   j["duplicates_merged"] = rr.duplicates_merged;
   j["flying_pixels_removed"] = rr.flying_pixels_removed;
   j["points_denoised"] = res.points_denoised;
+  j["points_stray"] = res.points_stray;
   j["points_voxel_removed"] = res.points_voxel_removed;
   j["points_used"] = res.points_used;
   j["sites"] = opt.sites;
@@ -275,6 +278,11 @@ int main(int argc, char** argv) {
   app.add_option("--denoise-stddev", opt.denoise_stddev,
                  "with --denoise: points farther than mean + this many standard deviations are outliers")
       ->capture_default_str();
+  app.add_option("--stray-ratio", opt.stray.ratio,
+                 "a point whose 16th nearest neighbour is more than this times farther than the median of the same "
+                 "distance over those neighbours is a stray point (isolated returns, groups of fewer than about 8 "
+                 "points off the surface) and is removed; 0 keeps every point")
+      ->capture_default_str();
   app.add_option("--voxel", opt.voxel_size, "voxel-grid downsampling size in input units; 0 = off")
       ->capture_default_str();
   app.add_option("--t-coef", opt.time_coefficient, "time step t = C * (mean edge length)^2")->capture_default_str();
@@ -316,7 +324,9 @@ int main(int argc, char** argv) {
     check_options(opt);
     if (const double r = read_options.flying_pixels.neighbour_distance_ratio; !(r >= 0) || !std::isfinite(r))
       throw InvalidInputError("--flying-pixels must be a finite number >= 0 (0 keeps every pixel)");
-    if (cloud_paths.empty() == conf_path.empty())
+    if (cloud_paths.empty() && conf_path.empty())
+      throw InvalidInputError("no input: give the clouds as CLOUD arguments or with --conf");
+    if (!cloud_paths.empty() && !conf_path.empty())
       throw InvalidInputError("give the input clouds either as CLOUD arguments or with --conf, not both");
     if (!pose_paths.empty() && pose_paths.size() != cloud_paths.size())
       throw InvalidInputError("--pose: " + std::to_string(pose_paths.size()) + " poses for " +
@@ -330,6 +340,9 @@ int main(int argc, char** argv) {
     if (!conf_path.empty()) scans = read_stanford_conf(conf_path);
     for (size_t i = 0; i < cloud_paths.size(); ++i)
       scans.push_back({cloud_paths[i], pose_paths.empty() ? Eigen::Isometry3d::Identity() : read_pose_file(pose_paths[i])});
+    std::vector<std::string> inputs{conf_path};
+    for (const ScanInput& scan : scans) inputs.push_back(scan.path);
+    cli::check_distinct_outputs({{"-o", out_path}, {"--report", report_path}}, inputs);
     const std::string cloud_path = scans.size() == 1 ? scans[0].path : !conf_path.empty() ? conf_path
                                    : scans[0].path + " (+" + std::to_string(scans.size() - 1) + " more)";
     CloudReadReport rr;
@@ -392,9 +405,9 @@ int main(int argc, char** argv) {
     if (!quiet) {
       std::printf("cloud2mesh: %s -> %s\n", cloud_path.c_str(), out_path.c_str());
       std::printf("  points: %ld read, %ld non-finite dropped, %ld flying pixels dropped, %ld duplicates merged, "
-                  "%d outliers removed, %d voxel-merged, %d used\n",
+                  "%d outliers removed, %d stray points removed, %d voxel-merged, %d used\n",
                   rr.points_in_file, rr.non_finite_dropped, rr.flying_pixels_removed, rr.duplicates_merged + res.points_merged,
-                  res.points_denoised, res.points_voxel_removed, res.points_used);
+                  res.points_denoised, res.points_stray, res.points_voxel_removed, res.points_used);
       std::printf("  time: Laplacian %.3f s, factor %.3f s, CVT %.3f s (%d heat iterations, %.3f s each), total %.3f s\n",
                   res.laplacian_seconds, res.factor_seconds, res.cvt_seconds, res.iterations, per_iter, total_s);
       std::printf("  stages:");

@@ -164,7 +164,7 @@ int main(int argc, char** argv) {
     cli::check_output_path(centroids_path, {".xyz", ".txt"});
     cli::check_output_path(report_path, {".json"});
     cli::check_distinct_outputs({{"-o", cells_path}, {"--edges", edges_path}, {"--centroids", centroids_path},
-                                 {"--report", report_path}});
+                                 {"--report", report_path}}, {mesh_path});
     auto log = [&](const std::string& s) {
       if (!quiet) std::cerr << s << std::endl;
     };

@@ -158,7 +158,7 @@ int main(int argc, char** argv) {
     cli::check_output_path(out_path, {".obj", ".ply", ".off"});
     cli::check_output_path(cells_path, {".ply"});
     cli::check_output_path(report_path, {".json"});
-    cli::check_distinct_outputs({{"-o", out_path}, {"--cells", cells_path}, {"--report", report_path}});
+    cli::check_distinct_outputs({{"-o", out_path}, {"--cells", cells_path}, {"--report", report_path}}, {mesh_path});
     auto log = [&](const std::string& s) {
       if (!quiet) std::cerr << s << std::endl;
     };

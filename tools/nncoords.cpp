@@ -100,7 +100,7 @@ int main(int argc, char** argv) {
     cli::check_output_path(out_path, {".ply"});
     cli::check_output_path(weights_path, {".txt"});
     cli::check_output_path(report_path, {".json"});
-    cli::check_distinct_outputs({{"-o", out_path}, {"--weights", weights_path}, {"--report", report_path}});
+    cli::check_distinct_outputs({{"-o", out_path}, {"--weights", weights_path}, {"--report", report_path}}, {mesh_path});
     auto log = [&](const std::string& s) {
       if (!quiet) std::cerr << s << std::endl;
     };

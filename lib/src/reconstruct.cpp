@@ -59,6 +59,7 @@ void check_options(const ReconstructionOptions& o) {
   if (!(o.cvt_points_per_site == 0 || o.cvt_points_per_site >= 3) || !std::isfinite(o.cvt_points_per_site))
     bad("cvt_points_per_site must be 0 (every point) or at least 3");
   if (o.denoise && o.denoise_neighbors < 2) bad("denoise_neighbors must be >= 2");
+  check_stray_point_options(o.stray);
   if (o.denoise && (!(o.denoise_stddev > 0) || !std::isfinite(o.denoise_stddev))) bad("denoise_stddev must be > 0");
   const CloudPreparationOptions& c = o.cloud;
   if (c.orientation_neighbors < 1 || c.max_fit_neighbors < 1 || c.smoothing_spacing_neighbors < 1)
@@ -150,13 +151,28 @@ struct PreparedCloud {
   CloudFrame frame;
 };
 
-// Exact duplicates merged, frame normalised, optional statistical outlier removal and voxel grid.
+// The rows of P whose mask entry equals `keep`.
+Eigen::MatrixX3d rows_where(const Eigen::MatrixX3d& P, const std::vector<char>& mask, char keep) {
+  Eigen::MatrixX3d Q(std::count(mask.begin(), mask.end(), keep), 3);
+  Eigen::Index r = 0;
+  for (Eigen::Index i = 0; i < P.rows(); ++i)
+    if (mask[i] == keep) Q.row(r++) = P.row(i);
+  return Q;
+}
+
+// Exact duplicates merged, stray points removed, frame normalised, optional statistical outlier
+// removal and voxel grid.
 PreparedCloud prepare_cloud(const Eigen::MatrixX3d& P_in, const ReconstructionOptions& options, ReconstructionResult& res) {
   PointCloud cloud;
   cloud.P = P_in;
   CloudReadReport clean_report;
   clean_cloud(cloud, &clean_report);
   res.points_merged = static_cast<int>(clean_report.duplicates_merged);
+  if (options.stray.enabled()) {  // before the frame, which they would stretch
+    const std::vector<char> stray = stray_point_mask(cloud.P, options.stray, options.threads);
+    res.points_stray = static_cast<int>(std::count(stray.begin(), stray.end(), 1));
+    if (res.points_stray > 0) cloud.P = rows_where(cloud.P, stray, 0);
+  }
   PreparedCloud out;
   out.frame = normalize_cloud(cloud);
   Eigen::MatrixX3d P = cloud.P;

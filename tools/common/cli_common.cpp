@@ -115,10 +115,16 @@ int run_tool(const std::string& tool, const std::function<int()>& body) {
   }
 }
 
-void check_distinct_outputs(const std::vector<std::pair<std::string, std::string>>& outputs) {
+void check_distinct_outputs(const std::vector<std::pair<std::string, std::string>>& outputs,
+                            const std::vector<std::string>& inputs) {
   std::vector<std::pair<std::string, std::string>> seen;  // (resolved path, option)
   for (const auto& [option, path] : outputs) {
     if (path.empty()) continue;
+    for (const std::string& input : inputs) {
+      std::error_code ec;  // a missing output or input cannot be the same file
+      if (std::filesystem::equivalent(path, input, ec) && !ec)
+        throw InvalidInputError(path + ": is also an input; " + option + " would overwrite it");
+    }
     const std::string resolved = resolve_output_path(path);
     for (const auto& [other, other_option] : seen)
       if (other == resolved)

@@ -93,10 +93,13 @@ auto on_file(const std::string& path, Work&& work) -> decltype(work()) {
 /// not one of them. Throws heatcvt::InvalidInputError "<path>: <problem>". Empty paths pass.
 void check_output_path(const std::string& path, const std::vector<std::string>& extensions = {});
 
-/// Fails fast when two outputs name the same file (after following symbolic links): `outputs`
-/// are (option, path) pairs, empty paths are skipped.
-/// Throws InvalidInputError "<path>: given to both <option> and <option> ...".
-void check_distinct_outputs(const std::vector<std::pair<std::string, std::string>>& outputs);
+/// Fails fast when two outputs name the same file (after following symbolic links), or an output
+/// names one of the `inputs` (which it would overwrite): `outputs` are (option, path) pairs, empty
+/// paths are skipped.
+/// Throws InvalidInputError "<path>: given to both <option> and <option> ..." or
+/// "<path>: is also an input; <option> would overwrite it".
+void check_distinct_outputs(const std::vector<std::pair<std::string, std::string>>& outputs,
+                            const std::vector<std::string>& inputs = {});
 
 /// Rows of whitespace-separated numbers from a text file ('#' comments and blank lines skipped),
 /// every row with `columns` values (0 = as many as the first row). Throws heatcvt::IOError or

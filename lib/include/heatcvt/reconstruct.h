@@ -15,6 +15,7 @@
 #include "heatcvt/mesh.h"
 #include "heatcvt/mesher/projector.h"
 #include "heatcvt/mesher/surface_mesher.h"
+#include "heatcvt/stray_points.h"
 #include "heatcvt/validate.h"
 
 namespace heatcvt {
@@ -86,6 +87,9 @@ struct ReconstructionOptions {
   /// StatisticalOutlierRemoval). Defaults 20 and 2.0. Only used with `denoise`.
   int denoise_neighbors = 20;
   double denoise_stddev = 2.0;
+  /// Stray points (single points and small groups far from the rest, stray_points.h) are
+  /// removed before everything. On by default (ratio 8, 16 neighbours); ratio 0 keeps them.
+  StrayPointOptions stray;
   /// Start of the Lloyd iterations when `surface_lloyd_iterations` = 0 (cvt.h): true =
   /// farthest-point sites relaxed by a graph Lloyd on the point triangles while the Cholesky
   /// factor is computed; false = seeded random sites (the paper's start). Default false.
@@ -154,6 +158,7 @@ struct ReconstructionResult {
   int points_input = 0;            ///< rows of P
   int points_merged = 0;           ///< exact duplicates merged
   int points_denoised = 0;         ///< removed by the outlier filter
+  int points_stray = 0;            ///< removed as stray points (ReconstructionOptions::stray)
   int points_voxel_removed = 0;    ///< removed by voxel-grid downsampling (input − output count)
   std::vector<double> iteration_seconds;  ///< wall time of each Lloyd iteration
   /// Mean site move of each Lloyd iteration, in site spacings sqrt(area / sites).
