@@ -7,6 +7,7 @@
 #include <climits>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -332,6 +333,10 @@ int main(int argc, char** argv) {
       throw InvalidInputError("--pose: " + std::to_string(pose_paths.size()) + " poses for " +
                               std::to_string(cloud_paths.size()) + " clouds (give one per CLOUD, in order)");
     cli::check_output_path(out_path, {".ply", ".obj", ".off", ".stl"});
+    std::string out_ext = std::filesystem::path(out_path).extension().string();
+    std::transform(out_ext.begin(), out_ext.end(), out_ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (write_normals && out_ext != ".ply" && out_ext != ".obj")
+      throw InvalidInputError(out_path + ": --normals needs a .ply or .obj output (.off and .stl carry no vertex normals)");
     cli::check_output_path(report_path, {".json"});
     cli::check_distinct_outputs({{"-o", out_path}, {"--report", report_path}});
 

@@ -434,8 +434,11 @@ RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions&
   out.cvt_vertices = static_cast<int>(work->V.rows());
   if (sites > out.cvt_vertices)
     throw InvalidInputError("remesh_cvt: " + std::to_string(sites) + " sites exceed the " +
-                            std::to_string(out.cvt_vertices) + " vertices of the " +
-                            (out.refinement_levels ? "refined " : "") + "input (raise max_refinement_levels)");
+                            std::to_string(out.cvt_vertices) + " vertices of the input" +
+                            (out.refinement_levels ? " subdivided " + std::to_string(out.refinement_levels) +
+                                                         " times (RemeshOptions::max_refinement_levels)"
+                                                   : std::string()) +
+                            "; ask for fewer sites or give a finer input");
   out.stage_seconds.emplace_back("refine", seconds_since(t));
 
   t = Clock::now();
@@ -468,6 +471,9 @@ RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions&
       }
     }
   }
+  if (options.post_cvt_stages && options.cvt.build_dual && !out.post_cvt_kept && out.post_cvt_refusal.empty())
+    out.post_cvt_refusal = out.input.non_orientable ? "not run: the input is not orientable (the stages orient every piece)"
+                                                    : "not run: the dual has no triangle";
   if (options.cvt.build_dual && options.post_cvt_stages) keep_creases(mesh, options, out);
   explain_self_intersections(mesh, out);
   out.quality = triangle_quality(out.mesh.V, out.mesh.F);
