@@ -296,6 +296,14 @@ TEST(CloudIO, MissingUnknownEmptyAndMalformed) {
              "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2000000000\nHEIGHT 1\n"
              "POINTS 2000000000\nDATA binary\n0123456789ab");
   expect_error<IOError>([&] { read_cloud(tmp.path("huge.pcd")); }, tmp.path("huge.pcd"), "truncated");
+  // An ascii PLY whose header declares fewer vertices than the file holds is refused, not read in
+  // part; trailing blank lines are fine.
+  const std::string header = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+                             "property float z\nend_header\n";
+  write_text(tmp.path("more.ply"), header + "0 0 0\n1 0 0\n0 1 0\n");
+  expect_error<IOError>([&] { read_cloud(tmp.path("more.ply")); }, tmp.path("more.ply"), "more values than the header");
+  write_text(tmp.path("blank_tail.ply"), header + "0 0 0\n1 0 0\n\n  \n");
+  EXPECT_EQ(read_cloud(tmp.path("blank_tail.ply")).P.rows(), 2);
 }
 
 TEST(CloudIO, TruncatedFilesAreReported) {

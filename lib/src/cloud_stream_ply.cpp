@@ -46,6 +46,13 @@ class PlyDecoder : public CloudChunkReader::Decoder {
         fail(src.path(), "truncated: binary data ends after " + std::to_string(instance_) + " of " +
                              std::to_string(el.count) + " " + el.name + " elements");
     }
+    // An ascii file with values left after its last element has more data than its header
+    // declares (a wrong count): refused rather than read in part.
+    if (ascii_ && current_ >= elements_.size() && !tail_checked_) {
+      tail_checked_ = true;
+      std::string tok;
+      if (src.token(tok)) fail(src.path(), "more values than the header declares (a wrong element count?)");
+    }
     return n;
   }
 
@@ -78,6 +85,7 @@ class PlyDecoder : public CloudChunkReader::Decoder {
   std::size_t current_ = 0;
   long long instance_ = 0;
   bool started_ = false;
+  bool tail_checked_ = false;
   std::size_t min_bytes_ = 0;
   bool is_face_ = false;
   int face_list_ = -1;

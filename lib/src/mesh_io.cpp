@@ -247,6 +247,12 @@ class PlyBody {
       : path_(path), data_(data), pos_(start), ascii_(ascii), swap_(swap) {}
   size_t remaining() const { return data_.size() - std::min(pos_, data_.size()); }
   bool ascii() const { return ascii_; }
+  // Whether only whitespace is left (ascii).
+  bool only_space_left() const {
+    for (size_t i = pos_; i < data_.size(); ++i)
+      if (!is_space(data_[i])) return false;
+    return true;
+  }
 
   // Reads one value; `context` describes the position for error messages.
   template <typename Context>
@@ -367,6 +373,9 @@ PolygonSoup read_ply(const std::string& path, const std::string& data, MeshReadR
     }
   }
   if (!have_vertices) fail(path, "PLY file has no vertex element");
+  // Values left after the last element: the header declares fewer than the file holds (a wrong
+  // count); refused rather than read in part.
+  if (ascii && !body.only_space_left()) fail(path, "more values than the header declares (a wrong element count?)");
   return soup;
 }
 
