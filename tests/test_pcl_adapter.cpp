@@ -394,6 +394,24 @@ void expect_same_mesh(const pcl::PolygonMesh& mesh, const Eigen::MatrixX3d& V, c
   }
 }
 
+TEST(HeatCVTReconstruction, StrayPointsAreRemovedUnlessTurnedOff) {
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+  ASSERT_EQ(pcl::io::loadPCDFile(data_path("clouds/pcl_bun0.pcd"), *cloud), 0);
+  cloud->push_back(pcl::PointXYZ(100.f, 100.f, 100.f));  // one return far off the bunny
+  heatcvt::HeatCVTReconstruction<pcl::PointXYZ> rec;
+  rec.setInputCloud(cloud);
+  configure(rec, small_options());
+  pcl::PolygonMesh mesh;
+  rec.reconstruct(mesh);
+  EXPECT_EQ(rec.getReconstructionResult().points_stray, 1);
+  heatcvt::StrayPointOptions off;
+  off.ratio = 0;
+  rec.setStrayPoints(off);
+  EXPECT_EQ(rec.getStrayPoints().ratio, 0);
+  rec.reconstruct(mesh);
+  EXPECT_EQ(rec.getReconstructionResult().points_stray, 0);
+}
+
 TEST(HeatCVTReconstruction, SameMeshAsReconstructSurfaceAndCloud2mesh) {
   const std::string path = data_path("clouds/pcl_bun0.pcd");
   const heatcvt::ReconstructionOptions opt = small_options();

@@ -118,6 +118,11 @@ class HeatCVTReconstruction : public pcl::SurfaceReconstruction<PointT> {
   void setDenoise(bool denoise) { options_.denoise = denoise; }
   bool getDenoise() const { return options_.denoise; }
 
+  /// The stray-point rule (stray_points.h, cloud2mesh --stray-ratio). Default on (ratio 8,
+  /// 16 neighbours); a ratio of 0 keeps every point.
+  void setStrayPoints(const StrayPointOptions& stray) { options_.stray = stray; }
+  const StrayPointOptions& getStrayPoints() const { return options_.stray; }
+
   /// Voxel-grid downsampling edge length in input units; 0 = off. Default 0.
   void setVoxelSize(double size) { options_.voxel_size = size; }
   double getVoxelSize() const { return options_.voxel_size; }
