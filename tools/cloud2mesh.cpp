@@ -419,7 +419,7 @@ int main(int argc, char** argv) {
       for (const auto& [name, seconds] : res.stage_seconds) std::printf(" %s %.2f s;", name.c_str(), seconds);
       std::printf("\n");
       std::printf("  mesh: %ld vertices, %ld faces, %d components, %d boundary loops, genus %d; %d holes filled, "
-                  "%d unused sites, %d small pieces dropped, %d flying faces removed%s\n",
+                  "%d vertices left in no triangle, %d small pieces dropped, %d flying faces removed%s\n",
                   static_cast<long>(res.mesh.V.rows()), static_cast<long>(res.mesh.F.rows()), val.components,
                   val.boundary_loops, val.genus, res.holes_filled, res.unused_sites, res.pieces_removed,
                   res.flying_faces, res.sized ? ", sized to -n" : "");

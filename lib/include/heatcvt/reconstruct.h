@@ -174,7 +174,10 @@ struct ReconstructionResult {
   int flipped_edges = 0;           ///< edge flips on the extracted mesh (max-min-angle and valence)
   bool polish_fallback = false;    ///< the valence-flip polish self-intersected; redone with Delaunay flips only
   long crossing_after_sizing = 0;  ///< intersecting face pairs the sizing left, untangled after it (MesherStats)
-  int unused_sites = 0;            ///< sites that ended in no triangle (dropped from the mesh)
+  /// Vertices of the working mesh left in no triangle and dropped: sites the dual or the stages
+  /// left out, and vertices the stages added and collapsed again (so it can exceed `sites` where
+  /// the sizing remeshed).
+  int unused_sites = 0;
   bool angle_polish_undone = false;  ///< the smallest-angle polish self-intersected and was undone
   int collapsed_edges = 0;         ///< short edges of slivers (< 25 degrees) collapsed at the end
   /// Wall time of each stage in pipeline order (name, seconds): where the time went.
