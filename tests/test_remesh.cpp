@@ -335,3 +335,19 @@ TEST(RemeshCvt, ADualBelowThirtyDegreesGoesThroughTheStages) {
   expect_valid_at_count(r, 1000, 30.0);
   EXPECT_GE(r.quality.mean_min_angle_deg, 52.0);
 }
+
+// hemisphere_open at 4 sites: the stages' result ran its vertices together (its bounding box a
+// millionth of the input's) and every other check passed it. The check "spans_input" fails it,
+// so it is refused and the dual, which spans the input, is the output.
+TEST(RemeshCvt, AResultWhoseVerticesRanTogetherFailsSpansInput) {
+  const TriangleMesh input = read_mesh(test::data_path("meshes/hemisphere_open.obj"));
+  const RemeshResult r = remesh_cvt(input, remesh_options(4));
+  ASSERT_NE(r.post_cvt_refusal.find("spans_input"), std::string::npos) << r.post_cvt_refusal;
+  EXPECT_FALSE(r.post_cvt_kept);
+  const MeshCheck* span = r.checks.find("spans_input");
+  ASSERT_NE(span, nullptr);
+  EXPECT_TRUE(span->passed) << span->detail;
+  const double diagonal = (r.mesh.V.colwise().maxCoeff() - r.mesh.V.colwise().minCoeff()).norm();
+  const double input_diagonal = (input.V.colwise().maxCoeff() - input.V.colwise().minCoeff()).norm();
+  EXPECT_GT(diagonal, 0.1 * input_diagonal);
+}

@@ -130,20 +130,6 @@ void repair_closed_ball(const TriangleMesh& work, const Laplacian& laplacian, co
   }
 }
 
-// Checks of a result against the input's topology; a mesh without triangles gets the one failed
-// check "has_triangles".
-ValidationReport check_result(const TriangleMesh& result, const SurfaceDescription& input, bool built) {
-  ValidationReport rep;
-  if (built && result.F.rows() > 0) return validate_triangle_mesh(result.V, result.F, dual_checks(input));
-  if (built) {
-    MeshCheck empty;
-    empty.name = "has_triangles";
-    empty.detail = "the dual has no triangles (no point where three cells meet)";
-    rep.checks.push_back(empty);
-  }
-  return rep;
-}
-
 // The input's vertices that faces use (the samples of its surface).
 Eigen::MatrixX3d face_vertices(const TriangleMesh& input) {
   std::vector<char> used(static_cast<std::size_t>(input.V.rows()), 0);
@@ -153,6 +139,40 @@ Eigen::MatrixX3d face_vertices(const TriangleMesh& input) {
     if (used[static_cast<std::size_t>(v)]) samples.row(r++) = input.V.row(v);
   return samples;
 }
+
+// Diagonal of the bounding box of P (0 for no rows).
+double bounding_diagonal(const Eigen::MatrixX3d& P) {
+  return P.rows() > 0 ? (P.colwise().maxCoeff() - P.colwise().minCoeff()).norm() : 0.0;
+}
+
+// Checks of a result against the input's topology; a mesh without triangles gets the one failed
+// check "has_triangles". "spans_input": a remesh lies on the input's surface and spreads its
+// vertices over it, so its bounding box has a diagonal of the input's order; a result below
+// kMinSpan of it has collapsed (a few sites run together at a very small count).
+ValidationReport check_result(const TriangleMesh& result, const SurfaceDescription& input, bool built) {
+  constexpr double kMinSpan = 0.1;
+  ValidationReport rep;
+  if (built && result.F.rows() > 0) {
+    rep = validate_triangle_mesh(result.V, result.F, dual_checks(input));
+    MeshCheck span;
+    span.name = "spans_input";
+    const double ratio = input.diagonal > 0 ? bounding_diagonal(face_vertices(result)) / input.diagonal : 1.0;
+    span.passed = ratio >= kMinSpan;
+    span.detail = span.passed ? "ok"
+                              : "the result's bounding box is " + std::to_string(ratio) +
+                                    " of the input's: its vertices ran together";
+    rep.checks.push_back(span);
+    return rep;
+  }
+  if (built) {
+    MeshCheck empty;
+    empty.name = "has_triangles";
+    empty.detail = "the dual has no triangles (no point where three cells meet)";
+    rep.checks.push_back(empty);
+  }
+  return rep;
+}
+
 
 // Distance from `mesh` to the sample (an input vertex of a face, face_vertices()) farthest from
 // it: how well it covers the input.
@@ -349,6 +369,7 @@ SurfaceDescription describe_surface(const TriangleMesh& mesh) {
   const int nv = static_cast<int>(mesh.V.rows());
   d.topology = mesh_topology(mesh.F, nv);
   d.genus = mesh_genus(mesh.F, nv);
+  d.diagonal = bounding_diagonal(face_vertices(mesh));
   if (d.topology.inconsistent_edges > 0 && d.topology.nonmanifold_edges == 0) {
     ValidationOptions o;
     o.check_self_intersections = false;

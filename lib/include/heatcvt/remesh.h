@@ -35,6 +35,7 @@ struct SurfaceDescription {
   MeshTopology topology;
   int genus = -1;               ///< mesh_genus(); −1 when not an orientable manifold
   bool non_orientable = false;  ///< an edge manifold admitting no consistent orientation (Klein bottle, Möbius strip)
+  double diagonal = 0;          ///< bounding-box diagonal of the vertices that faces use
   bool closed() const { return topology.boundary_edges == 0; }
   /// "genus 3", "non-orientable, Euler characteristic 0" or "genus undefined (not a manifold)".
   std::string genus_text() const;
