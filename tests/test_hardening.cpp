@@ -151,6 +151,8 @@ TEST(Hardening, CommandLineMisuseIsOneLineAndExit2) {
   }
   // cloud2mesh without an input; normals asked for an output format that cannot carry them.
   expect_bad_input(test::run_tool("cloud2mesh", "-n 10 -o " + dir.path("o.ply")), "cloud2mesh", "no input", dir, 2);
+  expect_bad_input(test::run_tool("cloud2mesh", mesh + " -n 10 --stray-ratio 0.5 -o " + dir.path("o.ply")), "cloud2mesh",
+                   "--stray-ratio", dir, 2);
   expect_bad_input(test::run_tool("cloud2mesh", mesh + " -n 10 --normals -o " + dir.path("o.off")), "cloud2mesh",
                    dir.path("o.off") + ": --normals", dir, 2);
   // --help still succeeds and documents the exit statuses.

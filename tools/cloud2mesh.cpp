@@ -87,8 +87,11 @@ void check_options(const ReconstructionOptions& opt) {
   if (opt.denoise_neighbors < 2) throw InvalidInputError("--denoise-k must be >= 2");
   if (!(opt.denoise_stddev > 0) || !std::isfinite(opt.denoise_stddev))
     throw InvalidInputError("--denoise-stddev must be a positive number");
-  if (!std::isfinite(opt.stray.ratio) || opt.stray.ratio < 0 || (opt.stray.ratio > 0 && opt.stray.ratio <= 1))
+  try {  // the library's rule, in the option's words
+    check_stray_point_options(opt.stray);
+  } catch (const InvalidInputError&) {
     throw InvalidInputError("--stray-ratio must be 0 (off) or above 1");
+  }
 }
 
 // PCL's voxel grid indexes at most 2^31 voxels; a smaller voxel would silently do nothing.
