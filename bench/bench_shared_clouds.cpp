@@ -14,10 +14,13 @@
 #include <vector>
 
 #include "bench_util.h"
+#include "heatcvt/closest_point.h"
 #include "heatcvt/cloud_io.h"
 #include "heatcvt/mesh.h"
+#include "heatcvt/normals.h"
 #include "heatcvt/reconstruct.h"
 #include "heatcvt/reconstruct_stream.h"
+#include "heatcvt/sample_border.h"
 #include "heatcvt/validate.h"
 #include "peer_pipelines.h"
 
@@ -28,10 +31,12 @@ using namespace heatcvt;
 struct Row {
   int vertices = 0, components = 0, loops = 0, genus = -1;
   double phi_min = 0, phi_boundary = 180, phi_mean = 0, seconds = 0;
+  BorderFit border;  // against the cloud's border points, in the output's mean edge lengths
+  double covered = 0;  // fraction of the cloud's points within one mean edge length of the output
   long flying_pixels = -1;  // dropped by the flying-pixel rule; −1 on the peer row (it meshes read_cloud's points, the same ones dropped)
 };
 
-Row describe(const TriangleMesh& m, double seconds) {
+Row describe(const TriangleMesh& m, double seconds, const Eigen::MatrixX3d& P, const std::vector<char>& on_border) {
   Row r;
   ValidationOptions vo;
   vo.require_closed = false;
@@ -45,21 +50,34 @@ Row describe(const TriangleMesh& m, double seconds) {
   r.phi_mean = q.mean_min_angle_deg;
   r.phi_boundary = q.boundary_min_angle_deg;
   r.seconds = seconds;
+  if (m.F.rows() == 0) return r;
+  const double h = mean_edge_length(m.V, m.F);
+  r.border = border_fit(P, on_border, m, h);
+  // Every point of clouds up to 100,000 points, an even stride of larger ones.
+  const Eigen::Index stride = std::max<Eigen::Index>(1, P.rows() / 100000);
+  Eigen::MatrixX3d Q(P.rows() / stride, 3);
+  for (Eigen::Index i = 0; i < Q.rows(); ++i) Q.row(i) = P.row(i * stride);
+  const std::vector<SurfacePoint> closest = closest_surface_points(m.V, m.F, Q);
+  long near = 0;
+  for (Eigen::Index i = 0; i < Q.rows(); ++i)
+    near += (position(m.V, m.F, closest[static_cast<std::size_t>(i)]) - Q.row(i).transpose()).norm() <= h;
+  r.covered = Q.rows() > 0 ? static_cast<double>(near) / static_cast<double>(Q.rows()) : 0.0;
   return r;
 }
 
 // PCL greedy projection triangulation (the acceptance's peer settings, peer_pipelines.h) of the
 // cloud voxel-downsampled to about `target` points, with the peers' normals.
-Row greedy_projection(const Eigen::MatrixX3d& P, int target) {
+Row greedy_projection(const Eigen::MatrixX3d& P, int target, const std::vector<char>& on_border) {
   const double t0 = bench::now_seconds();
   const TriangleMesh m = test::pcl_greedy_projection_at_count(P, target);
-  return describe(m, bench::now_seconds() - t0);
+  return describe(m, bench::now_seconds() - t0, P, on_border);
 }
 
 void print(const char* method, const Row& r, int n) {
-  std::printf("| %s | %d (%+.1f %%) | %d | %d | %d | %.1f | %.1f | %.1f | %.2f | %s |\n", method, r.vertices,
-              100.0 * (r.vertices - n) / n, r.components, r.loops, r.genus, r.phi_min, r.phi_boundary, r.phi_mean,
-              r.seconds, r.flying_pixels < 0 ? "-" : std::to_string(r.flying_pixels).c_str());
+  std::printf("| %s | %d (%+.1f %%) | %d | %d | %d | %.1f | %.1f | %.1f | %.3f | %.2f | %.3f | %.2f | %s |\n",
+              method, r.vertices, 100.0 * (r.vertices - n) / n, r.components, r.loops, r.genus, r.phi_min,
+              r.phi_boundary, r.phi_mean, r.border.mesh_border_on_edge, r.border.mesh_border_distance, r.covered, r.seconds,
+              r.flying_pixels < 0 ? "-" : std::to_string(r.flying_pixels).c_str());
 }
 
 }  // namespace
@@ -94,11 +112,11 @@ int main(int argc, char** argv) {
     if (e.path().extension() != ".md") files.push_back(e.path());
   std::sort(files.begin(), files.end());
   std::printf("cloud2mesh defaults, -n %d, every shared cloud with at least %d points; phi_b = smallest angle of the "
-              "triangles on a boundary; flying px = pixels of an organised frame dropped by the flying-pixel rule. Peer: PCL GreedyProjectionTriangulation on the cloud voxel-downsampled to about "
+              "triangles on a boundary; on edge = fraction of the mesh's border vertices within one site spacing (its mean edge length) of the cloud's border points (sample_border.h), p90 = their 90th percentile distance in spacings; covered = fraction of the cloud's points within one spacing of the mesh; flying px = pixels of an organised frame dropped by the flying-pixel rule. Peer: PCL GreedyProjectionTriangulation on the cloud voxel-downsampled to about "
               "-n points (PCA/MST normals, radius 3 voxels, mu 2.5, 10-120 deg).\n\n",
               n, 10 * n);
-  std::printf("| cloud | method | V (vs -n) | components | loops | genus | phi_min | phi_b | phi_m | time s | flying px |\n");
-  std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  std::printf("| cloud | method | V (vs -n) | components | loops | genus | phi_min | phi_b | phi_m | on edge | p90 | covered | time s | flying px |\n");
+  std::printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   for (const auto& f : files) {
     PointCloud cloud;
     try {
@@ -108,6 +126,8 @@ int main(int argc, char** argv) {
       continue;
     }
     if (cloud.P.rows() < 10L * n) continue;
+    const Eigen::MatrixXi knn = k_nearest_neighbors(cloud.P, 30, threads);
+    const std::vector<char> on_border = sample_border_points(cloud.P, estimate_normals(cloud.P, knn, threads), knn);
     ReconstructionOptions o;
     o.sites = n;
     o.threads = threads;
@@ -118,15 +138,15 @@ int main(int argc, char** argv) {
       // As cloud2mesh runs it: a file of more than StreamOptions::max_raw_points points is
       // streamed into a voxel summary, a smaller one reconstructed from its raw points.
       const StreamedReconstruction r = reconstruct_surface_streamed(f.string(), o, StreamOptions{});
-      Row row = describe(r.result.mesh, bench::now_seconds() - t0);
+      Row row = describe(r.result.mesh, bench::now_seconds() - t0, cloud.P, on_border);
       row.flying_pixels = static_cast<long>(r.flying_pixels_removed);
       print("heatcvt", row, n);
     } catch (const std::exception& e) {
-      std::printf("| heatcvt | failed: %s ||||||||\n", e.what());
+      std::printf("| heatcvt | failed: %s |||||||||||\n", e.what());
     }
     if (peer) {
       std::printf("| %s ", f.filename().c_str());
-      print("PCL GP3", greedy_projection(cloud.P, n), n);
+      print("PCL GP3", greedy_projection(cloud.P, n, on_border), n);
     }
     std::fflush(stdout);
   }

@@ -5,9 +5,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <tuple>
+#include <utility>
 
+#include "heatcvt/closest_point.h"
 #include "heatcvt/errors.h"
 #include "heatcvt/parallel.h"
+#include "heatcvt/point_index.h"
 
 namespace heatcvt {
 namespace {
@@ -27,6 +32,15 @@ double widest_gap(const Eigen::MatrixX3d& P, const Eigen::Vector3d& n, const Eig
   double gap = angles.front() + 2 * M_PI - angles.back();
   for (size_t a = 1; a < angles.size(); ++a) gap = std::max(gap, angles[a] - angles[a - 1]);
   return gap;
+}
+
+// The q-quantile of d (sorted in place) and the fraction of it at or below 1.
+std::pair<double, double> quantile_and_within_one(std::vector<double>& d, double q) {
+  if (d.empty()) return {0.0, 0.0};
+  std::sort(d.begin(), d.end());
+  const auto at = static_cast<std::size_t>(std::floor(q * static_cast<double>(d.size() - 1)));
+  const double within = static_cast<double>(std::upper_bound(d.begin(), d.end(), 1.0) - d.begin());
+  return {d[at], within / static_cast<double>(d.size())};
 }
 
 }  // namespace
@@ -52,6 +66,44 @@ std::vector<char> sample_border_points(const Eigen::MatrixX3d& P, const Eigen::M
     }
   }
   return border;
+}
+
+BorderFit border_fit(const Eigen::MatrixX3d& P, const std::vector<char>& on_border, const TriangleMesh& mesh,
+                     double length, double quantile) {
+  if (on_border.size() != static_cast<std::size_t>(P.rows()))
+    throw InvalidInputError("border_fit: the border flags and the points differ in length");
+  if (!(length > 0) || !(quantile >= 0 && quantile <= 1))
+    throw InvalidInputError("border_fit: the length must be positive and the quantile in [0, 1]");
+  BorderFit fit;
+  std::vector<int> rows;
+  for (int i = 0; i < static_cast<int>(on_border.size()); ++i)
+    if (on_border[i]) rows.push_back(i);
+  if (rows.empty() || mesh.F.rows() == 0) return fit;
+  const Eigen::MatrixX3d edge = P(rows, Eigen::all);
+  const std::vector<SurfacePoint> closest = closest_surface_points(mesh.V, mesh.F, edge);
+  std::vector<double> d(rows.size());
+  for (std::size_t r = 0; r < rows.size(); ++r)
+    d[r] = (position(mesh.V, mesh.F, closest[r]) - edge.row(static_cast<Eigen::Index>(r)).transpose()).norm() / length;
+  fit.edge_points = static_cast<int>(rows.size());
+  std::tie(fit.edge_distance, fit.edge_covered) = quantile_and_within_one(d, quantile);
+  // Border vertices: those on an edge that one face alone traverses (in either direction).
+  std::map<std::pair<int, int>, int> faces_of_edge;
+  for (Eigen::Index f = 0; f < mesh.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) ++faces_of_edge[std::minmax(mesh.F(f, k), mesh.F(f, (k + 1) % 3))];
+  std::vector<char> on_mesh_border(static_cast<std::size_t>(mesh.V.rows()), 0);
+  for (const auto& [e, faces] : faces_of_edge)
+    if (faces == 1) on_mesh_border[e.first] = on_mesh_border[e.second] = 1;
+  const PointIndex index(edge);
+  d.clear();
+  for (int v = 0; v < static_cast<int>(mesh.V.rows()); ++v) {
+    if (!on_mesh_border[v]) continue;
+    double dist = 0;
+    index.nearest(mesh.V.row(v).transpose(), dist);
+    d.push_back(dist / length);
+  }
+  fit.mesh_border_vertices = static_cast<int>(d.size());
+  std::tie(fit.mesh_border_distance, fit.mesh_border_on_edge) = quantile_and_within_one(d, quantile);
+  return fit;
 }
 
 }  // namespace heatcvt

@@ -7,6 +7,8 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "heatcvt/mesh.h"
+
 namespace heatcvt {
 
 /// Options of sample_border_points().
@@ -28,5 +30,26 @@ struct SampleBorderOptions {
 /// \throw InvalidInputError when the shapes differ or `knn` has fewer than 3 columns.
 std::vector<char> sample_border_points(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N, const Eigen::MatrixXi& knn,
                                        const SampleBorderOptions& options = {});
+
+/// How closely a mesh made from a cloud follows the border of the samples, in units of a length
+/// (the mesh's site spacing): for each border point of the cloud, its distance to the mesh (an
+/// inset or ragged mesh border leaves the scan's edge uncovered); for each border vertex of the
+/// mesh, its distance to the nearest border point of the cloud (a border drawn in lies off the
+/// edge). Each as the fraction of the points within the length and the `quantile` of the
+/// distances. A mesh without faces or a cloud without border gives zero counts.
+struct BorderFit {
+  int edge_points = 0;            ///< border points of the cloud
+  double edge_covered = 0;        ///< fraction of them within one length of the mesh
+  double edge_distance = 0;       ///< the quantile of their distances to the mesh, in lengths
+  int mesh_border_vertices = 0;   ///< vertices on a boundary edge of the mesh
+  double mesh_border_on_edge = 0; ///< fraction of them within one length of a border point
+  double mesh_border_distance = 0;///< the quantile of their distances to the border points, in lengths
+};
+
+/// BorderFit of `mesh` against the cloud P whose border points are flagged by `on_border`
+/// (sample_border_points()), in units of `length` (> 0), at the `quantile` in [0, 1].
+/// \throw InvalidInputError when `on_border` and P differ in length or `length` is not positive.
+BorderFit border_fit(const Eigen::MatrixX3d& P, const std::vector<char>& on_border, const TriangleMesh& mesh,
+                     double length, double quantile = 0.9);
 
 }  // namespace heatcvt

@@ -16,8 +16,10 @@ int delaunay_flips(WorkingMesh& mesh, const PolishOptions& o, int passes, const 
 
 void relax(WorkingMesh& mesh, const SurfaceProjector& surface, const PolishOptions& o, bool use_valence,
            MesherStats& stats) {
+  RelaxationBorder border;
+  border.follow_sample_border = o.follow_sample_border;
   for (int it = 0; it < o.relaxation_iterations; ++it) {
-    tangential_relaxation(mesh, surface, o.threads);
+    tangential_relaxation(mesh, surface, o.threads, border);
     // Valence-equalising flips first, max-min-angle flips in the last two iterations so that no
     // flip that hurts the smallest angle survives.
     FlipOptions f = o.flips;

@@ -145,7 +145,7 @@ double CloudSurfaceProjector::distance_to_samples(const Eigen::Vector3d& x) cons
   return d;
 }
 
-double CloudSurfaceProjector::distance_to_sample_border(const Eigen::Vector3d& x) const {
+const PointIndex& CloudSurfaceProjector::border_index() const {
   std::call_once(border_once_, [&] {
     SampleBorderOptions o = options_.border;
     o.threads = options_.threads;
@@ -153,11 +153,25 @@ double CloudSurfaceProjector::distance_to_sample_border(const Eigen::Vector3d& x
     std::vector<int> rows;
     for (int i = 0; i < static_cast<int>(on_border.size()); ++i)
       if (on_border[i]) rows.push_back(i);
-    border_ = std::make_unique<PointIndex>(P_(rows, Eigen::all));
+    border_points_ = P_(rows, Eigen::all);
+    border_ = std::make_unique<PointIndex>(border_points_);
   });
+  return *border_;
+}
+
+double CloudSurfaceProjector::distance_to_sample_border(const Eigen::Vector3d& x) const {
   double d = 0;
-  border_->nearest(x, d);
+  border_index().nearest(x, d);
   return d;
+}
+
+bool CloudSurfaceProjector::sample_border_mean(const Eigen::Vector3d& x, double radius, Eigen::Vector3d& mean) const {
+  const std::vector<int> rows = border_index().within(x, radius);
+  if (rows.empty()) return false;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (int r : rows) sum += border_points_.row(r).transpose();
+  mean = sum / static_cast<double>(rows.size());
+  return true;
 }
 
 MeshSurfaceProjector::MeshSurfaceProjector(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F)

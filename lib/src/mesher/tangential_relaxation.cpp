@@ -6,6 +6,31 @@
 #include "heatcvt/parallel.h"
 
 namespace heatcvt {
+namespace {
+
+// RelaxationBorder::follow_sample_border: the move of the simple border vertex v at x (normal
+// nv) to the middle of its border neighbours along their chord and onto the mean of the
+// samples' border points within its edges' mean length across it, none at a corner (a turn of
+// the border above `corner` radians); false where no border point is that near.
+bool follow_sample_border(const WorkingMesh& mesh, const SurfaceProjector& surface, const BorderLinks& links, int v,
+                          double corner, const Eigen::Vector3d& x, const Eigen::Vector3d& nv, Eigen::Vector3d& d) {
+  const Eigen::Vector3d p = mesh.V.row(links.prev[v]), q = mesh.V.row(links.next[v]);
+  Eigen::Vector3d edge;
+  if (!surface.sample_border_mean(x, 0.5 * ((p - x).norm() + (q - x).norm()), edge)) return false;
+  if (border_turn(mesh, links, v) > corner) {
+    d.setZero();
+    return true;
+  }
+  Eigen::Vector3d along = q - p;
+  along -= along.dot(nv) * nv;
+  if (!(along.norm() > 0)) return false;  // a border folded back on itself: move like the interior
+  along.normalize();
+  const Eigen::Vector3d across = nv.cross(along);
+  d = (0.5 * (p + q) - x).dot(along) * along + (edge - x).dot(across) * across;
+  return true;
+}
+
+}  // namespace
 
 void tangential_relaxation(WorkingMesh& mesh, const SurfaceProjector& surface, int threads,
                            const RelaxationBorder& border, const std::vector<char>* fixed) {
@@ -24,7 +49,8 @@ void tangential_relaxation(WorkingMesh& mesh, const SurfaceProjector& surface, i
     }
   }
   Eigen::MatrixX3d S2 = S, SN2 = SN;
-  const BorderLinks links = border.slide ? border_links(mesh) : BorderLinks{};
+  const bool follow = !border.slide && border.follow_sample_border;
+  const BorderLinks links = border.slide || follow ? border_links(mesh) : BorderLinks{};
   const double corner = border.corner_turn_deg * M_PI / 180.0;
 #pragma omp parallel for num_threads(resolve_threads(threads)) schedule(static)
   for (int v = 0; v < ns; ++v) {
@@ -37,6 +63,8 @@ void tangential_relaxation(WorkingMesh& mesh, const SurfaceProjector& surface, i
       const Eigen::Vector3d p = S.row(links.prev[v]), q = S.row(links.next[v]);
       d = 0.5 * (p + q) - x;
       d -= d.dot(nv) * nv;
+    } else if (follow && links.simple(v)) {
+      follow_sample_border(mesh, surface, links, v, corner, x, nv, d);
     }
     Eigen::Vector3d pos, nrm;
     surface.project(x + d, mesh.anchor[v], pos, nrm);

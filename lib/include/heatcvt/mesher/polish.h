@@ -22,6 +22,11 @@ struct PolishOptions {
   /// Passes of each flip step inside the polish. Default 5.
   int flip_passes = 5;
   FlipOptions flips;  ///< angles of the flip rules (max_passes and valence_mode are set per call)
+  /// In the relaxation, border vertices near the edge of the samples follow it
+  /// (RelaxationBorder::follow_sample_border): the border of an open scan is not drawn in.
+  /// Surfaces without sample borders (an input mesh, a closed scan) are not affected. false =
+  /// border vertices move like the others. Default true.
+  bool follow_sample_border = true;
   /// Angle polish: attempts (each after the previous one self-intersected, with the vertices of
   /// the intersecting faces and their neighbours held fixed). Default 3.
   int angle_attempts = 3;

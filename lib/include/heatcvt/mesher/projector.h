@@ -34,6 +34,13 @@ class SurfaceProjector {
     (void)x;
     return 0;
   }
+  /// The mean of the border points of the samples within `radius` of `x` (the edge of the scan
+  /// there, averaged over the radius), in `mean`; false (and `mean` left alone) where there is
+  /// none or the border is not sampled (an input mesh). Default false.
+  virtual bool sample_border_mean(const Eigen::Vector3d& x, double radius, Eigen::Vector3d& mean) const {
+    (void)x, (void)radius, (void)mean;
+    return false;
+  }
   /// Whether the surface's border is known exactly (an input mesh's boundary edges, none for a
   /// closed mesh); a cloud's is not.
   virtual bool border_known() const { return false; }
@@ -90,6 +97,7 @@ class CloudSurfaceProjector final : public SurfaceProjector {
   /// Nearest cloud point on the border of the samples (sample_border_points() with
   /// `options.border`, found on first use); infinity where there is none.
   double distance_to_sample_border(const Eigen::Vector3d& x) const override;
+  bool sample_border_mean(const Eigen::Vector3d& x, double radius, Eigen::Vector3d& mean) const override;
 
   /// The fit neighbourhood of cloud point c: c and its nearest points whose normal agrees with
   /// c's (all of them when too few agree).
@@ -111,9 +119,11 @@ class CloudSurfaceProjector final : public SurfaceProjector {
   Eigen::MatrixX3d P_, N_;
   CloudFitOptions options_;
   Eigen::MatrixXi knn_;
-  // Built on first use (hole filling only): every point, and the border points.
+  // Built on first use (hole filling and borders only): every point, and the border points.
+  const PointIndex& border_index() const;
   mutable std::once_flag samples_once_, border_once_;
   mutable std::unique_ptr<PointIndex> samples_, border_;
+  mutable Eigen::MatrixX3d border_points_;
 };
 
 class ClosestPointTree;
