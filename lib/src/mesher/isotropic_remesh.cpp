@@ -584,7 +584,8 @@ class Sizer {
     return 0;
   }
 
-  // Valence flips towards target_valences(), then a relaxation step with the border sliding.
+  // Valence flips towards target_valences(), then a relaxation step with the border sliding (or
+  // following the samples' border where it is near).
   void flip_and_relax() {
     FlipOptions f = o_.flips;
     f.valence_mode = true;
@@ -594,6 +595,7 @@ class Sizer {
     stats_.flipped_edges += flip_edges(mesh_, f, &movable, &target);
     RelaxationBorder border;
     border.slide = true;
+    border.follow_sample_border = o_.follow_sample_border;
     border.corner_turn_deg = o_.corner_turn_deg;
     const std::vector<char> fixed = held();
     tangential_relaxation(mesh_, surface_, o_.threads, border, &fixed);

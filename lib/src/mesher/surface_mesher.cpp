@@ -98,8 +98,9 @@ namespace {
 
 // The sizing stage: where it remeshes (sizing_reshapes()), flying faces removed with the small
 // pieces they cut off (so that the count is shared among the pieces that stay), then
-// size_to_target(). Where the sizing is then needed but refused (it would be worse on a target),
-// the mesh is left as it came, flying faces and all.
+// size_to_target() (again without following the samples' border where that is refused). Where
+// the sizing is then needed but refused (it would be worse on a target), the mesh is left as it
+// came, flying faces and all.
 bool size_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, const SurfaceMesherOptions& options,
                MesherStats& stats) {
   IsotropicRemeshOptions sizing = options.sizing;
@@ -119,6 +120,12 @@ bool size_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, const Surface
                                                    &stats.pieces_removed);
   }
   if (size_to_target(mesh, surface, sizing, stats)) return true;
+  // Border vertices held to the samples' border constrain the remeshing; where its result is
+  // refused, it is tried once more with the border free to slide along its own course.
+  if (sizing.follow_sample_border) {
+    sizing.follow_sample_border = false;
+    if (size_to_target(mesh, surface, sizing, stats)) return true;
+  }
   if (needs_sizing(mesh, surface, sizing) && stats.flying_faces > stats_unsized.flying_faces) {
     mesh.rollback(unsized);
     stats = stats_unsized;

@@ -3,20 +3,25 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
+
 #include "heatcvt/parallel.h"
 
 namespace heatcvt {
 namespace {
 
 // RelaxationBorder::follow_sample_border: the move of the simple border vertex v at x (normal
-// nv) to the middle of its border neighbours along their chord and onto the mean of the
-// samples' border points within its edges' mean length across it, none at a corner (a turn of
-// the border above `corner` radians); false where no border point is that near.
+// nv) to the middle of its border neighbours along their chord and, across it, onto the mean of
+// the samples' border points within a radius (its border edges' mean length, at most
+// max_radius), by at most half the radius; no move at a corner (a turn of the border above
+// `corner` radians); false where no border point is that near.
 bool follow_sample_border(const WorkingMesh& mesh, const SurfaceProjector& surface, const BorderLinks& links, int v,
-                          double corner, const Eigen::Vector3d& x, const Eigen::Vector3d& nv, Eigen::Vector3d& d) {
+                          double corner, double max_radius, const Eigen::Vector3d& x, const Eigen::Vector3d& nv,
+                          Eigen::Vector3d& d) {
   const Eigen::Vector3d p = mesh.V.row(links.prev[v]), q = mesh.V.row(links.next[v]);
+  const double radius = std::min(0.5 * ((p - x).norm() + (q - x).norm()), max_radius);
   Eigen::Vector3d edge;
-  if (!surface.sample_border_mean(x, 0.5 * ((p - x).norm() + (q - x).norm()), edge)) return false;
+  if (!surface.sample_border_mean(x, radius, edge)) return false;
   if (border_turn(mesh, links, v) > corner) {
     d.setZero();
     return true;
@@ -26,7 +31,8 @@ bool follow_sample_border(const WorkingMesh& mesh, const SurfaceProjector& surfa
   if (!(along.norm() > 0)) return false;  // a border folded back on itself: move like the interior
   along.normalize();
   const Eigen::Vector3d across = nv.cross(along);
-  d = (0.5 * (p + q) - x).dot(along) * along + (edge - x).dot(across) * across;
+  const double c = std::clamp((edge - x).dot(across), -0.5 * radius, 0.5 * radius);
+  d = (0.5 * (p + q) - x).dot(along) * along + c * across;
   return true;
 }
 
@@ -49,22 +55,30 @@ void tangential_relaxation(WorkingMesh& mesh, const SurfaceProjector& surface, i
     }
   }
   Eigen::MatrixX3d S2 = S, SN2 = SN;
-  const bool follow = !border.slide && border.follow_sample_border;
+  const bool follow = border.follow_sample_border;
   const BorderLinks links = border.slide || follow ? border_links(mesh) : BorderLinks{};
   const double corner = border.corner_turn_deg * M_PI / 180.0;
+  // The radius over which the samples' border is averaged is at most the mesh's mean edge length
+  // times max_follow_radius: a long border edge (across a gap, along a sparse wire) does not
+  // reach border points that belong elsewhere.
+  double edge_sum = 0;
+  for (const MeshFace& f : mesh.faces())
+    for (int k = 0; k < 3; ++k) edge_sum += (S.row(f[k]) - S.row(f[(k + 1) % 3])).norm();
+  const double max_radius =
+      mesh.num_faces() > 0 ? border.max_follow_radius * edge_sum / (3.0 * mesh.num_faces()) : 0.0;
 #pragma omp parallel for num_threads(resolve_threads(threads)) schedule(static)
   for (int v = 0; v < ns; ++v) {
     if (!(W[v] > 0) || (fixed && (*fixed)[v])) continue;
     const Eigen::Vector3d x = S.row(v), nv = SN.row(v);
     Eigen::Vector3d d = C.row(v).transpose() / W[v] - x;
     d -= d.dot(nv) * nv;
-    if (border.slide && links.on(v)) {
+    if (follow && links.simple(v) && follow_sample_border(mesh, surface, links, v, corner, max_radius, x, nv, d)) {
+      // d follows the samples' border
+    } else if (border.slide && links.on(v)) {
       if (!links.simple(v) || border_turn(mesh, links, v) > corner) continue;
       const Eigen::Vector3d p = S.row(links.prev[v]), q = S.row(links.next[v]);
       d = 0.5 * (p + q) - x;
       d -= d.dot(nv) * nv;
-    } else if (follow && links.simple(v)) {
-      follow_sample_border(mesh, surface, links, v, corner, x, nv, d);
     }
     Eigen::Vector3d pos, nrm;
     surface.project(x + d, mesh.anchor[v], pos, nrm);

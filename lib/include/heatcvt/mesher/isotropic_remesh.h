@@ -95,6 +95,9 @@ struct IsotropicRemeshOptions {
   /// the middle of their border neighbours, which smooths a ragged border at the site spacing.
   /// Default 120°.
   double corner_turn_deg = 120;
+  /// In the relaxation, border vertices near the edge of the samples follow it
+  /// (RelaxationBorder::follow_sample_border); an input mesh has no such edge. Default true.
+  bool follow_sample_border = true;
   /// A border vertex with several faces whose surface angle (the sum of its face angles) is
   /// below this is a spike of the border (noise at the site spacing: each of its faces has a
   /// smaller angle there) and is collapsed into its nearer border neighbour. Default 60°.

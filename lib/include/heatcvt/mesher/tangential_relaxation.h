@@ -16,14 +16,17 @@ struct RelaxationBorder {
   /// With `slide` or `follow_sample_border`: a border vertex where the border turns by more than
   /// this is a corner. Default 40°.
   double corner_turn_deg = 40;
-  /// Without `slide`: a border vertex with border points of the samples within its border
-  /// edges' mean length (SurfaceProjector::sample_border_mean(), the edge of a scan) moves along
-  /// the chord of its two border neighbours to their middle, and across it onto the mean of
-  /// those border points: the border follows the scan's edge, smoothed over one edge length,
-  /// instead of being drawn in towards the ring's centroid. Border vertices with no border
-  /// point that near (a hole of the mesh in sampled surface, a surface that is a mesh) move like
-  /// interior ones; corners (see corner_turn_deg) with one stay. Default false.
+  /// A border vertex with border points of the samples within its border edges' mean length
+  /// (SurfaceProjector::sample_border_mean(), the edge of a scan) moves along the chord of its
+  /// two border neighbours to their middle, and across it onto the mean of those border points:
+  /// the border follows the scan's edge, smoothed over one edge length, instead of being drawn
+  /// in towards the ring's centroid. Border vertices with no border point that near (a hole of
+  /// the mesh in sampled surface, a surface that is a mesh) move as `slide` says; corners (see
+  /// corner_turn_deg) with one stay. The move across is at most half the radius. Default false.
   bool follow_sample_border = false;
+  /// With `follow_sample_border`: the radius is at most this many mean edge lengths of the mesh.
+  /// Default 1.5.
+  double max_follow_radius = 1.5;
 };
 
 /// One step of tangential relaxation (Jacobi: every vertex computed from the old positions, in
