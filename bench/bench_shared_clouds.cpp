@@ -4,7 +4,9 @@
 // PCL's greedy projection triangulation (the usual PCL mesher of open scans) on the cloud voxel-
 // downsampled to about the same number of vertices.
 //
-// Usage: bench_shared_clouds [N = 2000] [--no-peer] [--threads T] [--mean-tolerance T]
+// Usage: bench_shared_clouds [N = 2000] [--no-peer] [--no-border-follow] [--threads T] [--mean-tolerance T]
+// --no-border-follow: border vertices move like interior ones in the relaxations (PolishOptions and
+// IsotropicRemeshOptions::follow_sample_border off), for a comparison in the same build.
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
@@ -84,17 +86,18 @@ void print(const char* method, const Row& r, int n) {
 
 int main(int argc, char** argv) {
   int n = 2000, threads = 0;
-  bool peer = true;
+  bool peer = true, follow = true;
   ReconstructionOptions defaults;
   double mean_tolerance = defaults.lloyd_mean_tolerance;
   for (int a = 1; a < argc; ++a) {
     const std::string s = argv[a];
     if (s == "--no-peer") peer = false;
+    else if (s == "--no-border-follow") follow = false;
     else if (s == "--threads" && a + 1 < argc) threads = std::atoi(argv[++a]);
     else if (s == "--mean-tolerance" && a + 1 < argc) mean_tolerance = std::atof(argv[++a]);
     else if (!s.empty() && std::isdigit(static_cast<unsigned char>(s[0]))) n = std::atoi(s.c_str());
     else {
-      std::fprintf(stderr, "usage: bench_shared_clouds [N = 2000] [--no-peer] [--threads T] [--mean-tolerance T]\n");
+      std::fprintf(stderr, "usage: bench_shared_clouds [N = 2000] [--no-peer] [--no-border-follow] [--threads T] [--mean-tolerance T]\n");
       return 2;
     }
   }
@@ -132,6 +135,7 @@ int main(int argc, char** argv) {
     o.sites = n;
     o.threads = threads;
     o.lloyd_mean_tolerance = mean_tolerance;
+    o.mesher.polish.follow_sample_border = o.mesher.sizing.follow_sample_border = follow;
     const double t0 = bench::now_seconds();
     std::printf("| %s ", f.filename().c_str());
     try {

@@ -212,6 +212,12 @@ TEST(Cloud2MeshTool, ReadmeCommandOnPclMilk) {
   EXPECT_EQ(test::json_number(json, "vertices"), m.V.rows());
   EXPECT_EQ(test::json_number(json, "faces"), m.F.rows());
   EXPECT_NE(json.find("\"all_checks_passed\": true"), std::string::npos);
+  // The carton's open bottom: the border within one site spacing of the scan's edge (90 % of its
+  // vertices, and 90 % of the edge's points within one spacing of the mesh), reported on both.
+  EXPECT_LE(test::json_number(json, "border_p90_spacings"), 1.0);
+  EXPECT_GE(test::json_number(json, "scan_edge_covered"), 0.9);
+  EXPECT_GT(test::json_number(json, "border_vertices"), 0);
+  EXPECT_NE(r.out.find("  border: "), std::string::npos) << r.out;
 }
 
 TEST(Cloud2MeshTool, MissingFile) {

@@ -1,6 +1,7 @@
 // The border of open scans: border_fit() measures how far a mesh's border is from the edge of the
 // samples; the relaxation's border vertices follow that edge (RelaxationBorder::
-// follow_sample_border); and reconstruct_surface() on open shapes sampled in code gives a mesh
+// follow_sample_border) and the angle polish moves them within a band along it
+// (AnglePolishOptions::sample_border_band); and reconstruct_surface() on open shapes sampled in code gives a mesh
 // whose border lies within one site spacing of the scan's edge, with the quality targets met.
 #include <gtest/gtest.h>
 
@@ -10,6 +11,7 @@
 
 #include "heatcvt/errors.h"
 #include "heatcvt/mesh.h"
+#include "heatcvt/mesher/angle_polish.h"
 #include "heatcvt/mesher/projector.h"
 #include "heatcvt/mesher/tangential_relaxation.h"
 #include "heatcvt/mesher/working_mesh.h"
@@ -111,6 +113,51 @@ TEST(BorderFit, RelaxedBorderVerticesFollowTheEdgeOfTheSamplesInsteadOfBeingDraw
   border.follow_sample_border = true;
   for (int it = 0; it < 10; ++it) tangential_relaxation(one, surface, 1, border);
   EXPECT_EQ(one.V, followed.V);
+}
+
+// Smallest angle of the triangles around vertex v.
+double ring_min_angle(const WorkingMesh& mesh, int v) {
+  double smallest = M_PI;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const MeshFace& face = mesh.face(f);
+    if (face[0] == v || face[1] == v || face[2] == v) smallest = std::min(smallest, face_min_angle(mesh, face));
+  }
+  return smallest;
+}
+
+TEST(BorderFit, TheAnglePolishMovesABorderVertexOffItsChordWithinTheBandAlongTheScansEdge) {
+  const Eigen::MatrixX3d P = jittered_grid(61);
+  const CloudSurfaceProjector surface(P, up_normals(P.rows()));
+  // A mesh of the scanned square with edges of 4 units; one vertex of its lower side pushed 1.5
+  // units in, so that the border turns by 41° there and its triangles are squeezed.
+  WorkingMesh start = test::working_mesh(test::grid(15, 0, 60, 0, 60));
+  int v = -1;
+  for (int i = 0; i < start.num_vertices(); ++i)
+    if (start.V(i, 0) == 28 && start.V(i, 1) == 0) v = i;
+  ASSERT_GE(v, 0);
+  start.V(v, 1) = 1.5;
+  const double before = ring_min_angle(start, v);
+  const std::vector<char> frozen(start.num_vertices(), 0);
+  auto polished = [&](double band) {
+    WorkingMesh mesh = start;
+    AnglePolishOptions o;
+    o.sample_border_band = band;
+    angle_polish(mesh, surface, 4, frozen, o, 0);
+    return mesh;
+  };
+  // Precondition: moving along its border chord only, where the border turns by more than
+  // max_boundary_turn_deg, the vertex stays.
+  const WorkingMesh chord = polished(0);
+  ASSERT_EQ(chord.V.row(v), start.V.row(v));
+  // Within the band: its triangles open up and it stays within one mean edge length (4) of the
+  // scan's edge.
+  const WorkingMesh band = polished(AnglePolishOptions().sample_border_band);
+  EXPECT_GT(ring_min_angle(band, v), before + 10 * M_PI / 180);
+  EXPECT_LE(surface.distance_to_sample_border(band.V.row(v).transpose()), 4.0);
+  // The same for any thread count.
+  WorkingMesh one = start;
+  angle_polish(one, surface, 4, frozen, AnglePolishOptions(), 1);
+  EXPECT_EQ(one.V, band.V);
 }
 
 struct OpenRun {

@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <cmath>
 #include <random>
 #include <vector>
 
@@ -106,7 +107,9 @@ TEST(StrayPoints, AReturnFarOffDoesNotPullTheMeshOutOfTheScannedSquare) {
   opt.stray = {};
   const ReconstructionResult r = reconstruct_surface(P, opt);
   EXPECT_EQ(r.points_stray, 1);
-  EXPECT_LT(farthest_outside(r.mesh), 0.02);
+  // On the square to within half a site spacing: border vertices may lie up to a quarter of an
+  // edge beyond the scan's averaged edge (AnglePolishOptions::sample_border_overshoot).
+  EXPECT_LT(farthest_outside(r.mesh), 0.5 * std::sqrt(1.0 / opt.sites));
   // Removed before the frame is chosen: the same mesh as from the square alone.
   const ReconstructionResult alone = reconstruct_surface(P.topRows(P.rows() - 1), opt);
   EXPECT_EQ(alone.points_stray, 0);

@@ -143,6 +143,11 @@ cli::Json make_report(const std::string& cloud_path, const std::vector<std::stri
   j["phi_min_deg"] = res.min_angle_deg;
   j["phi_mean_deg"] = res.mean_min_angle_deg;
   j["phi_min_boundary_deg"] = res.boundary_min_angle_deg;
+  j["scan_edge_points"] = res.border.edge_points;
+  j["scan_edge_covered"] = res.border.edge_covered;
+  j["border_vertices"] = res.border.mesh_border_vertices;
+  j["border_on_scan_edge"] = res.border.mesh_border_on_edge;
+  j["border_p90_spacings"] = res.border.mesh_border_distance;
   j["blas"] = heatcvt::blas_description();
   j["laplacian_s"] = res.laplacian_seconds;
   j["factor_s"] = res.factor_seconds;
@@ -429,6 +434,11 @@ int main(int argc, char** argv) {
       const std::string boundary = val.boundary_loops > 0 ? format_angle(res.boundary_min_angle_deg) : "none";
       std::printf("  quality: phi_min %.2f deg (boundary triangles %s), phi_m %.2f deg\n", res.min_angle_deg,
                   boundary.c_str(), res.mean_min_angle_deg);
+      if (res.border.mesh_border_vertices > 0 && res.border.edge_points > 0)
+        std::printf("  border: %.1f %% of the %d border vertices within one site spacing of the scan's edge (90 %% "
+                    "within %.2f), %.1f %% of the scan's %d edge points within one spacing of the mesh\n",
+                    100.0 * res.border.mesh_border_on_edge, res.border.mesh_border_vertices,
+                    res.border.mesh_border_distance, 100.0 * res.border.edge_covered, res.border.edge_points);
       // The point Laplacian resolves a heat cell from about 10 points (ReconstructionOptions::
       // cvt_points_per_site); far fewer leave holes and slivers the mesher can only patch.
       const double points_per_site = static_cast<double>(res.points_used) / opt.sites;

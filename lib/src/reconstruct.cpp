@@ -500,6 +500,9 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   res.mesh = finish_mesh(mesh, fit, mopt, stats);
   copy_stats(stats, res);
   stage.t = Clock::now();
+  if (res.mesh.F.rows() > 0)
+    res.border = border_fit(fit.sample_border(), res.mesh, mean_edge_length(res.mesh.V, res.mesh.F));
+  stage.done("border fit");
   restore_frame(res.mesh.V, cloud.frame);
   const TriangleQuality tq = triangle_quality(res.mesh.V, res.mesh.F);
   res.min_angle_deg = tq.min_angle_deg;

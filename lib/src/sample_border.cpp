@@ -68,23 +68,17 @@ std::vector<char> sample_border_points(const Eigen::MatrixX3d& P, const Eigen::M
   return border;
 }
 
-BorderFit border_fit(const Eigen::MatrixX3d& P, const std::vector<char>& on_border, const TriangleMesh& mesh,
-                     double length, double quantile) {
-  if (on_border.size() != static_cast<std::size_t>(P.rows()))
-    throw InvalidInputError("border_fit: the border flags and the points differ in length");
+BorderFit border_fit(const Eigen::MatrixX3d& border, const TriangleMesh& mesh, double length, double quantile) {
   if (!(length > 0) || !(quantile >= 0 && quantile <= 1))
     throw InvalidInputError("border_fit: the length must be positive and the quantile in [0, 1]");
   BorderFit fit;
-  std::vector<int> rows;
-  for (int i = 0; i < static_cast<int>(on_border.size()); ++i)
-    if (on_border[i]) rows.push_back(i);
-  if (rows.empty() || mesh.F.rows() == 0) return fit;
-  const Eigen::MatrixX3d edge = P(rows, Eigen::all);
-  const std::vector<SurfacePoint> closest = closest_surface_points(mesh.V, mesh.F, edge);
-  std::vector<double> d(rows.size());
-  for (std::size_t r = 0; r < rows.size(); ++r)
-    d[r] = (position(mesh.V, mesh.F, closest[r]) - edge.row(static_cast<Eigen::Index>(r)).transpose()).norm() / length;
-  fit.edge_points = static_cast<int>(rows.size());
+  if (border.rows() == 0 || mesh.F.rows() == 0) return fit;
+  const std::vector<SurfacePoint> closest = closest_surface_points(mesh.V, mesh.F, border);
+  std::vector<double> d(static_cast<std::size_t>(border.rows()));
+  for (Eigen::Index r = 0; r < border.rows(); ++r)
+    d[static_cast<std::size_t>(r)] =
+        (position(mesh.V, mesh.F, closest[static_cast<std::size_t>(r)]) - border.row(r).transpose()).norm() / length;
+  fit.edge_points = static_cast<int>(border.rows());
   std::tie(fit.edge_distance, fit.edge_covered) = quantile_and_within_one(d, quantile);
   // Border vertices: those on an edge that one face alone traverses (in either direction).
   std::map<std::pair<int, int>, int> faces_of_edge;
@@ -93,7 +87,7 @@ BorderFit border_fit(const Eigen::MatrixX3d& P, const std::vector<char>& on_bord
   std::vector<char> on_mesh_border(static_cast<std::size_t>(mesh.V.rows()), 0);
   for (const auto& [e, faces] : faces_of_edge)
     if (faces == 1) on_mesh_border[e.first] = on_mesh_border[e.second] = 1;
-  const PointIndex index(edge);
+  const PointIndex index(border);
   d.clear();
   for (int v = 0; v < static_cast<int>(mesh.V.rows()); ++v) {
     if (!on_mesh_border[v]) continue;
@@ -104,6 +98,16 @@ BorderFit border_fit(const Eigen::MatrixX3d& P, const std::vector<char>& on_bord
   fit.mesh_border_vertices = static_cast<int>(d.size());
   std::tie(fit.mesh_border_distance, fit.mesh_border_on_edge) = quantile_and_within_one(d, quantile);
   return fit;
+}
+
+BorderFit border_fit(const Eigen::MatrixX3d& P, const std::vector<char>& on_border, const TriangleMesh& mesh,
+                     double length, double quantile) {
+  if (on_border.size() != static_cast<std::size_t>(P.rows()))
+    throw InvalidInputError("border_fit: the border flags and the points differ in length");
+  std::vector<int> rows;
+  for (int i = 0; i < static_cast<int>(on_border.size()); ++i)
+    if (on_border[i]) rows.push_back(i);
+  return border_fit(Eigen::MatrixX3d(P(rows, Eigen::all)), mesh, length, quantile);
 }
 
 }  // namespace heatcvt

@@ -15,6 +15,7 @@
 #include "heatcvt/mesh.h"
 #include "heatcvt/mesher/projector.h"
 #include "heatcvt/mesher/surface_mesher.h"
+#include "heatcvt/sample_border.h"
 #include "heatcvt/stray_points.h"
 #include "heatcvt/validate.h"
 
@@ -187,6 +188,10 @@ struct ReconstructionResult {
   int flying_faces = 0;            ///< faces across depth jumps removed before the sizing (remove_flying_faces())
   int faces_turned_outward = 0;    ///< faces of closed pieces whose orientation was reversed (negative enclosed volume)
   int points_cvt = 0;              ///< points the CVT ran on (points_used unless cvt_points_per_site thins them)
+  /// How the mesh's border follows the scan's edge (the border points of the cloud the surface
+  /// was fitted to), in site spacings (the mesh's mean edge length); zero counts for a closed
+  /// scan.
+  BorderFit border;
 };
 
 /// Reconstructs a surface from the points P (#P by 3; NaN-free, duplicates allowed).

@@ -46,9 +46,13 @@ struct BorderFit {
   double mesh_border_distance = 0;///< the quantile of their distances to the border points, in lengths
 };
 
-/// BorderFit of `mesh` against the cloud P whose border points are flagged by `on_border`
-/// (sample_border_points()), in units of `length` (> 0), at the `quantile` in [0, 1].
-/// \throw InvalidInputError when `on_border` and P differ in length or `length` is not positive.
+/// BorderFit of `mesh` against the border points `border` of a cloud (sample_border_points()'s
+/// rows), in units of `length` (> 0), at the `quantile` in [0, 1].
+/// \throw InvalidInputError when `length` is not positive or `quantile` not in [0, 1].
+BorderFit border_fit(const Eigen::MatrixX3d& border, const TriangleMesh& mesh, double length, double quantile = 0.9);
+
+/// The same against the cloud P whose border points are flagged by `on_border`.
+/// \throw InvalidInputError also when `on_border` and P differ in length.
 BorderFit border_fit(const Eigen::MatrixX3d& P, const std::vector<char>& on_border, const TriangleMesh& mesh,
                      double length, double quantile = 0.9);
 

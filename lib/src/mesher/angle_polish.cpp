@@ -148,10 +148,33 @@ class VertexMover {
     if (!(area_sum > 0) || (!fan.interior && (fan.next < 0 || !o_.boundary))) return false;
     mean_edge /= ring.size();
     centroid /= area_sum;
-    // A boundary vertex slides along the chord of its two boundary neighbours, only where the
-    // boundary is nearly straight, so the border keeps its course.
+    // A boundary vertex on the samples' border searches in every direction within a band along
+    // it (AnglePolishOptions::sample_border_band); `band` is the largest distance allowed.
+    // It goes no farther out than sample_border_overshoot beyond the line through the mean of
+    // the border points along its border chord (the averaged edge of the scan).
+    double band = -1;
+    Eigen::Vector3d edge_mean;
+    Eigen::Vector2d outward = Eigen::Vector2d::Zero(), edge2 = Eigen::Vector2d::Zero();
+    if (!fan.interior && fan.next >= 0 && fan.prev >= 0 && o_.sample_border_band > 0 &&
+        surface_.sample_border_mean(x, mean_edge, edge_mean)) {
+      const Eigen::Vector3d chord = S.row(fan.next) - S.row(fan.prev);
+      outward = Eigen::Vector2d(chord.dot(w), -chord.dot(u));
+      if (outward.dot(centroid) > 0) outward = -outward;  // away from the ring
+      if (outward.norm() > 0) {
+        outward.normalize();
+        edge2 = Eigen::Vector2d((edge_mean - x).dot(u), (edge_mean - x).dot(w));
+        band = std::max(surface_.distance_to_sample_border(x), o_.sample_border_band * mean_edge);
+      }
+    }
+    const bool any_direction = fan.interior || band >= 0;
+    auto in_band = [&](const Eigen::Vector2d& y) {
+      return band < 0 || ((y - edge2).dot(outward) <= o_.sample_border_overshoot * mean_edge &&
+                          surface_.distance_to_sample_border(x + y.x() * u + y.y() * w) <= band);
+    };
+    // Any other boundary vertex slides along the chord of its two boundary neighbours, only where
+    // the boundary is nearly straight, so the border keeps its course.
     Eigen::Vector2d slide = Eigen::Vector2d::Zero();
-    if (!fan.interior) {
+    if (!any_direction) {
       const Eigen::Vector3d a = S.row(fan.prev).transpose() - x, b = S.row(fan.next).transpose() - x;
       if (!(a.norm() > 0) || !(b.norm() > 0) || (-a).normalized().dot(b.normalized()) < std::cos(o_.max_boundary_turn_deg * M_PI / 180.0))
         return false;
@@ -182,17 +205,17 @@ class VertexMover {
     };
     Eigen::Vector2d best = Eigen::Vector2d::Zero();
     RingQuality qb = q2(Eigen::Vector2d::Zero());
-    if (const RingQuality qc = q2(centroid); better(qc, qb)) best = centroid, qb = qc;
+    if (const RingQuality qc = q2(centroid); better(qc, qb) && in_band(centroid)) best = centroid, qb = qc;
     double step = o_.initial_step * mean_edge;
     for (int iter = 0; iter < o_.max_search_steps && step > o_.final_step * mean_edge; ++iter) {
       bool improved = false;
-      const int directions = fan.interior ? 8 : 2;
+      const int directions = any_direction ? 8 : 2;
       for (int d = 0; d < directions; ++d) {
         const double ang = d * 2 * M_PI / directions;
-        const Eigen::Vector2d dir = fan.interior ? Eigen::Vector2d(std::cos(ang), std::sin(ang)) : (d == 0 ? slide : -slide);
+        const Eigen::Vector2d dir = any_direction ? Eigen::Vector2d(std::cos(ang), std::sin(ang)) : (d == 0 ? slide : -slide);
         const Eigen::Vector2d y = best + step * dir;
         const RingQuality qy = q2(y, &qb);
-        if (better(qy, qb)) best = y, qb = qy, improved = true;
+        if (better(qy, qb) && in_band(y)) best = y, qb = qy, improved = true;
       }
       if (!improved) step *= 0.5;
     }
@@ -201,6 +224,7 @@ class VertexMover {
     int hint = mesh_.anchor[v];  // kept only with the move, so a rejected search can be skipped
     surface_.project(x + best.x() * u + best.y() * w, hint, pos, nrm);
     if (!pos.allFinite() || !nrm.allFinite()) return false;
+    if (band >= 0 && !in_band(Eigen::Vector2d((pos - x).dot(u), (pos - x).dot(w)))) return false;
     if (!better(ring3(v, pos, nrm), ring3(v, x, nv))) return false;
     mesh_.V.row(v) = pos.transpose();
     mesh_.N.row(v) = nrm.transpose();

@@ -159,6 +159,11 @@ const PointIndex& CloudSurfaceProjector::border_index() const {
   return *border_;
 }
 
+const Eigen::MatrixX3d& CloudSurfaceProjector::sample_border() const {
+  border_index();
+  return border_points_;
+}
+
 double CloudSurfaceProjector::distance_to_sample_border(const Eigen::Vector3d& x) const {
   double d = 0;
   border_index().nearest(x, d);

@@ -22,13 +22,26 @@ struct AnglePolishOptions {
   bool boundary = true;
   /// ... but only where the border turns by at most this much at the vertex. Default 30°.
   double max_boundary_turn_deg = 30;
+  /// A boundary vertex near the border of the samples (the edge of an open scan: border points
+  /// within its ring's mean edge length, SurfaceProjector::sample_border_mean()) searches in
+  /// every direction, like an interior one, wherever the border turns, but only among positions
+  /// within this many mean edge lengths of the samples' border (or no farther from it than it
+  /// is): its triangles are shaped as well as interior ones while the border stays on the scan's
+  /// edge. 0 = such vertices move along their border chord like the others. Default 1 (the
+  /// site spacing: the border stays within one spacing of the scan's edge).
+  double sample_border_band = 1.0;
+  /// ... and no farther out than this many mean edge lengths beyond the averaged edge (the line
+  /// along the vertex's border chord through the mean of those border points): the band does
+  /// not reach out beyond the scan, while a ragged edge leaves the vertex some room. Default 0.25.
+  double sample_border_overshoot = 0.25;
 };
 
 /// Gauss–Seidel rounds over the vertices in a fixed colouring (a greedy colouring of the vertex
 /// graph in index order; the vertices of one colour move in parallel, so the result does not
 /// depend on the thread count). Each interior vertex not `frozen` is moved by an 8-direction
 /// pattern search from the ring's area-weighted centroid and its position, in its tangent plane
-/// (a boundary vertex by a 2-direction search along its border, options.boundary);
+/// (a boundary vertex by a 2-direction search along its border, options.boundary, or within a
+/// band along the samples' border, options.sample_border_band);
 /// the target is projected to the surface and kept only if, measured in 3D, (ring min capped,
 /// ring sum) improves and no ring triangle turns against the vertex normal. Stops after `rounds`
 /// or a round without moves. Returns the moves kept.

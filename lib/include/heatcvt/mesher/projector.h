@@ -114,6 +114,9 @@ class CloudSurfaceProjector final : public SurfaceProjector {
   const Eigen::MatrixX3d& points() const { return P_; }
   const Eigen::MatrixX3d& normals() const { return N_; }
   const Eigen::MatrixXi& knn() const { return knn_; }
+  /// The cloud's points on the border of the samples (sample_border_points() with
+  /// `options.border`).
+  const Eigen::MatrixX3d& sample_border() const;
 
  private:
   Eigen::MatrixX3d P_, N_;
