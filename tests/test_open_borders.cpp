@@ -25,20 +25,8 @@
 namespace heatcvt {
 namespace {
 
-// A jittered n × n grid of points on z = 0 with spacing 1.
-Eigen::MatrixX3d jittered_grid(int n) {
-  Eigen::MatrixX3d P(n * n, 3);
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i)
-      P.row(j * n + i) << i + 0.2 * std::sin(7.0 * j + 3.0 * i), j + 0.2 * std::cos(5.0 * i + 2.0 * j), 0;
-  return P;
-}
-
-Eigen::MatrixX3d up_normals(Eigen::Index n) {
-  Eigen::MatrixX3d N = Eigen::MatrixX3d::Zero(n, 3);
-  N.col(2).setOnes();
-  return N;
-}
+using test::jittered_grid;
+using test::up_normals;
 
 TEST(BorderFit, AMeshOnTheScanIsOnItsEdgeAndAnInsetOneIsNot) {
   const Eigen::MatrixX3d P = jittered_grid(40);

@@ -15,6 +15,7 @@
 #include "heatcvt/normals.h"
 #include "heatcvt/sample_border.h"
 #include "heatcvt/validate.h"
+#include "open_shapes.h"
 #include "test_support.h"
 
 namespace heatcvt {
@@ -22,12 +23,8 @@ namespace {
 
 // A jittered n × n grid of points on z = 0 with spacing 1, normals +z.
 void jittered_grid(int n, Eigen::MatrixX3d& P, Eigen::MatrixX3d& N) {
-  P.resize(n * n, 3);
-  N = Eigen::MatrixX3d::Zero(n * n, 3);
-  N.col(2).setOnes();
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i)
-      P.row(j * n + i) << i + 0.2 * std::sin(7.0 * j + 3.0 * i), j + 0.2 * std::cos(5.0 * i + 2.0 * j), 0;
+  P = test::jittered_grid(n);
+  N = test::up_normals(P.rows());
 }
 
 TEST(SampleBorder, TheEdgeOfAPlanarScanAndNoPointOfAClosedOne) {

@@ -75,6 +75,16 @@ std::vector<std::vector<int>> vertex_neighbors(int num_vertices, const Eigen::Ma
   return nb;
 }
 
+std::vector<std::pair<int, int>> boundary_edges(const Eigen::MatrixX3i& F) {
+  std::map<std::pair<int, int>, int> faces_of_edge;
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) ++faces_of_edge[std::minmax(F(f, k), F(f, (k + 1) % 3))];
+  std::vector<std::pair<int, int>> border;
+  for (const auto& [edge, faces] : faces_of_edge)
+    if (faces == 1) border.push_back(edge);
+  return border;
+}
+
 int connected_components(int num_vertices, const Eigen::MatrixX3i& F, Eigen::VectorXi& component) {
   DisjointSets sets(num_vertices);
   for (int f = 0; f < F.rows(); ++f)

@@ -500,7 +500,8 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   res.mesh = finish_mesh(mesh, fit, mopt, stats);
   copy_stats(stats, res);
   stage.t = Clock::now();
-  if (res.mesh.F.rows() > 0)
+  // Only an open mesh has a border to fit (a closed one leaves the cloud's border unsearched).
+  if (!boundary_edges(res.mesh.F).empty())
     res.border = border_fit(fit.sample_border(), res.mesh, mean_edge_length(res.mesh.V, res.mesh.F));
   stage.done("border fit");
   restore_frame(res.mesh.V, cloud.frame);

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <tuple>
 #include <utility>
 
@@ -80,13 +79,8 @@ BorderFit border_fit(const Eigen::MatrixX3d& border, const TriangleMesh& mesh, d
         (position(mesh.V, mesh.F, closest[static_cast<std::size_t>(r)]) - border.row(r).transpose()).norm() / length;
   fit.edge_points = static_cast<int>(border.rows());
   std::tie(fit.edge_distance, fit.edge_covered) = quantile_and_within_one(d, quantile);
-  // Border vertices: those on an edge that one face alone traverses (in either direction).
-  std::map<std::pair<int, int>, int> faces_of_edge;
-  for (Eigen::Index f = 0; f < mesh.F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) ++faces_of_edge[std::minmax(mesh.F(f, k), mesh.F(f, (k + 1) % 3))];
   std::vector<char> on_mesh_border(static_cast<std::size_t>(mesh.V.rows()), 0);
-  for (const auto& [e, faces] : faces_of_edge)
-    if (faces == 1) on_mesh_border[e.first] = on_mesh_border[e.second] = 1;
+  for (const auto& [a, b] : boundary_edges(mesh.F)) on_mesh_border[a] = on_mesh_border[b] = 1;
   const PointIndex index(border);
   d.clear();
   for (int v = 0; v < static_cast<int>(mesh.V.rows()); ++v) {

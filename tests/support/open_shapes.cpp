@@ -49,4 +49,18 @@ Eigen::MatrixX3d open_shape_samples(const std::string& name, int count, std::uin
   return P;
 }
 
+Eigen::MatrixX3d jittered_grid(int n) {
+  Eigen::MatrixX3d P(n * n, 3);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i)
+      P.row(j * n + i) << i + 0.2 * std::sin(7.0 * j + 3.0 * i), j + 0.2 * std::cos(5.0 * i + 2.0 * j), 0;
+  return P;
+}
+
+Eigen::MatrixX3d up_normals(Eigen::Index count) {
+  Eigen::MatrixX3d N = Eigen::MatrixX3d::Zero(count, 3);
+  N.col(2).setOnes();
+  return N;
+}
+
 }  // namespace heatcvt::test

@@ -21,4 +21,9 @@ std::vector<std::string> open_shape_names();
 /// \throw std::invalid_argument for another name.
 Eigen::MatrixX3d open_shape_samples(const std::string& name, int count, std::uint32_t seed = 1);
 
+/// A jittered n × n grid of points on z = 0 with spacing 1 (each point moved by up to 0.2 by a
+/// fixed pattern), and its normals, all +z.
+Eigen::MatrixX3d jittered_grid(int n);
+Eigen::MatrixX3d up_normals(Eigen::Index count);
+
 }  // namespace heatcvt::test

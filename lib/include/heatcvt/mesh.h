@@ -2,6 +2,7 @@
 /// \file mesh.h
 /// Plain triangle-mesh value type and the geometric quantities every module needs.
 #include <Eigen/Core>
+#include <utility>
 #include <vector>
 
 namespace heatcvt {
@@ -40,6 +41,10 @@ std::vector<std::vector<int>> vertex_faces(int num_vertices, const Eigen::Matrix
 
 /// For every vertex the sorted list of neighbouring vertices (one-ring via edges).
 std::vector<std::vector<int>> vertex_neighbors(int num_vertices, const Eigen::MatrixX3i& F);
+
+/// The edges with one incident face (each as its two vertices, smaller first), sorted: the
+/// border of an open mesh.
+std::vector<std::pair<int, int>> boundary_edges(const Eigen::MatrixX3i& F);
 
 /// Connected components of the vertex graph: component id per vertex, ids 0..count-1.
 /// Returns the number of components.

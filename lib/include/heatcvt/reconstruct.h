@@ -190,7 +190,7 @@ struct ReconstructionResult {
   int points_cvt = 0;              ///< points the CVT ran on (points_used unless cvt_points_per_site thins them)
   /// How the mesh's border follows the scan's edge (the border points of the cloud the surface
   /// was fitted to), in site spacings (the mesh's mean edge length); zero counts for a closed
-  /// scan.
+  /// mesh.
   BorderFit border;
 };
 

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
 #include <utility>
 
 #include "heatcvt/closest_point.h"
@@ -183,14 +182,7 @@ MeshSurfaceProjector::MeshSurfaceProjector(const Eigen::MatrixX3d& V, const Eige
     : V_(V), F_(F), tree_(std::make_unique<ClosestPointTree>(V, F)) {
   VN_ = vertex_normals(V, F);
   vfaces_ = vertex_faces(static_cast<int>(V.rows()), F);
-  std::map<std::pair<int, int>, int> faces_of_edge;
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      const int a = F(f, k), b = F(f, (k + 1) % 3);
-      ++faces_of_edge[{std::min(a, b), std::max(a, b)}];
-    }
-  for (const auto& [edge, faces] : faces_of_edge)
-    if (faces == 1) border_.push_back(edge);
+  border_ = boundary_edges(F);
 }
 
 bool MeshSurfaceProjector::project_to_border(const Eigen::Vector3d& x, Eigen::Vector3d& position,

@@ -62,8 +62,9 @@ void tangential_relaxation(WorkingMesh& mesh, const SurfaceProjector& surface, i
   // times max_follow_radius: a long border edge (across a gap, along a sparse wire) does not
   // reach border points that belong elsewhere.
   double edge_sum = 0;
-  for (const MeshFace& f : mesh.faces())
-    for (int k = 0; k < 3; ++k) edge_sum += (S.row(f[k]) - S.row(f[(k + 1) % 3])).norm();
+  if (follow)
+    for (const MeshFace& f : mesh.faces())
+      for (int k = 0; k < 3; ++k) edge_sum += (S.row(f[k]) - S.row(f[(k + 1) % 3])).norm();
   const double max_radius =
       mesh.num_faces() > 0 ? border.max_follow_radius * edge_sum / (3.0 * mesh.num_faces()) : 0.0;
 #pragma omp parallel for num_threads(resolve_threads(threads)) schedule(static)
