@@ -88,5 +88,32 @@ TEST(MeshChecks, FacesSharingAnEdgeOrAVertexIntersectOnlyWhenTheyOverlap) {
   EXPECT_EQ(intersecting_face_pairs(working(U, G)), (std::vector<std::pair<int, int>>{{0, 1}}));
 }
 
+TEST(MeshChecks, FacesThatOnlyJustMissCountAsIntersecting) {
+  // A slit whose two sides end in distinct vertices 2 and 5 (a border pinched shut): faces
+  // (0, 1, 2) and (3, 4, 5) share no corner. With 5 a rounding step off 2, exact predicates say
+  // the faces miss; scaled back to a scan's frame the two corners can round to the same point,
+  // and CGAL's check of the written mesh fails. Within the contact tolerance (1e-9 of the
+  // diagonal) they count; a micrometre apart on a unit mesh they do not.
+  Eigen::MatrixX3d V(6, 3);
+  V << 0, 0, 0, 1, 0, 0, 0.5, 1, 0, 1, 2, 0, 0, 2, 0, 0.5, 1, 0;
+  Eigen::MatrixX3i F(2, 3);
+  F << 0, 1, 2, 3, 4, 5;
+  for (const double gap : {1e-15, 1e-12, 1e-10}) {
+    V.row(5) << 0.5, 1 + gap, 0;
+    EXPECT_EQ(intersecting_face_pairs(working(V, F)), (std::vector<std::pair<int, int>>{{0, 1}})) << gap;
+  }
+  V.row(5) << 0.5, 1 + 1e-6, 0;
+  EXPECT_EQ(self_intersecting_pairs(working(V, F)), 0);
+  // Faces on a common vertex 0: the far corner of the second a rounding step above the first's
+  // plane, over its interior (its far edge only just misses the first face).
+  Eigen::MatrixX3d U(5, 3);
+  U << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0.3, 0.3, 1e-13, -1, -1, 1;
+  Eigen::MatrixX3i G(2, 3);
+  G << 0, 1, 2, 0, 3, 4;
+  EXPECT_EQ(intersecting_face_pairs(working(U, G)), (std::vector<std::pair<int, int>>{{0, 1}}));
+  U.row(3) << 0.3, 0.3, 1e-6;
+  EXPECT_EQ(self_intersecting_pairs(working(U, G)), 0);
+}
+
 }  // namespace
 }  // namespace heatcvt

@@ -4,8 +4,11 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/box_intersection_d.h>
 #include <CGAL/intersections.h>
+#include <CGAL/squared_distance_3.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 
 namespace heatcvt {
 
@@ -17,11 +20,59 @@ using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, int, CGAL::Box_
 // Boxes below this many are compared all against all by the box intersection.
 constexpr std::ptrdiff_t kBoxCutoff = 2000;
 
+// Faces closer than this fraction of the mesh's bounding-box diagonal (where they share no
+// corner, or apart from the corner they share) count as intersecting. Exact predicates decide a
+// pair in the coordinates at hand; a pair that only just misses (two border vertices moved onto
+// the same point, a corner a rounding step off a face) can touch once the mesh is scaled back to
+// the input's frame or written out, so the mesher keeps a margin far above rounding and far below
+// any edge length.
+constexpr double kContactTolerance = 1e-9;
+
 K::Point_3 point(const WorkingMesh& mesh, int v) { return {mesh.V(v, 0), mesh.V(v, 1), mesh.V(v, 2)}; }
 
+// Whether the points p[0..n) all lie more than eps to the same side of the plane of triangle s
+// (then they, and what they span, are farther than eps from s).
+bool apart_by_plane(const K::Triangle_3& s, const K::Point_3* p, int n, double eps) {
+  const K::Vector_3 normal = CGAL::cross_product(s[1] - s[0], s[2] - s[0]);
+  const double len = std::sqrt(normal.squared_length());
+  if (!(len > 0)) return false;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (int i = 0; i < n; ++i) {
+    const double d = (p[i] - s[0]) * normal / len;
+    lo = std::min(lo, d), hi = std::max(hi, d);
+  }
+  return lo > eps || hi < -eps;
+}
+
+bool apart_by_plane(const K::Triangle_3& s, const K::Triangle_3& t, double eps) {
+  const K::Point_3 p[3] = {t[0], t[1], t[2]};
+  return apart_by_plane(s, p, 3, eps);
+}
+
+// Whether the segment and the triangle come within eps of each other.
+bool segment_near(const K::Segment_3& s, const K::Triangle_3& t, double eps) {
+  const K::Point_3 ends[2] = {s.source(), s.target()};
+  if (apart_by_plane(t, ends, 2, eps)) return false;
+  const double eps2 = eps * eps;
+  if (CGAL::squared_distance(s.source(), t) < eps2 || CGAL::squared_distance(s.target(), t) < eps2) return true;
+  for (int i = 0; i < 3; ++i)
+    if (CGAL::squared_distance(s, K::Segment_3(t[i], t[(i + 1) % 3])) < eps2) return true;
+  return false;
+}
+
+// Whether two triangles with no common corner come within eps of each other.
+bool triangles_near(const K::Triangle_3& a, const K::Triangle_3& b, double eps) {
+  if (apart_by_plane(a, b, eps) || apart_by_plane(b, a, eps)) return false;
+  for (int i = 0; i < 3; ++i)
+    if (segment_near(K::Segment_3(a[i], a[(i + 1) % 3]), b, eps)) return true;
+  for (int i = 0; i < 3; ++i)
+    if (CGAL::squared_distance(b[i], a) < eps * eps) return true;
+  return false;
+}
+
 // Whether faces f and g intersect other than along what they share (the rule of
-// intersecting_face_pairs()).
-bool faces_intersect(const WorkingMesh& mesh, const MeshFace& f, const MeshFace& g) {
+// intersecting_face_pairs()), or come within eps of each other where they share nothing.
+bool faces_intersect(const WorkingMesh& mesh, const MeshFace& f, const MeshFace& g, double eps) {
   int shared = 0, fi = -1, gj = -1;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
@@ -45,9 +96,10 @@ bool faces_intersect(const WorkingMesh& mesh, const MeshFace& f, const MeshFace&
   if (shared == 1) {
     const K::Segment_3 sf(point(mesh, f[(fi + 1) % 3]), point(mesh, f[(fi + 2) % 3]));
     const K::Segment_3 sg(point(mesh, g[(gj + 1) % 3]), point(mesh, g[(gj + 2) % 3]));
-    return CGAL::do_intersect(tf, sg) || CGAL::do_intersect(tg, sf);
+    return CGAL::do_intersect(tf, sg) || CGAL::do_intersect(tg, sf) || segment_near(sg, tf, eps) ||
+           segment_near(sf, tg, eps);
   }
-  return CGAL::do_intersect(tf, tg);
+  return CGAL::do_intersect(tf, tg) || triangles_near(tf, tg, eps);
 }
 
 }  // namespace
@@ -55,18 +107,27 @@ bool faces_intersect(const WorkingMesh& mesh, const MeshFace& f, const MeshFace&
 std::vector<std::pair<int, int>> intersecting_face_pairs(const WorkingMesh& mesh) {
   std::vector<Box> boxes;
   boxes.reserve(static_cast<std::size_t>(mesh.num_faces()));
+  CGAL::Bbox_3 all;
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int v : mesh.face(f)) all += point(mesh, v).bbox();
+  const double eps = kContactTolerance * std::sqrt(CGAL::square(all.xmax() - all.xmin()) +
+                                                   CGAL::square(all.ymax() - all.ymin()) +
+                                                   CGAL::square(all.zmax() - all.zmin()));
   for (int f = 0; f < mesh.num_faces(); ++f) {
     const MeshFace& t = mesh.face(f);
     const K::Point_3 p = point(mesh, t[0]), q = point(mesh, t[1]), r = point(mesh, t[2]);
     if (CGAL::collinear(p, q, r)) continue;
-    boxes.emplace_back(p.bbox() + q.bbox() + r.bbox(), f);
+    const CGAL::Bbox_3 b = p.bbox() + q.bbox() + r.bbox();
+    boxes.emplace_back(CGAL::Bbox_3(b.xmin() - eps, b.ymin() - eps, b.zmin() - eps, b.xmax() + eps,
+                                    b.ymax() + eps, b.zmax() + eps),
+                       f);
   }
   std::vector<std::pair<int, int>> pairs;
   CGAL::box_self_intersection_d<CGAL::Sequential_tag>(
       boxes.begin(), boxes.end(),
       [&](const Box& a, const Box& b) {
         const int f = std::min(a.info(), b.info()), g = std::max(a.info(), b.info());
-        if (faces_intersect(mesh, mesh.face(f), mesh.face(g))) pairs.emplace_back(f, g);
+        if (faces_intersect(mesh, mesh.face(f), mesh.face(g), eps)) pairs.emplace_back(f, g);
       },
       kBoxCutoff);
   std::sort(pairs.begin(), pairs.end());

@@ -14,6 +14,9 @@ namespace heatcvt {
 /// common edge intersect when they are coplanar and on the same side of it (they overlap); faces
 /// with one common vertex when the edge of either opposite it meets the other; other faces when
 /// the triangles meet (exact predicates). Faces whose corners are collinear are skipped, as there.
+/// Beyond CGAL's rule, faces that come within 1e-9 of the mesh's bounding-box diagonal of each
+/// other apart from what they share count too: such a near contact can become a real one when
+/// the mesh is scaled back to its input's frame, and CGAL's check of the written mesh would fail.
 /// Candidate pairs come from CGAL's box intersection of the faces' bounding boxes; no topology
 /// is checked, so the cost is that of the boxes alone.
 std::vector<std::pair<int, int>> intersecting_face_pairs(const WorkingMesh& mesh);
