@@ -115,5 +115,37 @@ TEST(MeshChecks, FacesThatOnlyJustMissCountAsIntersecting) {
   EXPECT_EQ(self_intersecting_pairs(working(U, G)), 0);
 }
 
+TEST(MeshChecks, LostLoopsAreThoseClosedOrJoined) {
+  // A 6 × 6 grid without the quads (1, 2) and (3, 2): two holes one quad apart, and the outer
+  // border: three loops.
+  const TriangleMesh g = test::grid(6);
+  auto without = [&](std::vector<int> quads) {
+    std::vector<MeshFace> faces;
+    for (int q = 0; q < 36; ++q)
+      if (std::find(quads.begin(), quads.end(), q) == quads.end())
+        for (int f : {2 * q, 2 * q + 1}) faces.push_back({g.F(f, 0), g.F(f, 1), g.F(f, 2)});
+    WorkingMesh w(g.V, Eigen::MatrixX3d::Zero(g.V.rows(), 3), std::vector<int>(g.V.rows(), -1));
+    w.set_faces(faces);
+    return w;
+  };
+  const int left = 2 * 6 + 1, middle = 2 * 6 + 2, right = 2 * 6 + 3;
+  std::vector<int> before;
+  ASSERT_EQ(boundary_loop_labels(without({left, right}), before), 3);
+  // The same mesh: nothing lost.
+  EXPECT_TRUE(lost_loop_vertices(without({left, right}), before).empty());
+  // The quad between them removed: the two holes are one loop; the corners of both are lost.
+  std::vector<int> joined = lost_loop_vertices(without({left, middle, right}), before);
+  EXPECT_EQ(joined.size(), 8u);
+  // The right hole closed: its four corners are lost, the left hole's are not.
+  std::vector<int> closed = lost_loop_vertices(without({left}), before);
+  std::vector<int> right_corners;
+  for (int v = 0; v < static_cast<int>(before.size()); ++v)
+    if (before[v] >= 0 && before[v] == before[2 * 7 + 4]) right_corners.push_back(v);
+  EXPECT_EQ(closed, right_corners);
+  EXPECT_EQ(right_corners.size(), 4u);
+  // A new hole elsewhere loses nothing.
+  EXPECT_TRUE(lost_loop_vertices(without({left, right, 4 * 6 + 4}), before).empty());
+}
+
 }  // namespace
 }  // namespace heatcvt

@@ -351,3 +351,46 @@ TEST(RemeshCvt, AResultWhoseVerticesRanTogetherFailsSpansInput) {
   const double input_diagonal = (input.V.colwise().maxCoeff() - input.V.colwise().minCoeff()).norm();
   EXPECT_GT(diagonal, 0.1 * input_diagonal);
 }
+
+namespace {
+
+// test::grid(n) without the quads (i, j) for which hole(i, j) holds.
+template <class Hole>
+TriangleMesh grid_with_holes(int n, Hole hole) {
+  const TriangleMesh full = test::grid(n);
+  TriangleMesh m;
+  m.V = full.V;
+  std::vector<int> keep;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i)
+      if (!hole(i, j)) keep.insert(keep.end(), {2 * (j * n + i), 2 * (j * n + i) + 1});
+  m.F.resize(static_cast<Eigen::Index>(keep.size()), 3);
+  for (std::size_t f = 0; f < keep.size(); ++f) m.F.row(static_cast<Eigen::Index>(f)) = full.F.row(keep[f]);
+  return m;
+}
+
+}  // namespace
+
+// A unit square sheet (60 × 60 quads of 1/60) with three holes: two 6-quad-wide square holes one
+// quad apart (a strip 0.29 site spacings wide at 300 sites) and a hole of one quad (0.29 spacings
+// across). The input has 4 boundary loops. Without the closed-ball repair a cell spans the strip
+// or a loop has fewer than three cells, and the dual loses loops; with it every loop has cells of
+// its own, and the output keeps all four and passes every check. (The count is not asserted: the
+// sites the repair adds stay.)
+TEST(RemeshCvt, HolesCloserOrSmallerThanACellKeepTheirOwnLoops) {
+  const TriangleMesh input = grid_with_holes(60, [](int i, int j) {
+    const bool rows = j >= 27 && j <= 32;
+    return (rows && i >= 18 && i <= 23) || (rows && i >= 25 && i <= 30) || (i == 45 && j == 15);
+  });
+  ASSERT_EQ(describe_surface(input).topology.boundary_loops, 4);
+  RemeshOptions o = remesh_options(300);
+  RemeshOptions bare = o;
+  bare.repair_rounds = 0;
+  bare.post_cvt_stages = false;
+  const RemeshResult without = remesh_cvt(input, bare);
+  ASSERT_LT(without.checks.boundary_loops, 4) << "the dual must lose a loop without the repair for the test";
+  const RemeshResult r = remesh_cvt(input, o);
+  EXPECT_EQ(r.checks.boundary_loops, 4);
+  EXPECT_GT(r.repair_sites, 0);
+  for (const MeshCheck& c : r.checks.checks) EXPECT_TRUE(c.passed) << c.name << ": " << c.detail;
+}

@@ -101,8 +101,9 @@ int main(int argc, char** argv) {
                  "site, so more sites than input vertices work (0 = never refine)")
       ->capture_default_str();
   app.add_option("--repair-rounds", repair_rounds,
-                 "rounds of adding a site to every cell at a non-manifold spot of the dual and running the CVT again "
-                 "(0 = off)")
+                 "rounds of adding a site to every cell at a non-manifold spot of the dual, and sites on boundary loops "
+                 "of the input with fewer than three cells or sharing a cell with another loop, and running the CVT "
+                 "again (0 = off)")
       ->capture_default_str();
   app.add_flag("--no-post-cvt", no_post,
                "write the dual triangulation itself, without the post-CVT stages (manifold extraction, hole filling, "

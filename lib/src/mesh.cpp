@@ -85,6 +85,25 @@ std::vector<std::pair<int, int>> boundary_edges(const Eigen::MatrixX3i& F) {
   return border;
 }
 
+int boundary_loop_labels(int num_vertices, const Eigen::MatrixX3i& F, Eigen::VectorXi& loop) {
+  DisjointSets sets(num_vertices);
+  std::vector<char> on(static_cast<std::size_t>(num_vertices), 0);
+  for (const auto& [a, b] : boundary_edges(F)) {
+    sets.unite(a, b);
+    on[static_cast<std::size_t>(a)] = on[static_cast<std::size_t>(b)] = 1;
+  }
+  loop.setConstant(num_vertices, -1);
+  std::vector<int> id(static_cast<std::size_t>(num_vertices), -1);
+  int count = 0;
+  for (int v = 0; v < num_vertices; ++v) {
+    if (!on[static_cast<std::size_t>(v)]) continue;
+    int& r = id[static_cast<std::size_t>(sets.find(v))];
+    if (r < 0) r = count++;
+    loop[v] = r;
+  }
+  return count;
+}
+
 int connected_components(int num_vertices, const Eigen::MatrixX3i& F, Eigen::VectorXi& component) {
   DisjointSets sets(num_vertices);
   for (int f = 0; f < F.rows(); ++f)
@@ -130,6 +149,10 @@ MeshTopology mesh_topology(const Eigen::MatrixX3i& F, int num_vertices) {
   for (int v = 0; v < num_vertices; ++v)
     if (used[v]) seen[comp[v]] = 1;
   t.components = static_cast<int>(std::count(seen.begin(), seen.end(), 1));
+  if (t.boundary_edges > 0) {
+    Eigen::VectorXi loop;
+    t.boundary_loops = boundary_loop_labels(num_vertices, F, loop);
+  }
   return t;
 }
 

@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -35,6 +37,7 @@ ValidationOptions dual_checks(const SurfaceDescription& input) {
   ValidationOptions o;
   o.require_closed = input.closed();
   o.expected_genus = input.genus;
+  o.expected_boundary_loops = input.topology.boundary_loops;
   o.allow_non_orientable = input.non_orientable;
   return o;
 }
@@ -89,14 +92,126 @@ std::vector<SurfacePoint> farthest_points_of_cells(const VoronoiDiagram& d, cons
   return found;
 }
 
+// The boundary loops of a mesh: the loop of each vertex (boundary_loop_labels(), −1 off the
+// border) and the length of each loop.
+struct BoundaryLoops {
+  Eigen::VectorXi of_vertex;
+  std::vector<double> length;
+  int shorter_than(double min_length) const {
+    return static_cast<int>(std::count_if(length.begin(), length.end(), [&](double l) { return l < min_length; }));
+  }
+};
+
+BoundaryLoops boundary_loops_of(const TriangleMesh& mesh) {
+  BoundaryLoops b;
+  b.length.assign(static_cast<std::size_t>(boundary_loop_labels(static_cast<int>(mesh.V.rows()), mesh.F, b.of_vertex)), 0.0);
+  for (const auto& [u, v] : boundary_edges(mesh.F))
+    b.length[static_cast<std::size_t>(b.of_vertex[u])] += (mesh.V.row(u) - mesh.V.row(v)).norm();
+  return b;
+}
+
+// Where the cells of d touch the border of `work` (the mesh d tessellates): for every cell and
+// every boundary loop it touches (loop labels of boundary_loop_labels()), the point of the loop
+// in the cell nearest to the cell's site.
+struct LoopContact {
+  int cell = -1, loop = -1;
+  SurfacePoint point;
+  double distance = 0;
+};
+
+std::vector<LoopContact> loop_contacts(const VoronoiDiagram& d, const TriangleMesh& work, const Eigen::VectorXi& loop,
+                                       const Eigen::MatrixX3d& site_positions) {
+  constexpr double kOnEdge = 1e-9;  // a refined corner whose barycentric weight opposite an edge is below this lies on it
+  std::set<std::pair<int, int>> border;
+  for (const auto& e : boundary_edges(work.F)) border.insert(e);
+  std::map<std::pair<int, int>, LoopContact> nearest;  // (cell, loop) -> contact
+  for (Eigen::Index r = 0; r < d.F.rows(); ++r) {
+    const int c = d.face_cell[r], p = d.face_parent[r];
+    if (c < 0) continue;
+    for (int k = 0; k < 3; ++k) {
+      const int a = work.F(p, k), b = work.F(p, (k + 1) % 3);
+      if (loop[a] < 0 || !border.count(std::minmax(a, b))) continue;
+      for (int j = 0; j < 3; ++j) {
+        const Eigen::Vector3d bary = d.face_bary.row(3 * r + j).transpose();
+        if (std::abs(bary[(k + 2) % 3]) > kOnEdge) continue;
+        LoopContact t{c, loop[a], SurfacePoint{p, bary}, 0};
+        t.distance = (position(work.V, work.F, t.point) - site_positions.row(c).transpose()).norm();
+        auto [it, added] = nearest.emplace(std::make_pair(c, t.loop), t);
+        if (!added && t.distance < it->second.distance) it->second = t;
+      }
+    }
+  }
+  std::vector<LoopContact> out;
+  for (const auto& [key, t] : nearest) out.push_back(t);
+  return out;  // sorted by cell, then loop
+}
+
+// New sites that give every boundary loop of the input at least `min_length` long cells of its
+// own, as the closed-ball property asks at the border: the dual keeps a loop only where at least
+// three cells touch it, and a cell touching two loops joins them in the dual (or pinches them at
+// its site). A cell touching several such loops gets a site on each but the one nearest to its
+// site, at the cell's point of that loop nearest to the site (unless that is within
+// `min_separation` of the site: a near-duplicate site makes a sliver); a loop touched by fewer
+// than three cells gets sites at its vertices farthest from the points where cells touch it.
+std::vector<SurfacePoint> sites_for_boundary_loops(const VoronoiDiagram& d, const TriangleMesh& work,
+                                                   const BoundaryLoops& loops, double min_length,
+                                                   const Eigen::MatrixX3d& site_positions, double min_separation) {
+  constexpr int kMinCellsPerLoop = 3;
+  const int count = static_cast<int>(loops.length.size());
+  std::vector<SurfacePoint> added;
+  std::vector<LoopContact> contacts = loop_contacts(d, work, loops.of_vertex, site_positions);
+  contacts.erase(std::remove_if(contacts.begin(), contacts.end(),
+                                [&](const LoopContact& c) { return loops.length[static_cast<std::size_t>(c.loop)] < min_length; }),
+                 contacts.end());
+  std::vector<std::vector<Eigen::Vector3d>> touched(static_cast<std::size_t>(count));
+  for (std::size_t i = 0; i < contacts.size();) {
+    std::size_t j = i;
+    while (j < contacts.size() && contacts[j].cell == contacts[i].cell) ++j;
+    std::size_t keep = i;  // the cell keeps its nearest loop
+    for (std::size_t q = i; q < j; ++q)
+      if (contacts[q].distance < contacts[keep].distance) keep = q;
+    for (std::size_t q = i; q < j; ++q) {
+      touched[static_cast<std::size_t>(contacts[q].loop)].push_back(position(work.V, work.F, contacts[q].point));
+      if (q != keep && contacts[q].distance >= min_separation) added.push_back(contacts[q].point);
+    }
+    i = j;
+  }
+  std::vector<std::vector<int>> loop_vertices(static_cast<std::size_t>(count));
+  for (int v = 0; v < static_cast<int>(loops.of_vertex.size()); ++v)
+    if (loops.of_vertex[v] >= 0) loop_vertices[static_cast<std::size_t>(loops.of_vertex[v])].push_back(v);
+  std::vector<int> face_of(static_cast<std::size_t>(work.V.rows()), -1), corner_of(face_of.size(), -1);
+  for (Eigen::Index f = 0; f < work.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) face_of[static_cast<std::size_t>(work.F(f, k))] = static_cast<int>(f), corner_of[static_cast<std::size_t>(work.F(f, k))] = k;
+  for (int l = 0; l < count; ++l) {
+    if (loops.length[static_cast<std::size_t>(l)] < min_length) continue;
+    std::vector<Eigen::Vector3d>& points = touched[static_cast<std::size_t>(l)];
+    for (int n = static_cast<int>(points.size()); n < kMinCellsPerLoop; ++n) {
+      int far = -1;
+      double best = -1;
+      for (int v : loop_vertices[static_cast<std::size_t>(l)]) {
+        double near = std::numeric_limits<double>::infinity();
+        for (const Eigen::Vector3d& q : points) near = std::min(near, (work.V.row(v).transpose() - q).squaredNorm());
+        if (near > best) best = near, far = v;
+      }
+      if (far < 0 || !(best > 0)) break;
+      SurfacePoint p{face_of[static_cast<std::size_t>(far)], Eigen::Vector3d::Zero()};
+      p.bary[corner_of[static_cast<std::size_t>(far)]] = 1;
+      added.push_back(p);
+      points.push_back(work.V.row(far).transpose());
+    }
+  }
+  return added;
+}
+
 // Whether (V, F) has edges with more than two faces (then no manifold dual exists).
 bool has_nonmanifold_edges(const SurfaceDescription& input) { return input.topology.nonmanifold_edges > 0; }
 
 // Site spacing of `sites` sites on the surface of `mesh`.
 double site_spacing(const TriangleMesh& mesh, int sites) { return std::sqrt(surface_area(mesh.V, mesh.F) / std::max(1, sites)); }
 
-// Closed-ball repair (RemeshOptions::repair_rounds): while the dual of out.cvt is not a manifold,
-// a new site at the farthest point of every cell at a non-manifold spot, the sites in no triangle
+// Closed-ball repair (RemeshOptions::repair_rounds): while the dual of out.cvt is not a manifold
+// or a boundary loop of the input lacks cells of its own (sites_for_boundary_loops()),
+// a new site at the farthest point of every cell at a non-manifold spot and on such loops, the sites in no triangle
 // (cells enclosed by another cell, which is then an annulus) dropped, and the CVT again from
 // these sites with a few surface-Lloyd iterations (as after the CVT's own splits).
 void repair_closed_ball(const TriangleMesh& work, const Laplacian& laplacian, const Eigen::VectorXd& metric,
@@ -106,23 +221,38 @@ void repair_closed_ball(const TriangleMesh& work, const Laplacian& laplacian, co
   again.surface_lloyd_iterations = std::min(again.surface_lloyd_iterations, again.surface_lloyd_split_iterations);
   again.iterations = std::min(again.iterations, options.repair_iterations);
   const double spacing = site_spacing(work, options.cvt.sites);
+  // A site added on a loop no nearer than this many spacings to the site of its cell.
+  constexpr double kMinSiteSeparation = 0.1;
+  const BoundaryLoops loops = out.input.closed() ? BoundaryLoops() : boundary_loops_of(work);
   while (out.repair_rounds < options.repair_rounds && out.repair_sites < budget) {
     const int ns = static_cast<int>(out.cvt.sites.size());
     std::vector<int> bad = cells_breaking_closed_ball(out.cvt.dual, out.input);
-    if (bad.empty()) break;
+    std::vector<SurfacePoint> on_loops;
+    if (!out.input.closed())
+      on_loops = sites_for_boundary_loops(out.cvt.diagram, work, loops, options.min_loop_spacings * spacing,
+                                          out.cvt.positions, kMinSiteSeparation * spacing);
+    if (bad.empty() && on_loops.empty()) break;
     std::vector<unsigned char> drop(static_cast<std::size_t>(ns), 0);
     if (out.cvt.dual.F.rows() > 0)
       for (int s : out.cvt.dual.unused_sites) drop[static_cast<std::size_t>(s)] = 1;
     bad.erase(std::remove_if(bad.begin(), bad.end(), [&](int s) { return drop[static_cast<std::size_t>(s)] != 0; }),
               bad.end());
     if (static_cast<int>(bad.size()) > budget - out.repair_sites) bad.resize(static_cast<std::size_t>(budget - out.repair_sites));
-    const std::vector<SurfacePoint> added = farthest_points_of_cells(out.cvt.diagram, out.cvt.positions, bad, 1e-6 * spacing);
+    std::vector<SurfacePoint> added = farthest_points_of_cells(out.cvt.diagram, out.cvt.positions, bad, 1e-6 * spacing);
+    const int room = std::max(0, budget - out.repair_sites - static_cast<int>(added.size()));
+    if (static_cast<int>(on_loops.size()) > room) on_loops.resize(static_cast<std::size_t>(room));
+    added.insert(added.end(), on_loops.begin(), on_loops.end());
     std::vector<SurfacePoint> start;
     for (int s = 0; s < ns; ++s)
       if (!drop[static_cast<std::size_t>(s)]) start.push_back(out.cvt.sites[static_cast<std::size_t>(s)]);
     const int dropped = ns - static_cast<int>(start.size());
     if (added.empty() && dropped == 0) break;
     start.insert(start.end(), added.begin(), added.end());
+    // The CVT's own splits share one budget with the first run's: max_inserted_fraction of the
+    // sites asked for, over all rounds (each round's start already holds the earlier splits).
+    const double split_room = options.cvt.max_inserted_fraction * options.cvt.sites -
+                              (static_cast<double>(start.size()) - options.cvt.sites);
+    again.max_inserted_fraction = std::max(0.0, split_room) / static_cast<double>(start.size());
     out.cvt = centroidal_voronoi(work.V, work.F, laplacian, again, start, progress, metric);
     out.repair_sites += static_cast<int>(added.size());
     out.repair_dropped_sites += dropped;
@@ -296,6 +426,11 @@ bool run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options
   SurfaceMesherOptions mo = options.mesher;
   mo.threads = options.cvt.threads;
   if (mo.sizing.target_vertices == 0) mo.sizing.target_vertices = options.cvt.sites;
+  // Loops below the resolution asked for (RemeshOptions::min_loop_spacings) may close: each one
+  // closed adds one to the Euler characteristic.
+  const int short_loops = boundary_loops_of(input).shorter_than(options.min_loop_spacings * site_spacing(input, options.cvt.sites));
+  mo.keep_topology = {out.input.topology.components, out.input.topology.boundary_loops - short_loops,
+                      out.input.topology.euler_characteristic() + short_loops};
   DualSurfaceResult post;
   try {
     post = mesh_dual_surface(out.cvt.dual.V, out.cvt.dual.F, surface, mo);
@@ -429,6 +564,22 @@ void explain_self_intersections(const TriangleMesh& input, RemeshResult& out) {
                      " intersecting face pairs, which a remesh close to it cannot avoid";
 }
 
+// Where the result fails its boundary_loops check and loops of the input are shorter than
+// RemeshOptions::min_loop_spacings site spacings, the check's detail says how many: holes below
+// the resolution asked for, which more sites keep.
+void explain_short_loops(const TriangleMesh& input, const RemeshOptions& options, RemeshResult& out) {
+  MeshCheck* check = nullptr;
+  for (MeshCheck& c : out.checks.checks)
+    if (c.name == "boundary_loops" && c.ran && !c.passed) check = &c;
+  if (!check) return;
+  const double min_length = options.min_loop_spacings * site_spacing(input, options.cvt.sites);
+  const int short_loops = boundary_loops_of(input).shorter_than(min_length);
+  if (short_loops > 0)
+    check->detail += "; " + std::to_string(short_loops) + " of the input's loops are shorter than " +
+                     std::to_string(options.min_loop_spacings) +
+                     " site spacings (holes below the resolution asked for: more sites keep them)";
+}
+
 // The pipeline of remesh_cvt() on a mesh already in its unit frame.
 RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions& options, const CvtCallback& progress) {
   const int sites = options.cvt.sites;
@@ -497,6 +648,7 @@ RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions&
                                                     : "not run: the dual has no triangle";
   if (options.cvt.build_dual && options.post_cvt_stages) keep_creases(mesh, options, out);
   explain_self_intersections(mesh, out);
+  explain_short_loops(mesh, options, out);
   out.quality = triangle_quality(out.mesh.V, out.mesh.F);
   out.iterations = static_cast<int>(out.cvt.iterations.size());
   out.converged = out.cvt.converged;

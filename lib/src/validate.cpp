@@ -305,6 +305,14 @@ void add_topology_checks(ValidationReport& rep, const Topology& t, const Validat
     c.detail = std::to_string(t.components) + " components, expected " + std::to_string(options.expected_components);
     rep.checks.push_back(c);
   }
+  if (options.expected_boundary_loops >= 0) {
+    MeshCheck c;
+    c.name = "boundary_loops";
+    c.passed = t.boundary_loops == options.expected_boundary_loops;
+    c.detail = std::to_string(t.boundary_loops) + " boundary loops, expected " +
+               std::to_string(options.expected_boundary_loops);
+    rep.checks.push_back(c);
+  }
   if (options.expected_genus >= 0) {
     MeshCheck c;
     c.name = "genus";

@@ -46,6 +46,11 @@ std::vector<std::vector<int>> vertex_neighbors(int num_vertices, const Eigen::Ma
 /// border of an open mesh.
 std::vector<std::pair<int, int>> boundary_edges(const Eigen::MatrixX3i& F);
 
+/// Boundary loops: loop[v] is the loop (connected set of border edges, boundary_edges()) vertex
+/// v is on, ids 0..count-1, or −1 for a vertex on no border edge. Returns the number of loops
+/// (ValidationReport::boundary_loops counts the same).
+int boundary_loop_labels(int num_vertices, const Eigen::MatrixX3i& F, Eigen::VectorXi& loop);
+
 /// Connected components of the vertex graph: component id per vertex, ids 0..count-1.
 /// Returns the number of components.
 int connected_components(int num_vertices, const Eigen::MatrixX3i& F, Eigen::VectorXi& component);
@@ -56,6 +61,7 @@ struct MeshTopology {
   int edges = 0;              ///< undirected edges
   int faces = 0;
   int boundary_edges = 0;     ///< edges with one incident face
+  int boundary_loops = 0;     ///< connected sets of boundary edges (boundary_loop_labels())
   int nonmanifold_edges = 0;  ///< edges with more than two incident faces
   int inconsistent_edges = 0; ///< manifold interior edges traversed twice in the same direction
   int components = 0;

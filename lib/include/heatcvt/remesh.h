@@ -78,12 +78,19 @@ struct RemeshOptions {
   /// cell at a non-manifold spot of the dual (cells wrapping a thin part, touching themselves or
   /// split), the sites in no dual triangle (a cell enclosed by another) dropped, then the CVT
   /// again from these sites" while the dual is not a manifold (on inputs without non-manifold
-  /// edges). 0 = off. Default 3.
-  int repair_rounds = 3;
+  /// edges), and sites on the input's boundary loops that lack cells of their own (a loop needs
+  /// three cells, a cell may touch one loop). 0 = off. Default 5 (bun_zipper at 300 sites: its
+  /// smallest hole, a third of the site spacing across, got its three cells in the fourth round).
+  int repair_rounds = 5;
   /// Heat Lloyd iterations of the CVT of a repair round, at most (its start from the previous
   /// sites plus the new ones is already near a CVT: the round is there to give every cell a
   /// site, the start's surface-Lloyd iterations settle them). Default 4.
   int repair_iterations = 4;
+  /// Boundary loops of the input shorter than this many site spacings (sqrt(area / sites)) are
+  /// holes below the resolution asked for: the repair gives them no cells of their own and the
+  /// post-CVT stages may close them (the boundary_loops check still counts them, and its detail
+  /// says how many are that short). Longer loops are kept. Default 1.
+  double min_loop_spacings = 1.0;
   /// Sites added by the repair rounds, at most this fraction of cvt.sites in total. Default 0.1.
   double max_repair_fraction = 0.1;
   /// The post-CVT stages' result is kept only where it covers the input about as well as a dual

@@ -20,6 +20,8 @@ struct ValidationOptions {
   int expected_genus = -1;
   /// Expected number of connected components; −1 = do not check. Default −1.
   int expected_components = -1;
+  /// Expected number of boundary loops (a remesh keeps its input's); −1 = do not check. Default −1.
+  int expected_boundary_loops = -1;
   /// Run PMP::does_self_intersect / self_intersections (the expensive check); when false the
   /// check is not reported at all. Default true.
   bool check_self_intersections = true;

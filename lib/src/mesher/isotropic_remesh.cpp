@@ -551,6 +551,21 @@ class Sizer {
     return ok;
   }
 
+  // The mesh's topology where one is to be kept (o_.keep_topology), else the unset one.
+  TopologyTarget topology_of_if_kept() const { return o_.keep_topology.enabled() ? topology_of(mesh_) : TopologyTarget(); }
+
+  // The faces with a corner among `vertices`.
+  std::vector<int> faces_at(const std::vector<int>& vertices) const {
+    std::vector<char> in(mesh_.num_vertices(), 0);
+    for (int v : vertices) in[v] = 1;
+    std::vector<int> faces;
+    for (int f = 0; f < mesh_.num_faces(); ++f) {
+      const MeshFace& t = mesh_.face(f);
+      if (in[t[0]] || in[t[1]] || in[t[2]]) faces.push_back(f);
+    }
+    return faces;
+  }
+
   // Freezes the vertices of `faces` and of every face touching them.
   void freeze_around(const std::vector<int>& faces) {
     std::vector<char> in(mesh_.num_vertices(), 0);
@@ -563,16 +578,25 @@ class Sizer {
   }
 
   // Runs `step` (which returns how much it changed); where it makes more faces cross than
-  // crossed before, undoes it (counters too), freezes the region and runs it again, at most
-  // three times, then leaves the step out. Returns what the kept run changed (0 if none).
+  // crossed before, or breaks the topology to keep (o_.keep_topology), undoes it
+  // (counters too), freezes the region and runs it again, at most three times, then leaves the
+  // step out. Returns what the kept run changed (0 if none).
   template <class Step>
   int attempt(Step step) {
     for (int tries = 0; tries < 3; ++tries) {
       const WorkingMesh::Checkpoint before = mesh_.checkpoint();
       const MesherStats stats_before = stats_;
+      std::vector<int> loops_before;
+      TopologyTarget topology_before;
+      if (o_.keep_topology.enabled()) {
+        topology_before = topology_of(mesh_);
+        boundary_loop_labels(mesh_, loops_before);
+      }
       const int changed = step();
       std::vector<int> bad = self_intersecting_faces(mesh_);
-      if (bad.size() <= crossings_.size()) {
+      const bool broken = breaks_topology(o_.keep_topology, topology_before, topology_of_if_kept());
+      const std::vector<int> lost = broken ? lost_loop_vertices(mesh_, loops_before) : std::vector<int>();
+      if (bad.size() <= crossings_.size() && !broken) {
         crossings_ = std::move(bad);  // what the next step is measured against
         return changed;
       }
@@ -580,6 +604,7 @@ class Sizer {
       frozen_.resize(before.V.rows());  // vertices added by the step are gone again
       mesh_.rollback(before);
       stats_ = stats_before;
+      freeze_around(faces_at(lost));  // lost holds vertices of the state rolled back to
     }
     return 0;
   }

@@ -1,6 +1,8 @@
 // Self-intersections of the working mesh (CGAL box intersection and exact predicates).
 #include "heatcvt/mesher/mesh_checks.h"
 
+#include "heatcvt/mesh.h"
+
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/box_intersection_d.h>
 #include <CGAL/intersections.h>
@@ -146,5 +148,59 @@ std::vector<int> self_intersecting_faces(const WorkingMesh& mesh) {
 }
 
 long self_intersecting_pairs(const WorkingMesh& mesh) { return static_cast<long>(intersecting_face_pairs(mesh).size()); }
+
+namespace {
+
+Eigen::MatrixX3i face_matrix(const WorkingMesh& mesh) {
+  const std::vector<MeshFace>& faces = mesh.faces();
+  Eigen::MatrixX3i F(static_cast<Eigen::Index>(faces.size()), 3);
+  for (std::size_t f = 0; f < faces.size(); ++f) F.row(static_cast<Eigen::Index>(f)) << faces[f][0], faces[f][1], faces[f][2];
+  return F;
+}
+
+}  // namespace
+
+TopologyTarget topology_of(const WorkingMesh& mesh) {
+  const MeshTopology t = mesh_topology(face_matrix(mesh), mesh.num_vertices());
+  return {t.components, t.boundary_loops, t.euler_characteristic()};
+}
+
+bool breaks_topology(const TopologyTarget& target, const TopologyTarget& before, const TopologyTarget& after) {
+  if (!target.enabled()) return false;
+  return (before == target && !(after == target)) ||
+         after.boundary_loops < std::min(before.boundary_loops, target.boundary_loops);
+}
+
+int boundary_loop_labels(const WorkingMesh& mesh, std::vector<int>& loop) {
+  Eigen::VectorXi labels;
+  const int count = boundary_loop_labels(mesh.num_vertices(), face_matrix(mesh), labels);
+  loop.assign(labels.data(), labels.data() + labels.size());
+  return count;
+}
+
+std::vector<int> lost_loop_vertices(const WorkingMesh& mesh, const std::vector<int>& before) {
+  std::vector<int> now;
+  boundary_loop_labels(mesh, now);
+  const int loops = before.empty() ? 0 : *std::max_element(before.begin(), before.end()) + 1;
+  // For each loop of before, the loop its vertices are on now (−1: none on the border; −2: several).
+  std::vector<int> became(static_cast<std::size_t>(loops), -1);
+  for (std::size_t v = 0; v < before.size(); ++v) {
+    const int l = before[v], n = v < now.size() ? now[v] : -1;
+    if (l < 0 || n < 0) continue;
+    int& b = became[static_cast<std::size_t>(l)];
+    b = b == -1 || b == n ? n : -2;
+  }
+  std::vector<int> sharing(now.empty() ? 0 : static_cast<std::size_t>(*std::max_element(now.begin(), now.end()) + 1), 0);
+  for (int b : became)
+    if (b >= 0) ++sharing[static_cast<std::size_t>(b)];
+  std::vector<int> lost;
+  for (std::size_t v = 0; v < before.size(); ++v) {
+    const int l = before[v];
+    if (l < 0) continue;
+    const int b = became[static_cast<std::size_t>(l)];
+    if (b == -1 || (b >= 0 && sharing[static_cast<std::size_t>(b)] > 1)) lost.push_back(static_cast<int>(v));
+  }
+  return lost;
+}
 
 }  // namespace heatcvt

@@ -30,8 +30,37 @@ class StageTimer {
   Clock::time_point t_;
 };
 
+// Runs stages on `mesh` and undoes one (mesh and counters) where it breaks the topology to keep
+// (breaks_topology(), SurfaceMesherOptions::keep_topology); without a target it only runs them.
+class TopologyGuard {
+ public:
+  TopologyGuard(WorkingMesh& mesh, const TopologyTarget& keep, MesherStats& stats)
+      : mesh_(mesh), keep_(keep), stats_(stats) {}
+  template <class Stage>
+  void run(Stage stage) const {
+    if (!keep_.enabled()) {
+      stage();
+      return;
+    }
+    const TopologyTarget before = topology_of(mesh_);
+    const WorkingMesh::Checkpoint checkpoint = mesh_.checkpoint();
+    const MesherStats stats = stats_;
+    stage();
+    if (!breaks_topology(keep_, before, topology_of(mesh_))) return;
+    mesh_.rollback(checkpoint);
+    std::vector<std::pair<std::string, double>> seconds = std::move(stats_.stage_seconds);
+    stats_ = stats;
+    stats_.stage_seconds = std::move(seconds);
+  }
+
+ private:
+  WorkingMesh& mesh_;
+  const TopologyTarget keep_;
+  MesherStats& stats_;
+};
+
 // Whether the dual triangles F form an oriented 2-manifold (every edge on at most two faces,
-// once in each direction) whose components or Euler characteristic the extraction's result
+// once in each direction) whose components, boundary loops or Euler characteristic the extraction's result
 // `mesh` does not have: it cut or closed the surface (an ear thinner than a cell cut off).
 bool changes_topology(const WorkingMesh& mesh, const Eigen::MatrixX3i& F) {
   const MeshTopology dual = mesh_topology(F, mesh.num_vertices());
@@ -40,7 +69,7 @@ bool changes_topology(const WorkingMesh& mesh, const Eigen::MatrixX3i& F) {
   for (int f = 0; f < mesh.num_faces(); ++f)
     for (int k = 0; k < 3; ++k) E(f, k) = mesh.face(f)[k];
   const MeshTopology extracted = mesh_topology(E, mesh.num_vertices());
-  return extracted.components != dual.components ||
+  return extracted.components != dual.components || extracted.boundary_loops != dual.boundary_loops ||
          extracted.euler_characteristic() != dual.euler_characteristic();
 }
 
@@ -74,23 +103,35 @@ void polish_extracted(WorkingMesh& mesh, const SurfaceProjector& surface, const 
   StageTimer timer(stats);
   BorderGrowthOptions borders = options.borders;
   borders.threads = options.threads;
-  stats.border_triangles += grow_borders(mesh, borders);
-  stats.holes_filled +=
-      fill_holes(mesh, surface, options.holes, options.manifold, stats.removed_triangles, &stats.filled_hole_edges);
+  const TopologyGuard guard(mesh, options.keep_topology, stats);
+  guard.run([&] {
+    stats.border_triangles += grow_borders(mesh, borders);
+    stats.holes_filled +=
+        fill_holes(mesh, surface, options.holes, options.manifold, stats.removed_triangles, &stats.filled_hole_edges);
+  });
   timer.done("border growth");
   untangle(mesh, surface, options.untangle, options.holes, options.manifold, stats);
   timer.done("untangle");
-  relaxation_polish(mesh, surface, polish, options.untangle, options.holes, options.manifold, stats);
+  guard.run([&] { relaxation_polish(mesh, surface, polish, options.untangle, options.holes, options.manifold, stats); });
   timer.done("relaxation polish");
-  // Slivers flat along the border first: the angle polish then moves the vertices they expose.
-  if (polish.relaxation_iterations > 0) stats.trimmed_faces += trim_boundary_slivers(mesh, options.boundary_slivers);
-  angle_polish_stage(mesh, surface, polish, stats);
+  const bool polishing = polish.relaxation_iterations > 0;
+  guard.run([&] {
+    // Slivers flat along the border first: the angle polish then moves the vertices they expose.
+    if (polishing) stats.trimmed_faces += trim_boundary_slivers(mesh, options.boundary_slivers);
+    angle_polish_stage(mesh, surface, polish, stats);
+  });
   timer.done("angle polish");
-  if (polish.relaxation_iterations > 0) stats.collapsed_edges = collapse_slivers(mesh, surface, options.slivers, stats);
+  guard.run([&] {
+    if (polishing) stats.collapsed_edges = collapse_slivers(mesh, surface, options.slivers, stats);
+  });
   timer.done("sliver collapse");
-  if (polish.relaxation_iterations > 0) stats.split_edges = split_long_edges(mesh, surface, split, stats);
+  guard.run([&] {
+    if (polishing) stats.split_edges = split_long_edges(mesh, surface, split, stats);
+  });
   timer.done("long-edge split");
-  if (polish.relaxation_iterations > 0) stats.trimmed_faces += trim_boundary_slivers(mesh, options.boundary_slivers);
+  guard.run([&] {
+    if (polishing) stats.trimmed_faces += trim_boundary_slivers(mesh, options.boundary_slivers);
+  });
   timer.done("boundary sliver trim");
 }
 
@@ -105,6 +146,7 @@ bool size_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, const Surface
                MesherStats& stats) {
   IsotropicRemeshOptions sizing = options.sizing;
   sizing.threads = options.threads;
+  sizing.keep_topology = options.keep_topology;
   sizing.min_piece_faces = options.min_piece_faces;
   sizing.min_piece_vertex_fraction = options.min_piece_vertex_fraction;
   // The hole policy decides what the sizing may open or close: no flying face is removed where a
@@ -115,9 +157,11 @@ bool size_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, const Surface
   const WorkingMesh::Checkpoint unsized = mesh.checkpoint();
   const MesherStats stats_unsized = stats;
   if (sizing.remove_flying && sizing_reshapes(mesh, surface, sizing)) {
-    stats.flying_faces += remove_flying_faces(mesh, surface, sizing);
-    stats.removed_triangles += remove_small_pieces(mesh, options.min_piece_faces, options.min_piece_vertex_fraction,
-                                                   &stats.pieces_removed);
+    TopologyGuard(mesh, options.keep_topology, stats).run([&] {
+      stats.flying_faces += remove_flying_faces(mesh, surface, sizing);
+      stats.removed_triangles += remove_small_pieces(mesh, options.min_piece_faces, options.min_piece_vertex_fraction,
+                                                     &stats.pieces_removed);
+    });
   }
   if (size_to_target(mesh, surface, sizing, stats)) return true;
   // Border vertices held to the samples' border constrain the remeshing; where its result is

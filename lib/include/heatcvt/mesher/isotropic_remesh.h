@@ -9,6 +9,7 @@
 /// that follows starts from near-equilateral triangles, on the border too.
 #include "heatcvt/mesher/angle_polish.h"
 #include "heatcvt/mesher/edge_flips.h"
+#include "heatcvt/mesher/mesh_checks.h"
 #include "heatcvt/mesher/mesher_stats.h"
 #include "heatcvt/mesher/projector.h"
 #include "heatcvt/mesher/sliver_collapse.h"
@@ -98,6 +99,12 @@ struct IsotropicRemeshOptions {
   /// In the relaxation, border vertices near the edge of the samples follow it
   /// (RelaxationBorder::follow_sample_border); an input mesh has no such edge. Default true.
   bool follow_sample_border = true;
+  /// The topology to keep (an input mesh's, for its remesh): a step that breaks it
+  /// (breaks_topology(): the mesh had it and loses it, or a real hole is closed or joined to
+  /// another) is undone and retried with the region of a lost loop frozen, like one that makes
+  /// faces cross. Not enabled (a cloud: its border is the scan's edge, which the hole policy
+  /// handles). Set by the surface mesher from SurfaceMesherOptions::keep_topology.
+  TopologyTarget keep_topology;
   /// A border vertex with several faces whose surface angle (the sum of its face angles) is
   /// below this is a spike of the border (noise at the site spacing: each of its faces has a
   /// smaller angle there) and is collapsed into its nearer border neighbour. Default 60°.

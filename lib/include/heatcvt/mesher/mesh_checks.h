@@ -27,4 +27,36 @@ std::vector<int> self_intersecting_faces(const WorkingMesh& mesh);
 /// Number of intersecting face pairs (0 for an empty mesh).
 long self_intersecting_pairs(const WorkingMesh& mesh);
 
+/// The topology a mesh is to keep through the mesher's stages: its edge-connected components,
+/// boundary loops and Euler characteristic (an input mesh's, for its remesh). components < 0:
+/// no target.
+struct TopologyTarget {
+  int components = -1;
+  int boundary_loops = 0;
+  int euler_characteristic = 0;
+  bool enabled() const { return components >= 0; }
+  bool operator==(const TopologyTarget& o) const {
+    return components == o.components && boundary_loops == o.boundary_loops &&
+           euler_characteristic == o.euler_characteristic;
+  }
+};
+
+/// Components, boundary loops and Euler characteristic of the mesh's faces (mesh_topology()).
+TopologyTarget topology_of(const WorkingMesh& mesh);
+
+/// Whether a step that took the mesh from topology `before` to `after` breaks `target`: the mesh
+/// had the target's topology and lost it, or it now has fewer boundary loops than both before and
+/// the target (a real hole closed, or two joined). Never with a target that is not enabled().
+bool breaks_topology(const TopologyTarget& target, const TopologyTarget& before, const TopologyTarget& after);
+
+/// Boundary loop of each vertex of the mesh (boundary_loop_labels() of its faces: −1 off the
+/// border); returns the number of loops.
+int boundary_loop_labels(const WorkingMesh& mesh, std::vector<int>& loop);
+
+/// Vertices of the loops of `before` (labels from boundary_loop_labels() of an earlier state)
+/// that the mesh no longer has as loops of their own: loops none of whose vertices is on the
+/// border any more (collapsed or closed), and loops that now share a loop with another (joined).
+/// Empty when every loop of `before` is still there.
+std::vector<int> lost_loop_vertices(const WorkingMesh& mesh, const std::vector<int>& before);
+
 }  // namespace heatcvt

@@ -49,14 +49,20 @@ struct SurfaceMesherOptions {
   double min_piece_vertex_fraction = 0.01;
   /// Where the dual triangles given to mesh_dual_surface() form an oriented 2-manifold (every
   /// edge on at most two faces, once in each direction; a heat Voronoi diagram with the
-  /// closed-ball property on an input mesh) and the extraction's result has other components or
-  /// another Euler characteristic, the dual's own triangles replace that result before
+  /// closed-ball property on an input mesh) and the extraction's result has other components,
+  /// boundary loops or another Euler characteristic, the dual's own triangles replace that result before
   /// polish_extracted(). The extraction orients every triangle by its sites' normals and sets
   /// aside those whose normal is far from a site's (candidates.coherent_min_dot): the triangles
   /// that turn around a part thinner than the site spacing (an ear at 300 sites), which it then
   /// cuts off. Where it keeps the topology its result stays (it also mends the dual's shape at
   /// sharp creases). Default false (a cloud's dual is never trusted); meshcvt sets it.
   bool keep_manifold_dual = false;
+  /// The topology to keep (remesh_cvt() sets the input mesh's: components, boundary loops, Euler
+  /// characteristic): no stage after the untangling breaks it (breaks_topology()): a polish
+  /// stage, the hole filling after the extraction or the removal of small pieces that would is
+  /// undone, and the sizing undoes and retries such steps (IsotropicRemeshOptions::keep_topology).
+  /// The extraction may still close the dual's own holes. Not enabled by default (a cloud).
+  TopologyTarget keep_topology;
   /// Worker threads of the parallel stages (overrides polish.threads and split.threads);
   /// 0 = all cores. Results do not depend on it. Default 0.
   int threads = 0;
