@@ -101,9 +101,9 @@ int main(int argc, char** argv) {
                  "site, so more sites than input vertices work (0 = never refine)")
       ->capture_default_str();
   app.add_option("--repair-rounds", repair_rounds,
-                 "rounds of adding a site to every cell at a non-manifold spot of the dual, and sites on boundary loops "
-                 "of the input with fewer than three cells or sharing a cell with another loop, and running the CVT "
-                 "again (0 = off)")
+                 "rounds of adding a site to every cell at a non-manifold spot of the dual (and sites on boundary loops "
+                 "of the input with fewer than three cells or sharing a cell with another loop; up to 3 more rounds "
+                 "where only loops need them), and running the CVT again (0 = no repair)")
       ->capture_default_str();
   app.add_flag("--no-post-cvt", no_post,
                "write the dual triangulation itself, without the post-CVT stages (manifold extraction, hole filling, "
@@ -176,6 +176,7 @@ int main(int argc, char** argv) {
     remesh.anisotropy = anisotropy;
     remesh.min_vertices_per_site = min_vertices_per_site;
     remesh.repair_rounds = repair_rounds;
+    if (repair_rounds == 0) remesh.loop_repair_rounds = 0;  // no repair at all
     remesh.post_cvt_stages = !no_post;
     remesh.creases.enabled = !no_features;
     remesh.creases.min_dihedral_deg = crease_angle;

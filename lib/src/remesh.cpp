@@ -209,8 +209,9 @@ bool has_nonmanifold_edges(const SurfaceDescription& input) { return input.topol
 // Site spacing of `sites` sites on the surface of `mesh`.
 double site_spacing(const TriangleMesh& mesh, int sites) { return std::sqrt(surface_area(mesh.V, mesh.F) / std::max(1, sites)); }
 
-// Closed-ball repair (RemeshOptions::repair_rounds): while the dual of out.cvt is not a manifold
-// or a boundary loop of the input lacks cells of its own (sites_for_boundary_loops()),
+// Closed-ball repair (RemeshOptions::repair_rounds, loop_repair_rounds): while the dual of out.cvt
+// is not a manifold or a boundary loop of the input lacks cells of its own
+// (sites_for_boundary_loops()),
 // a new site at the farthest point of every cell at a non-manifold spot and on such loops, the sites in no triangle
 // (cells enclosed by another cell, which is then an annulus) dropped, and the CVT again from
 // these sites with a few surface-Lloyd iterations (as after the CVT's own splits).
@@ -224,7 +225,8 @@ void repair_closed_ball(const TriangleMesh& work, const Laplacian& laplacian, co
   // A site added on a loop no nearer than this many spacings to the site of its cell.
   constexpr double kMinSiteSeparation = 0.1;
   const BoundaryLoops loops = out.input.closed() ? BoundaryLoops() : boundary_loops_of(work);
-  while (out.repair_rounds < options.repair_rounds && out.repair_sites < budget) {
+  int ball_rounds = 0, loop_rounds = 0;  // rounds for non-manifold spots, rounds for loops alone
+  while (out.repair_sites < budget) {
     const int ns = static_cast<int>(out.cvt.sites.size());
     std::vector<int> bad = cells_breaking_closed_ball(out.cvt.dual, out.input);
     std::vector<SurfacePoint> on_loops;
@@ -232,6 +234,20 @@ void repair_closed_ball(const TriangleMesh& work, const Laplacian& laplacian, co
       on_loops = sites_for_boundary_loops(out.cvt.diagram, work, loops, options.min_loop_spacings * spacing,
                                           out.cvt.positions, kMinSiteSeparation * spacing);
     if (bad.empty() && on_loops.empty()) break;
+    // Rounds for the non-manifold spots (and the loops) while they last; then rounds for the loops
+    // alone, whose diagram is that of the sites as placed (no Lloyd step, no split).
+    const bool ball_round = !bad.empty() && ball_rounds < options.repair_rounds;
+    if (!ball_round) {
+      if (on_loops.empty() || loop_rounds >= options.loop_repair_rounds) break;
+      bad.clear();
+    }
+    ++(ball_round ? ball_rounds : loop_rounds);
+    CvtOptions round = again;
+    if (!ball_round) {  // the loops' sites stay where they are put: Lloyd steps would draw them off
+      round.split_nonmanifold_cells = false;
+      round.surface_lloyd_iterations = 0;
+      round.iterations = 0;
+    }
     std::vector<unsigned char> drop(static_cast<std::size_t>(ns), 0);
     if (out.cvt.dual.F.rows() > 0)
       for (int s : out.cvt.dual.unused_sites) drop[static_cast<std::size_t>(s)] = 1;
@@ -248,12 +264,7 @@ void repair_closed_ball(const TriangleMesh& work, const Laplacian& laplacian, co
     const int dropped = ns - static_cast<int>(start.size());
     if (added.empty() && dropped == 0) break;
     start.insert(start.end(), added.begin(), added.end());
-    // The CVT's own splits share one budget with the first run's: max_inserted_fraction of the
-    // sites asked for, over all rounds (each round's start already holds the earlier splits).
-    const double split_room = options.cvt.max_inserted_fraction * options.cvt.sites -
-                              (static_cast<double>(start.size()) - options.cvt.sites);
-    again.max_inserted_fraction = std::max(0.0, split_room) / static_cast<double>(start.size());
-    out.cvt = centroidal_voronoi(work.V, work.F, laplacian, again, start, progress, metric);
+    out.cvt = centroidal_voronoi(work.V, work.F, laplacian, round, start, progress, metric);
     out.repair_sites += static_cast<int>(added.size());
     out.repair_dropped_sites += dropped;
     ++out.repair_rounds;

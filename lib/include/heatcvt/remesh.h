@@ -78,10 +78,14 @@ struct RemeshOptions {
   /// cell at a non-manifold spot of the dual (cells wrapping a thin part, touching themselves or
   /// split), the sites in no dual triangle (a cell enclosed by another) dropped, then the CVT
   /// again from these sites" while the dual is not a manifold (on inputs without non-manifold
-  /// edges), and sites on the input's boundary loops that lack cells of their own (a loop needs
-  /// three cells, a cell may touch one loop). 0 = off. Default 5 (bun_zipper at 300 sites: its
-  /// smallest hole, a third of the site spacing across, got its three cells in the fourth round).
-  int repair_rounds = 5;
+  /// edges); each round also adds sites on the input's boundary loops that lack cells of their
+  /// own (a loop needs three cells, a cell may touch one loop). 0 = off. Default 3.
+  int repair_rounds = 3;
+  /// Further rounds of the repair for the boundary loops alone, once the dual is a manifold or
+  /// the repair_rounds are spent: sites on the loops that lack cells of their own, and the
+  /// diagram of the sites as placed (no Lloyd step, which would draw the new sites off the loop,
+  /// and no split: the count grows only by the loops' sites). Default 3.
+  int loop_repair_rounds = 3;
   /// Heat Lloyd iterations of the CVT of a repair round, at most (its start from the previous
   /// sites plus the new ones is already near a CVT: the round is there to give every cell a
   /// site, the start's surface-Lloyd iterations settle them). Default 4.
