@@ -371,8 +371,8 @@ TriangleMesh grid_with_holes(int n, Hole hole) {
 
 }  // namespace
 
-// A unit square sheet (60 × 60 quads of 1/60) with three holes: two 6-quad-wide square holes one
-// quad apart (a strip 0.29 site spacings wide at 300 sites) and a hole of one quad (0.29 spacings
+// A unit square sheet (60 × 60 quads of 1/60) with three holes: two 6-quad-wide square holes three
+// quads apart (a strip 0.87 site spacings wide at 300 sites) and a hole of one quad (0.29 spacings
 // across). The input has 4 boundary loops. Without the closed-ball repair a cell spans the strip
 // or a loop has fewer than three cells, and the dual loses loops; with it every loop has cells of
 // its own, and the output keeps all four and passes every check. (The count is not asserted: the
@@ -380,7 +380,7 @@ TriangleMesh grid_with_holes(int n, Hole hole) {
 TEST(RemeshCvt, HolesCloserOrSmallerThanACellKeepTheirOwnLoops) {
   const TriangleMesh input = grid_with_holes(60, [](int i, int j) {
     const bool rows = j >= 27 && j <= 32;
-    return (rows && i >= 18 && i <= 23) || (rows && i >= 25 && i <= 30) || (i == 45 && j == 15);
+    return (rows && i >= 18 && i <= 23) || (rows && i >= 27 && i <= 32) || (i == 45 && j == 15);
   });
   ASSERT_EQ(describe_surface(input).topology.boundary_loops, 4);
   RemeshOptions o = remesh_options(300);

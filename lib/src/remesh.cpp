@@ -235,18 +235,21 @@ void repair_closed_ball(const TriangleMesh& work, const Laplacian& laplacian, co
                                           out.cvt.positions, kMinSiteSeparation * spacing);
     if (bad.empty() && on_loops.empty()) break;
     // Rounds for the non-manifold spots (and the loops) while they last; then rounds for the loops
-    // alone, whose diagram is that of the sites as placed (no Lloyd step, no split).
+    // alone.
     const bool ball_round = !bad.empty() && ball_rounds < options.repair_rounds;
     if (!ball_round) {
       if (on_loops.empty() || loop_rounds >= options.loop_repair_rounds) break;
       bad.clear();
     }
     ++(ball_round ? ball_rounds : loop_rounds);
+    // A loop round splits no cell and runs no heat iteration; its surface-Lloyd iterations settle
+    // the new sites, except in the last loop round, where they stay where they are put (Lloyd
+    // steps can draw them off a loop again).
     CvtOptions round = again;
-    if (!ball_round) {  // the loops' sites stay where they are put: Lloyd steps would draw them off
+    if (!ball_round) {
       round.split_nonmanifold_cells = false;
-      round.surface_lloyd_iterations = 0;
       round.iterations = 0;
+      if (loop_rounds == options.loop_repair_rounds) round.surface_lloyd_iterations = 0;
     }
     std::vector<unsigned char> drop(static_cast<std::size_t>(ns), 0);
     if (out.cvt.dual.F.rows() > 0)

@@ -82,9 +82,10 @@ struct RemeshOptions {
   /// own (a loop needs three cells, a cell may touch one loop). 0 = off. Default 3.
   int repair_rounds = 3;
   /// Further rounds of the repair for the boundary loops alone, once the dual is a manifold or
-  /// the repair_rounds are spent: sites on the loops that lack cells of their own, and the
-  /// diagram of the sites as placed (no Lloyd step, which would draw the new sites off the loop,
-  /// and no split: the count grows only by the loops' sites). Default 3.
+  /// the repair_rounds are spent: sites on the loops that lack cells of their own, then the CVT
+  /// without splits or heat iterations (the count grows only by the loops' sites); its
+  /// surface-Lloyd iterations settle the sites, except in the last such round, which keeps them
+  /// where they are put (a Lloyd step can draw a site off a loop again). Default 3.
   int loop_repair_rounds = 3;
   /// Heat Lloyd iterations of the CVT of a repair round, at most (its start from the previous
   /// sites plus the new ones is already near a CVT: the round is there to give every cell a
