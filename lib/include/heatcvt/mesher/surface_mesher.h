@@ -58,10 +58,11 @@ struct SurfaceMesherOptions {
   /// sharp creases). Default false (a cloud's dual is never trusted); meshcvt sets it.
   bool keep_manifold_dual = false;
   /// The topology to keep (remesh_cvt() sets the input mesh's: components, boundary loops, Euler
-  /// characteristic): no stage after the untangling breaks it (breaks_topology()): a polish
-  /// stage, the hole filling after the extraction or the removal of small pieces that would is
-  /// undone, and the sizing undoes and retries such steps (IsotropicRemeshOptions::keep_topology).
-  /// The extraction may still close the dual's own holes. Not enabled by default (a cloud).
+  /// characteristic): the hole filling after the extraction, each polish stage and the sizing's
+  /// removal of flying faces are undone where they break it (breaks_topology()), and the sizing
+  /// undoes and retries such steps (IsotropicRemeshOptions::keep_topology). The extraction may
+  /// still close the dual's own holes, and small pieces are still removed. Not enabled by
+  /// default (a cloud).
   TopologyTarget keep_topology;
   /// Worker threads of the parallel stages (overrides polish.threads and split.threads);
   /// 0 = all cores. Results do not depend on it. Default 0.
