@@ -85,10 +85,13 @@ std::vector<std::pair<int, int>> boundary_edges(const Eigen::MatrixX3i& F) {
   return border;
 }
 
-int boundary_loop_labels(int num_vertices, const Eigen::MatrixX3i& F, Eigen::VectorXi& loop) {
+namespace {
+
+// Loop labels (boundary_loop_labels()) of the border edges `border`; returns the number of loops.
+int label_loops(int num_vertices, const std::vector<std::pair<int, int>>& border, Eigen::VectorXi& loop) {
   DisjointSets sets(num_vertices);
   std::vector<char> on(static_cast<std::size_t>(num_vertices), 0);
-  for (const auto& [a, b] : boundary_edges(F)) {
+  for (const auto& [a, b] : border) {
     sets.unite(a, b);
     on[static_cast<std::size_t>(a)] = on[static_cast<std::size_t>(b)] = 1;
   }
@@ -102,6 +105,12 @@ int boundary_loop_labels(int num_vertices, const Eigen::MatrixX3i& F, Eigen::Vec
     loop[v] = r;
   }
   return count;
+}
+
+}  // namespace
+
+int boundary_loop_labels(int num_vertices, const Eigen::MatrixX3i& F, Eigen::VectorXi& loop) {
+  return label_loops(num_vertices, boundary_edges(F), loop);
 }
 
 int connected_components(int num_vertices, const Eigen::MatrixX3i& F, Eigen::VectorXi& component) {
@@ -136,8 +145,10 @@ MeshTopology mesh_topology(const Eigen::MatrixX3i& F, int num_vertices) {
     }
   t.vertices = static_cast<int>(std::count(used.begin(), used.end(), 1));
   t.edges = static_cast<int>(edges.size());
+  std::vector<std::pair<int, int>> border;
   for (const auto& [key, e] : edges) {
     int n = e.first + e.second;
+    if (n == 1) border.emplace_back(static_cast<int>(key >> 32), static_cast<int>(key & 0xffffffffu));
     if (n == 1) t.boundary_edges++;
     else if (n > 2) t.nonmanifold_edges++;
     else if (e.first != 1) t.inconsistent_edges++;
@@ -149,9 +160,9 @@ MeshTopology mesh_topology(const Eigen::MatrixX3i& F, int num_vertices) {
   for (int v = 0; v < num_vertices; ++v)
     if (used[v]) seen[comp[v]] = 1;
   t.components = static_cast<int>(std::count(seen.begin(), seen.end(), 1));
-  if (t.boundary_edges > 0) {
+  if (!border.empty()) {
     Eigen::VectorXi loop;
-    t.boundary_loops = boundary_loop_labels(num_vertices, F, loop);
+    t.boundary_loops = label_loops(num_vertices, border, loop);
   }
   return t;
 }

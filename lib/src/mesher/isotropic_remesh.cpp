@@ -586,25 +586,25 @@ class Sizer {
     for (int tries = 0; tries < 3; ++tries) {
       const WorkingMesh::Checkpoint before = mesh_.checkpoint();
       const MesherStats stats_before = stats_;
-      std::vector<int> loops_before;
-      TopologyTarget topology_before;
-      if (o_.keep_topology.enabled()) {
-        topology_before = topology_of(mesh_);
-        boundary_loop_labels(mesh_, loops_before);
-      }
+      const TopologyTarget topology_before = topology_of_if_kept();
       const int changed = step();
       std::vector<int> bad = self_intersecting_faces(mesh_);
       const bool broken = breaks_topology(o_.keep_topology, topology_before, topology_of_if_kept());
-      const std::vector<int> lost = broken ? lost_loop_vertices(mesh_, loops_before) : std::vector<int>();
       if (bad.size() <= crossings_.size() && !broken) {
         crossings_ = std::move(bad);  // what the next step is measured against
         return changed;
       }
       freeze_around(bad);
       frozen_.resize(before.V.rows());  // vertices added by the step are gone again
+      WorkingMesh changed_mesh;
+      if (broken) changed_mesh = mesh_;  // the loops it lost are found against the state rolled back to
       mesh_.rollback(before);
       stats_ = stats_before;
-      freeze_around(faces_at(lost));  // lost holds vertices of the state rolled back to
+      if (broken) {
+        std::vector<int> loops_before;
+        boundary_loop_labels(mesh_, loops_before);
+        freeze_around(faces_at(lost_loop_vertices(changed_mesh, loops_before)));
+      }
     }
     return 0;
   }
