@@ -24,24 +24,29 @@
 namespace heatcvt {
 namespace {
 
-// The unit cube, each side an n×n grid of squares split into two triangles, outward oriented.
-TriangleMesh cube_mesh(int n) {
-  std::map<std::tuple<long, long, long>, int> index;
+// A box of the given side lengths with a corner at the origin, each side a grid of squares of
+// about `step` (at least one per side) split into two triangles, outward oriented.
+TriangleMesh box_mesh(const Eigen::Vector3d& size, double step) {
+  Eigen::Vector3i cells;
+  for (int a = 0; a < 3; ++a) cells[a] = std::max(1, static_cast<int>(std::lround(size[a] / step)));
+  std::map<std::tuple<int, int, int>, int> index;
   std::vector<Eigen::Vector3d> points;
-  const auto vertex = [&](const Eigen::Vector3d& p) {
-    const auto key = std::make_tuple(std::lround(p.x() * n), std::lround(p.y() * n), std::lround(p.z() * n));
-    const auto [it, added] = index.emplace(key, static_cast<int>(points.size()));
-    if (added) points.push_back(p);
+  const auto vertex = [&](const Eigen::Vector3i& g) {
+    const auto [it, added] = index.emplace(std::make_tuple(g.x(), g.y(), g.z()), static_cast<int>(points.size()));
+    if (added) points.push_back(size.cwiseProduct(g.cast<double>().cwiseQuotient(cells.cast<double>())));
     return it->second;
   };
   std::vector<Eigen::Vector3i> faces;
   for (int axis = 0; axis < 3; ++axis)
     for (int side = 0; side < 2; ++side) {
-      const Eigen::Vector3d u = Eigen::Vector3d::Unit((axis + 1) % 3), w = Eigen::Vector3d::Unit((axis + 2) % 3);
-      const Eigen::Vector3d base = side * Eigen::Vector3d::Unit(axis);
-      for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j) {
-          const auto at = [&](int a, int b) { return vertex(base + u * a / n + w * b / n); };
+      const int u = (axis + 1) % 3, w = (axis + 2) % 3;
+      for (int i = 0; i < cells[u]; ++i)
+        for (int j = 0; j < cells[w]; ++j) {
+          const auto at = [&](int a, int b) {
+            Eigen::Vector3i g = Eigen::Vector3i::Zero();
+            g[axis] = side * cells[axis], g[u] = a, g[w] = b;
+            return vertex(g);
+          };
           const int p = at(i, j), q = at(i + 1, j), r = at(i + 1, j + 1), s = at(i, j + 1);
           // u × w points along +axis: counter-clockwise seen from outside on side 1.
           if (side == 1) faces.push_back({p, q, r}), faces.push_back({p, r, s});
@@ -55,6 +60,9 @@ TriangleMesh cube_mesh(int n) {
   for (std::size_t f = 0; f < faces.size(); ++f) m.F.row(f) = faces[f].transpose();
   return m;
 }
+
+// The unit cube, each side an n×n grid.
+TriangleMesh cube_mesh(int n) { return box_mesh(Eigen::Vector3d::Ones(), 1.0 / n); }
 
 double point_segment_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   const Eigen::Vector3d ab = b - a;
@@ -218,6 +226,30 @@ TEST(Creases, LinesAlongThinPartsAreLeftOutAlone) {
   EXPECT_GT(stats.skipped_lines, 0);
   EXPECT_GT(stats.lines, stats.skipped_lines);
   EXPECT_LE(self_intersecting_pairs(work), crossing_before);
+}
+
+// A plate about one spacing thick: the faces across its rim have all three corners on the two
+// lines along it. Spread evenly, the samples of the two lines face each other and those faces
+// fall below meshcvt's 30°; slid along their lines they are staggered. The rule is meshcvt's for
+// every mesh: φmin ≥ 30°, every check, the creases within 0.5 % of the diagonal.
+TEST(Creases, VerticesSlideAlongLinesAcrossAThinPlate) {
+  const double thickness = 0.05;
+  const TriangleMesh plate = box_mesh(Eigen::Vector3d(1, 1, thickness), 1.0 / 40);
+  RemeshOptions o;
+  o.cvt.sites = 1000;
+  const double spacing = std::sqrt((2 + 4 * thickness) / o.cvt.sites);  // area over sites
+  ASSERT_LT(thickness, 1.5 * spacing) << "the rim is about one spacing wide";
+  o.creases.slide_steps = 0;
+  const RemeshResult spread = remesh_cvt(plate, o);
+  ASSERT_FALSE(spread.creases.undone) << spread.creases.undone_reason;
+  ASSERT_LT(spread.quality.min_angle_deg, 30) << "evenly spread samples across the rim";
+  o.creases.slide_steps = RemeshOptions().creases.slide_steps;
+  const RemeshResult slid = remesh_cvt(plate, o);
+  ASSERT_FALSE(slid.creases.undone) << slid.creases.undone_reason;
+  EXPECT_EQ(slid.creases.lines, spread.creases.lines);
+  EXPECT_TRUE(slid.checks.ok()) << slid.checks.summary();
+  EXPECT_GE(slid.quality.min_angle_deg, 30);
+  EXPECT_LE(crease_gap(plate, slid.mesh), 0.005 * diagonal(plate));
 }
 
 TEST(Creases, FandiskRemeshKeepsItsCreases) {

@@ -74,6 +74,20 @@ std::vector<Eigen::Vector3d> resample(const Eigen::MatrixX3d& V, const std::vect
   return out;
 }
 
+// The point of `line` at arc length `at` from its first vertex (clamped to the line's ends).
+Eigen::Vector3d point_at(const Eigen::MatrixX3d& V, const std::vector<int>& line, double at) {
+  double done = 0;  // arc length at line[i - 1]
+  for (std::size_t i = 1; i < line.size(); ++i) {
+    const double piece = (V.row(line[i]) - V.row(line[i - 1])).norm();
+    if (done + piece >= at && piece > 0) {
+      const double t = std::clamp((at - done) / piece, 0.0, 1.0);
+      return ((1 - t) * V.row(line[i - 1]) + t * V.row(line[i])).transpose();
+    }
+    done += piece;
+  }
+  return at <= 0 ? Eigen::Vector3d(V.row(line.front()).transpose()) : Eigen::Vector3d(V.row(line.back()).transpose());
+}
+
 double mean_edge_length(const WorkingMesh& mesh) {
   double sum = 0;
   long count = 0;
@@ -300,7 +314,7 @@ class CreaseRecovery {
       path.push_back(x);
       path.push_back(w);
     }
-    if (whole) spread(line, path);
+    if (whole) spread(l, path);
   }
 
   // The vertices off the lines relaxed, flipped and polished around them; slivers whose corners
@@ -321,6 +335,7 @@ class CreaseRecovery {
     flips.valence_mode = false;
     for (int round = 0; round < o_.polish_rounds; ++round) {
       flip_between_lines();
+      slide_on_lines();
       RelaxationBorder border;
       border.slide = true;
       tangential_relaxation(mesh_, surface_, o_.threads, border, &fixed);
@@ -387,13 +402,72 @@ class CreaseRecovery {
 
   // The vertices of `path`, an edge path along `line` from its start to its end, moved to equal
   // arc-length steps of the line; its two ends keep their place.
-  void spread(const std::vector<int>& line, const std::vector<int>& path) {
-    const std::vector<Eigen::Vector3d> at = resample(V_, line, static_cast<int>(path.size()) - 1);
-    for (std::size_t i = 1; i + 1 < path.size(); ++i) {
-      Eigen::Vector3d pos, nrm;
-      surface_.project(at[i], mesh_.anchor[path[i]], pos, nrm);
-      mesh_.V.row(path[i]) = at[i].transpose();
-      if (nrm.allFinite()) mesh_.N.row(path[i]) = nrm.transpose();
+  // Recorded in paths_ for slide_on_lines().
+  void spread(int l, const std::vector<int>& path) {
+    const std::vector<int>& line = lines_.lines[l];
+    const int segments = static_cast<int>(path.size()) - 1;
+    const std::vector<Eigen::Vector3d> at = resample(V_, line, segments);
+    for (std::size_t i = 1; i + 1 < path.size(); ++i) place(path[i], at[i]);
+    LinePath recorded{l, path, {}};
+    const double total = polyline_length(V_, line);
+    for (int i = 0; i <= segments; ++i) recorded.at.push_back(total * i / segments);
+    paths_.push_back(std::move(recorded));
+  }
+
+  // Vertex v moved onto x, a point of the input surface, with the surface's normal there.
+  void place(int v, const Eigen::Vector3d& x) {
+    Eigen::Vector3d pos, nrm;
+    surface_.project(x, mesh_.anchor[v], pos, nrm);
+    mesh_.V.row(v) = x.transpose();
+    if (nrm.allFinite()) mesh_.N.row(v) = nrm.transpose();
+  }
+
+  // The smallest angle of the faces `faces` at vertex v if v were at x; −1 if a face would turn
+  // by 90° or more from `normals` (its normal with v where it is).
+  double min_angle_with(int v, const Eigen::Vector3d& x, const std::vector<int>& faces,
+                        const std::vector<Eigen::Vector3d>& normals) {
+    const Eigen::RowVector3d kept = mesh_.V.row(v);
+    mesh_.V.row(v) = x.transpose();
+    double smallest = M_PI;
+    for (std::size_t i = 0; i < faces.size() && smallest >= 0; ++i) {
+      const MeshFace& f = mesh_.face(faces[i]);
+      smallest = faces_along(mesh_, f[0], f[1], f[2], normals[i]) ? std::min(smallest, face_min_angle(mesh_, f)) : -1;
+    }
+    mesh_.V.row(v) = kept;
+    return smallest;
+  }
+
+  // Every vertex inside a recovered path slid along its line, between its two path neighbours,
+  // to the place among slide_steps + 1 evenly spaced ones in the middle slide_range of that
+  // interval where the smallest angle of its faces is largest (the ends and corners keep their
+  // place). Where two lines run closer than the spacing (a plate thinner than a cell), evenly
+  // spread samples on both face each other and the faces between the lines are right-angled or
+  // worse; sliding staggers them.
+  void slide_on_lines() {
+    if (o_.slide_steps < 1 || !(o_.slide_range > 0)) return;
+    const std::vector<std::vector<int>> vf = mesh_.vertex_faces();
+    std::vector<Eigen::Vector3d> normals;
+    for (LinePath& p : paths_) {
+      const std::vector<int>& line = lines_.lines[p.line];
+      for (std::size_t i = 1; i + 1 < p.path.size(); ++i) {
+        const int v = p.path[i];
+        normals.clear();
+        for (int f : vf[v]) {
+          const MeshFace& t = mesh_.face(f);
+          normals.push_back((mesh_.V.row(t[1]) - mesh_.V.row(t[0])).cross(mesh_.V.row(t[2]) - mesh_.V.row(t[0])).transpose());
+        }
+        const double lo = p.at[i - 1], hi = p.at[i + 1];
+        double best = min_angle_with(v, mesh_.V.row(v).transpose(), vf[v], normals), best_at = p.at[i];
+        for (int step = 0; step <= o_.slide_steps; ++step) {
+          const double at = lo + (hi - lo) * (0.5 + o_.slide_range * (static_cast<double>(step) / o_.slide_steps - 0.5));
+          const double angle = min_angle_with(v, point_at(V_, line, at), vf[v], normals);
+          if (angle > best + 1e-9) best = angle, best_at = at;
+        }
+        if (best_at != p.at[i]) {
+          place(v, point_at(V_, line, best_at));
+          p.at[i] = best_at;
+        }
+      }
     }
   }
 
@@ -402,13 +476,15 @@ class CreaseRecovery {
     WorkingMesh::Checkpoint mesh;
     std::vector<char> taken;
     std::set<std::pair<int, int>> line_edges;
+    std::size_t paths;
     CreaseStats stats;
   };
-  Transaction begin() const { return {mesh_.checkpoint(), taken_, line_edges_, stats}; }
+  Transaction begin() const { return {mesh_.checkpoint(), taken_, line_edges_, paths_.size(), stats}; }
   void undo(const Transaction& t) {
     mesh_.rollback(t.mesh, true);
     taken_ = t.taken;
     line_edges_ = t.line_edges;
+    paths_.resize(t.paths);
     const int skipped = stats.skipped_lines;
     stats = t.stats;
     stats.skipped_lines = skipped;
@@ -456,6 +532,13 @@ class CreaseRecovery {
   const double spacing_;
   std::vector<char> taken_;
   std::set<std::pair<int, int>> line_edges_;
+  // A recovered line: its edge path of output vertices and their arc lengths along the line.
+  struct LinePath {
+    int line;
+    std::vector<int> path;
+    std::vector<double> at;
+  };
+  std::vector<LinePath> paths_;
   using Cell = std::array<long, 3>;
   Cell cell_of(const Eigen::Vector3d& x) const {
     return {static_cast<long>(std::floor(x[0] / cell_size_)), static_cast<long>(std::floor(x[1] / cell_size_)),

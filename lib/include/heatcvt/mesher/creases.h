@@ -33,6 +33,12 @@ struct CreaseOptions {
   /// the vertices off the lines within polish_rings rings of one on a line. Defaults 4 and 2.
   int polish_rounds = 4;
   int polish_rings = 2;
+  /// In each polish round, a vertex of a recovered line slides along it to the best of
+  /// slide_steps + 1 evenly spaced places in the middle slide_range of the stretch between its
+  /// two neighbours on the line (the place where the smallest angle of its faces is largest).
+  /// Defaults 8 and 0.6; slide_steps = 0 keeps the line's vertices evenly spread.
+  int slide_steps = 8;
+  double slide_range = 0.6;
   /// The recovery is undone where a face falls below the lower of the mesh's smallest angle
   /// before and this, unless that smallest angle is at a corner between two line edges (two
   /// crease lines meeting at that angle bound every triangle between them) or the face's three
