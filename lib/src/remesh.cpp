@@ -37,7 +37,10 @@ ValidationOptions dual_checks(const SurfaceDescription& input) {
   ValidationOptions o;
   o.require_closed = input.closed();
   o.expected_genus = input.genus;
-  o.expected_boundary_loops = input.topology.boundary_loops;
+  // The loop count, like the genus, only where the input is an edge manifold: where its border
+  // pinches at a vertex or an edge has more than two faces, a remesh that is a manifold separates
+  // or joins the loops there.
+  o.expected_boundary_loops = input.genus >= 0 || input.non_orientable ? input.topology.boundary_loops : -1;
   o.allow_non_orientable = input.non_orientable;
   return o;
 }
@@ -385,12 +388,15 @@ bool dual_meets_targets(const RemeshResult& out, const RemeshOptions& options) {
 }
 
 // Why the post-CVT stages' result `post` (its checks `after`) does not replace the dual
-// (out.mesh, out.checks), or "" where it does: it must pass every check the dual passed, keep
+// (out.mesh, out.checks), or "" where it does: a manifold result replaces a dual that is none;
+// otherwise it must pass every check the dual passed, keep
 // the input's topology (components, Euler characteristic) where the dual has it (the stages must
 // not open, close or cut the surface), and cover the input as well as a dual that is a manifold
 // (RemeshOptions::max_coverage_ratio).
 std::string post_cvt_refusal(const Eigen::MatrixX3d& samples, double spacing, const TriangleMesh& post,
                              const ValidationReport& after, const RemeshOptions& options, const RemeshResult& out) {
+  // A dual that is no manifold is no alternative to a result that is one, whatever else it passes.
+  if (!is_manifold(out.checks) && is_manifold(after)) return "";
   const auto input_topology = [&](const ValidationReport& r) {
     return r.components == out.input.topology.components &&
            r.euler_characteristic == out.input.topology.euler_characteristic();
