@@ -12,6 +12,7 @@
 //
 // Usage: bench_remesh [--sizes 1000,3000,10000] [--only spot,torus] [--threads T] [--samples S]
 //                     [--no-features] (heatcvt without the crease stage, as meshcvt --no-features)
+//                     [--dir DIR] (the meshes of DIR instead, e.g. scripts/make_shapes.py's)
 // Inputs that are not edge manifolds or not orientable are skipped with the reason printed.
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
@@ -166,6 +167,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> only;
   int threads = 0, samples = 20000;
   bool features = true;
+  std::filesystem::path dir = std::filesystem::path(HEATCVT_DATA_DIR) / "meshes";
   for (int i = 1; i < argc; ++i) {
     auto next = [&]() -> std::string {
       if (i + 1 >= argc) {
@@ -185,12 +187,17 @@ int main(int argc, char** argv) {
       features = false;
     } else if (!std::strcmp(argv[i], "--samples")) {
       samples = std::atoi(next().c_str());
+    } else if (!std::strcmp(argv[i], "--dir")) {
+      dir = next();
     } else {
       std::fprintf(stderr, "bench_remesh: unknown option %s\n", argv[i]);
       return 2;
     }
   }
-  const std::filesystem::path dir = std::filesystem::path(HEATCVT_DATA_DIR) / "meshes";
+  if (!std::filesystem::is_directory(dir)) {
+    std::fprintf(stderr, "bench_remesh: %s: not a directory\n", dir.string().c_str());
+    return 2;
+  }
   std::vector<std::filesystem::path> files;
   for (const auto& e : std::filesystem::directory_iterator(dir)) {
     const std::string ext = e.path().extension().string();

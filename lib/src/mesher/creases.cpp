@@ -88,6 +88,20 @@ Eigen::Vector3d point_at(const Eigen::MatrixX3d& V, const std::vector<int>& line
   return at <= 0 ? Eigen::Vector3d(V.row(line.front()).transpose()) : Eigen::Vector3d(V.row(line.back()).transpose());
 }
 
+// The arc length along `line` of its point nearest x.
+double arc_length_near(const Eigen::MatrixX3d& V, const std::vector<int>& line, const Eigen::Vector3d& x) {
+  double done = 0, best = std::numeric_limits<double>::infinity(), at = 0;
+  for (std::size_t i = 1; i < line.size(); ++i) {
+    const Eigen::Vector3d a = V.row(line[i - 1]).transpose(), b = V.row(line[i]).transpose();
+    const double piece = (b - a).norm();
+    const double t = piece > 0 ? std::clamp((x - a).dot(b - a) / (piece * piece), 0.0, 1.0) : 0.0;
+    const double d = (a + t * (b - a) - x).squaredNorm();
+    if (d < best) best = d, at = done + t * piece;
+    done += piece;
+  }
+  return at;
+}
+
 double mean_edge_length(const WorkingMesh& mesh) {
   double sum = 0;
   long count = 0;
@@ -287,25 +301,35 @@ class CreaseRecovery {
     }
     std::vector<std::vector<int>> vf = mesh_.vertex_faces();
     std::vector<int> path{c.front()};
+    std::vector<int> run;  // the current run of joined samples of a line with gaps
+    std::vector<std::vector<int>> runs;
+    const auto end_run = [&]() {
+      if (run.size() >= 3) runs.push_back(run);
+      run.clear();
+    };
     bool whole = true;
     for (std::size_t s = 1; s < c.size(); ++s) {
       const int u = c[s - 1], w = c[s];
       if (u < 0 || w < 0 || u == w) {
         ++stats.missing_edges;
         whole = false;
+        end_run();
         continue;
       }
+      if (run.empty()) run.push_back(u);
       const int joined = join(mesh_, u, w, vf);
       if (joined >= 0) {
         stats.flips += joined;
         mark(u, w);
         path.push_back(w);
+        run.push_back(w);
         continue;
       }
       const int x = bridge(mesh_, u, w, V_, line, vf, taken_);
       if (x < 0) {
         ++stats.missing_edges;
         whole = false;
+        end_run();
         continue;
       }
       ++stats.snapped;
@@ -313,8 +337,13 @@ class CreaseRecovery {
       mark(x, w);
       path.push_back(x);
       path.push_back(w);
+      run.push_back(x);
+      run.push_back(w);
     }
+    end_run();
     if (whole) spread(l, path);
+    else
+      for (const std::vector<int>& r : runs) record_run(l, r);
   }
 
   // The vertices off the lines relaxed, flipped and polished around them; slivers whose corners
@@ -414,6 +443,19 @@ class CreaseRecovery {
     paths_.push_back(std::move(recorded));
   }
 
+  // A run of joined samples of line l (a line with gaps) recorded in paths_ for
+  // slide_on_lines(), with the arc length of each vertex's nearest point of the line; left out
+  // where those are not increasing along the run (a closed line's run across its start).
+  void record_run(int l, const std::vector<int>& run) {
+    LinePath recorded{l, run, {}};
+    for (int v : run) {
+      const double at = arc_length_near(V_, lines_.lines[l], mesh_.V.row(v).transpose());
+      if (!recorded.at.empty() && !(at > recorded.at.back())) return;
+      recorded.at.push_back(at);
+    }
+    paths_.push_back(std::move(recorded));
+  }
+
   // Vertex v moved onto x, a point of the input surface, with the surface's normal there.
   void place(int v, const Eigen::Vector3d& x) {
     Eigen::Vector3d pos, nrm;
@@ -437,7 +479,7 @@ class CreaseRecovery {
     return smallest;
   }
 
-  // Every vertex inside a recovered path slid along its line, between its two path neighbours,
+  // Every vertex inside a recovered path or run slid along its line, between its two neighbours,
   // to the place among slide_steps + 1 evenly spaced ones in the middle slide_range of that
   // interval where the smallest angle of its faces is largest (the ends and corners keep their
   // place). Where two lines run closer than the spacing (a plate thinner than a cell), evenly
@@ -532,7 +574,8 @@ class CreaseRecovery {
   const double spacing_;
   std::vector<char> taken_;
   std::set<std::pair<int, int>> line_edges_;
-  // A recovered line: its edge path of output vertices and their arc lengths along the line.
+  // A recovered line (or a run of joined samples of a line with gaps): its edge path of output
+  // vertices and their arc lengths along the line.
   struct LinePath {
     int line;
     std::vector<int> path;
