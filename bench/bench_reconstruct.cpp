@@ -87,9 +87,9 @@ void measure(Row& r, const TriangleMesh& m, const TriangleMesh& src, double diag
   r.hausdorff = d.hausdorff / diag;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+// The benchmark's command line: [points] [sites] [shapes] and the heatcvt options (< 0: the
+// library default).
+struct BenchOptions {
   std::vector<std::string> pos;
   bool only_heat = false, clean = true, noisy = true;
   int threads = 0;
@@ -101,164 +101,233 @@ int main(int argc, char** argv) {
   double points_per_site = -1;  // < 0: the library default
   int polish = -1;              // < 0: the library default (relaxation_iterations)
   bool no_smooth = false;       // smooth_cvt_points = false
+};
+
+// Parses the command line into `o`; false (after a message on stderr) for an unknown option.
+bool parse_arguments(int argc, char** argv, BenchOptions& o) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--only-heatcvt") only_heat = true;
-    else if (a == "--clean-only") noisy = false;
-    else if (a == "--noisy-only") clean = false;
-    else if (a == "--threads" && i + 1 < argc) threads = std::atoi(argv[++i]);
-    else if (a == "--anisotropy" && i + 1 < argc) anisotropy = std::atof(argv[++i]);
-    else if (a == "--iterations" && i + 1 < argc) iterations = std::atoi(argv[++i]);
-    else if (a == "--relaxation" && i + 1 < argc) relaxation = std::atof(argv[++i]);
-    else if (a == "--tolerance" && i + 1 < argc) tolerance = std::atof(argv[++i]);
-    else if (a == "--random-start") random_start = true;
-    else if (a == "--fast-start") fast_start = true;
-    else if (a == "--surface-lloyd" && i + 1 < argc) surface_lloyd = std::atoi(argv[++i]);
-    else if (a == "--points-per-site" && i + 1 < argc) points_per_site = std::atof(argv[++i]);
-    else if (a == "--polish" && i + 1 < argc) polish = std::atoi(argv[++i]);
-    else if (a == "--no-smooth") no_smooth = true;
+    if (a == "--only-heatcvt") o.only_heat = true;
+    else if (a == "--clean-only") o.noisy = false;
+    else if (a == "--noisy-only") o.clean = false;
+    else if (a == "--threads" && i + 1 < argc) o.threads = std::atoi(argv[++i]);
+    else if (a == "--anisotropy" && i + 1 < argc) o.anisotropy = std::atof(argv[++i]);
+    else if (a == "--iterations" && i + 1 < argc) o.iterations = std::atoi(argv[++i]);
+    else if (a == "--relaxation" && i + 1 < argc) o.relaxation = std::atof(argv[++i]);
+    else if (a == "--tolerance" && i + 1 < argc) o.tolerance = std::atof(argv[++i]);
+    else if (a == "--random-start") o.random_start = true;
+    else if (a == "--fast-start") o.fast_start = true;
+    else if (a == "--surface-lloyd" && i + 1 < argc) o.surface_lloyd = std::atoi(argv[++i]);
+    else if (a == "--points-per-site" && i + 1 < argc) o.points_per_site = std::atof(argv[++i]);
+    else if (a == "--polish" && i + 1 < argc) o.polish = std::atoi(argv[++i]);
+    else if (a == "--no-smooth") o.no_smooth = true;
     else if (!a.empty() && a[0] == '-') {
       std::fprintf(stderr, "bench_reconstruct: unknown option %s\n", a.c_str());
-      return 2;
-    } else pos.push_back(a);
+      return false;
+    } else o.pos.push_back(a);
   }
-  const int points = pos.size() > 0 ? std::atoi(pos[0].c_str()) : 50000;
-  const int sites = pos.size() > 1 ? std::atoi(pos[1].c_str()) : 3000;
+  return true;
+}
+
+// The shapes to sample: the third positional argument (comma-separated) or the default five.
+std::vector<std::string> shape_list(const BenchOptions& o) {
   std::vector<std::string> shapes = {"bunny_pmp.off", "armadillo.obj", "kitten.obj", "fertility.off", "elephant.off"};
-  if (pos.size() > 2) {
+  if (o.pos.size() > 2) {
     shapes.clear();
-    std::stringstream ss(pos[2]);
+    std::stringstream ss(o.pos[2]);
     for (std::string s; std::getline(ss, s, ',');) shapes.push_back(s);
   }
-  ReconstructionOptions heat_options;
-  heat_options.sites = sites;
-  heat_options.threads = threads;
-  if (anisotropy >= 0) heat_options.anisotropy = anisotropy;
-  if (iterations >= 0) heat_options.iterations = iterations;
-  if (relaxation >= 0) heat_options.lloyd_relaxation = relaxation;
-  if (tolerance >= 0) heat_options.lloyd_tolerance = tolerance;
-  if (random_start) heat_options.farthest_point_start = false;
-  if (fast_start) heat_options.farthest_point_start = true;
-  if (surface_lloyd >= 0) heat_options.surface_lloyd_iterations = surface_lloyd;
-  if (points_per_site >= 0) heat_options.cvt_points_per_site = points_per_site;
-  if (polish >= 0) heat_options.relaxation_iterations = polish;
-  if (no_smooth) heat_options.smooth_cvt_points = false;
-  {
-    const CvtOptions c = reconstruction_cvt_options(heat_options);  // what reconstruct_surface runs
-    std::fprintf(stderr, "heatcvt CVT: %d sites, %d heat iterations, %s start, %d surface-Lloyd iterations (omega %.2f), "
-                 "%d graph-Lloyd iterations, relaxation %.2f, Voronoi rings %d\n", c.sites, c.iterations,
-                 c.initialization == CvtInitialization::farthest_point ? "farthest-point" : "random",
-                 c.surface_lloyd_iterations, c.surface_lloyd_relaxation, c.graph_lloyd_iterations, c.relaxation,
-                 c.voronoi_rings);
-  }
-  std::vector<double> noises;
-  if (clean) noises.push_back(0.0);
-  if (noisy) noises.push_back(0.0025);
-  std::vector<Row> rows;
-  for (const std::string& shape : shapes) {
-    const TriangleMesh src = read_mesh(std::string(HEATCVT_DATA_DIR) + "/meshes/" + shape);
-    const double diag = (src.V.colwise().maxCoeff() - src.V.colwise().minCoeff()).norm();
-    const int genus = mesh_genus(src.F, static_cast<int>(src.V.rows()));
-    for (double noise : noises) {
-      const Eigen::MatrixX3d P = sample_surface(src.V, src.F, points, 11, noise * diag);
-      char label[128];
-      std::snprintf(label, sizeof label, "%s (g%d) %s", shape.c_str(), genus, noise > 0 ? "noisy" : "clean");
-      std::fprintf(stderr, "== %s\n", label);
-      std::vector<Row> cell;
-      auto run = [&](const std::string& method, const std::function<TriangleMesh()>& f, bool check_si = true) {
-        Row r;
-        r.shape = label;
-        r.method = method;
-        r.noisy = noise > 0;
-        r.source_genus = genus;
-        const double t0 = now();
-        TriangleMesh m;
-        try {
-          m = f();
-          r.seconds = now() - t0;
-          measure(r, m, src, diag, check_si);
-        } catch (const std::exception& e) {
-          r.seconds = now() - t0;
-          r.note = std::string("failed: ") + e.what();
-        }
-        r.pipeline_seconds = r.seconds;
-        std::fprintf(stderr, "   %-28s %.2fs V %ld F %ld genus %d phi_m %.1f phi_min %.1f dist %.5f %s\n",
-                     method.c_str(), r.seconds, r.V, r.F, r.genus, r.phi_m, r.phi_min, r.mean_dist, r.note.c_str());
-        cell.push_back(r);
-        return m;
-      };
-      ReconstructionResult heat;
-      run("heatcvt (-n " + std::to_string(sites) + ")", [&]() {
-        heat = reconstruct_surface(P, heat_options);
-        return heat.mesh;
-      });
-      cell.back().heat = true;
-      if (!only_heat) {
-        // Normals for the other methods: PCA (k = 30) + MST orientation, the same as heatcvt uses
-        // (heatcvt receives the bare points; its time includes its own normals).
-        const double tn = now();
-        const Eigen::MatrixX3d N = test::peer_normals(P, threads);
-        const double normal_seconds = now() - tn;
-        // Mean spacing for the radius-based methods.
-        const Eigen::MatrixXi nn = k_nearest_neighbors(P, 1);
-        double spacing = 0;
-        for (Eigen::Index i = 0; i < P.rows(); ++i) spacing += (P.row(i) - P.row(nn(i, 0))).norm();
-        spacing /= P.rows();
+  return shapes;
+}
 
-        run("PCL GP3", [&]() { return test::pcl_greedy_projection(P, N, 4 * spacing); }, false);
-        cell.back().pipeline_seconds += normal_seconds;
-        run("CGAL advancing front", [&]() {
-          std::vector<K::Point_3> pts;
-          for (Eigen::Index i = 0; i < P.rows(); ++i) pts.emplace_back(P(i, 0), P(i, 1), P(i, 2));
-          std::vector<std::array<std::size_t, 3>> facets;
-          CGAL::advancing_front_surface_reconstruction(pts.begin(), pts.end(), std::back_inserter(facets));
-          TriangleMesh m;
-          m.V = P;
-          m.F.resize(facets.size(), 3);
-          for (size_t i = 0; i < facets.size(); ++i)
-            for (int k = 0; k < 3; ++k) m.F(i, k) = static_cast<int>(facets[i][k]);
-          return test::compact(m);
-        }, false);
-        const TriangleMesh pcl_poisson = run("PCL Poisson (depth 8)", [&]() { return test::pcl_poisson(P, N, 8); }, false);
-        const double pcl_poisson_seconds = cell.back().seconds + normal_seconds;
-        cell.back().pipeline_seconds = pcl_poisson_seconds;
-        const TriangleMesh cgal_poisson = run("CGAL Poisson", [&]() { return test::cgal_poisson(P, N); }, false);
-        const double cgal_poisson_seconds = cell.back().seconds + normal_seconds;
-        cell.back().pipeline_seconds = cgal_poisson_seconds;
-        run("PCL Poisson + CGAL remesh", [&]() {
-          if (pcl_poisson.F.rows() == 0) throw std::runtime_error("no Poisson mesh");
-          return test::remesh_to(pcl_poisson, sites);
-        });
-        cell.back().pipeline_seconds += pcl_poisson_seconds;
-        run("CGAL Poisson + CGAL remesh", [&]() {
-          if (cgal_poisson.F.rows() == 0) throw std::runtime_error("no Poisson mesh");
-          return test::remesh_to(cgal_poisson, sites);
-        });
-        cell.back().pipeline_seconds += cgal_poisson_seconds;
-        // Ratio against the best two-step pipeline and the acceptance verdict of the heatcvt row.
-        double best = std::numeric_limits<double>::infinity();
-        for (const Row& r : cell)
-          if (r.method.find("+ CGAL remesh") != std::string::npos && r.F > 0) best = std::min(best, r.mean_dist);
-        Row& h = cell.front();
-        if (std::isfinite(best) && best > 0) h.ratio = h.mean_dist / best;
-        for (Row& r : cell)
-          if (r.method.find("+ CGAL remesh") != std::string::npos && r.F > 0 && std::isfinite(best) && best > 0)
-            r.ratio = r.mean_dist / best;
-      }
-      Row& h = cell.front();
-      h.accepted = h.closed && h.manifold && !h.self_intersecting && h.genus == genus && h.phi_m >= 52.0 &&
-                   h.phi_min >= 25.0 && (h.ratio < 0 || h.ratio <= (h.noisy ? 1.5 : 1.2));
-      double iteration_sum = 0;
-      for (double s : heat.iteration_seconds) iteration_sum += s;
-      std::fprintf(stderr, "   heatcvt: laplacian %.2fs factor %.2fs cvt %.2fs (%d it, %.2fs in them) total %.2fs; holes %d "
-                   "rejected %d removed %d unused %d fallback %d angle-undone %d; ratio %.3f %s\n",
-                   heat.laplacian_seconds, heat.factor_seconds, heat.cvt_seconds, heat.iterations, iteration_sum,
-                   heat.total_seconds,
-                   heat.holes_filled, heat.rejected_triangles, heat.removed_triangles, heat.unused_sites,
-                   heat.polish_fallback ? 1 : 0, heat.angle_polish_undone ? 1 : 0, h.ratio, h.accepted ? "ACCEPTED" : "NOT accepted");
-      for (Row& r : cell) rows.push_back(r);
+// The options of heatcvt's reconstruction: the library defaults with what the arguments set.
+ReconstructionOptions heat_options(const BenchOptions& o, int sites) {
+  ReconstructionOptions opt;
+  opt.sites = sites;
+  opt.threads = o.threads;
+  if (o.anisotropy >= 0) opt.anisotropy = o.anisotropy;
+  if (o.iterations >= 0) opt.iterations = o.iterations;
+  if (o.relaxation >= 0) opt.lloyd_relaxation = o.relaxation;
+  if (o.tolerance >= 0) opt.lloyd_tolerance = o.tolerance;
+  if (o.random_start) opt.farthest_point_start = false;
+  if (o.fast_start) opt.farthest_point_start = true;
+  if (o.surface_lloyd >= 0) opt.surface_lloyd_iterations = o.surface_lloyd;
+  if (o.points_per_site >= 0) opt.cvt_points_per_site = o.points_per_site;
+  if (o.polish >= 0) opt.relaxation_iterations = o.polish;
+  if (o.no_smooth) opt.smooth_cvt_points = false;
+  return opt;
+}
+
+// Prints on stderr the CVT configuration that reconstruct_surface runs with these options.
+void print_cvt_configuration(const ReconstructionOptions& options) {
+  const CvtOptions c = reconstruction_cvt_options(options);  // what reconstruct_surface runs
+  std::fprintf(stderr, "heatcvt CVT: %d sites, %d heat iterations, %s start, %d surface-Lloyd iterations (omega %.2f), "
+               "%d graph-Lloyd iterations, relaxation %.2f, Voronoi rings %d\n", c.sites, c.iterations,
+               c.initialization == CvtInitialization::farthest_point ? "farthest-point" : "random",
+               c.surface_lloyd_iterations, c.surface_lloyd_relaxation, c.graph_lloyd_iterations, c.relaxation,
+               c.voronoi_rings);
+}
+
+// The rows of one cloud (a shape, clean or noisy): each method run, timed and measured against the source.
+struct Cell {
+  std::string label;
+  bool noisy = false;
+  int genus = -1;
+  const TriangleMesh& src;
+  double diag = 0;
+  std::vector<Row> rows;
+
+  // Runs one method, measures its mesh (a failure is a row with the error as its note), logs the
+  // row on stderr and appends it; returns the mesh.
+  TriangleMesh run(const std::string& method, const std::function<TriangleMesh()>& f, bool check_si = true) {
+    Row r;
+    r.shape = label;
+    r.method = method;
+    r.noisy = noisy;
+    r.source_genus = genus;
+    const double t0 = now();
+    TriangleMesh m;
+    try {
+      m = f();
+      r.seconds = now() - t0;
+      measure(r, m, src, diag, check_si);
+    } catch (const std::exception& e) {
+      r.seconds = now() - t0;
+      r.note = std::string("failed: ") + e.what();
     }
+    r.pipeline_seconds = r.seconds;
+    std::fprintf(stderr, "   %-28s %.2fs V %ld F %ld genus %d phi_m %.1f phi_min %.1f dist %.5f %s\n",
+                 method.c_str(), r.seconds, r.V, r.F, r.genus, r.phi_m, r.phi_min, r.mean_dist, r.note.c_str());
+    rows.push_back(r);
+    return m;
   }
+};
+
+// CGAL's advancing-front reconstruction of the points (their own vertices, unused ones dropped).
+TriangleMesh advancing_front(const Eigen::MatrixX3d& P) {
+  std::vector<K::Point_3> pts;
+  for (Eigen::Index i = 0; i < P.rows(); ++i) pts.emplace_back(P(i, 0), P(i, 1), P(i, 2));
+  std::vector<std::array<std::size_t, 3>> facets;
+  CGAL::advancing_front_surface_reconstruction(pts.begin(), pts.end(), std::back_inserter(facets));
+  TriangleMesh m;
+  m.V = P;
+  m.F.resize(facets.size(), 3);
+  for (size_t i = 0; i < facets.size(); ++i)
+    for (int k = 0; k < 3; ++k) m.F(i, k) = static_cast<int>(facets[i][k]);
+  return test::compact(m);
+}
+
+// Runs the other methods on the cloud: PCL GP3, CGAL advancing front, both Poissons and both
+// Poisson + remesh pipelines, with their end-to-end times.
+void run_peers(Cell& cell, const Eigen::MatrixX3d& P, int threads, int sites) {
+  // Normals for the other methods: PCA (k = 30) + MST orientation, the same as heatcvt uses
+  // (heatcvt receives the bare points; its time includes its own normals).
+  const double tn = now();
+  const Eigen::MatrixX3d N = test::peer_normals(P, threads);
+  const double normal_seconds = now() - tn;
+  // Mean spacing for the radius-based methods.
+  const Eigen::MatrixXi nn = k_nearest_neighbors(P, 1);
+  double spacing = 0;
+  for (Eigen::Index i = 0; i < P.rows(); ++i) spacing += (P.row(i) - P.row(nn(i, 0))).norm();
+  spacing /= P.rows();
+
+  cell.run("PCL GP3", [&]() { return test::pcl_greedy_projection(P, N, 4 * spacing); }, false);
+  cell.rows.back().pipeline_seconds += normal_seconds;
+  cell.run("CGAL advancing front", [&]() { return advancing_front(P); }, false);
+  const TriangleMesh pcl_poisson = cell.run("PCL Poisson (depth 8)", [&]() { return test::pcl_poisson(P, N, 8); }, false);
+  const double pcl_poisson_seconds = cell.rows.back().seconds + normal_seconds;
+  cell.rows.back().pipeline_seconds = pcl_poisson_seconds;
+  const TriangleMesh cgal_poisson = cell.run("CGAL Poisson", [&]() { return test::cgal_poisson(P, N); }, false);
+  const double cgal_poisson_seconds = cell.rows.back().seconds + normal_seconds;
+  cell.rows.back().pipeline_seconds = cgal_poisson_seconds;
+  cell.run("PCL Poisson + CGAL remesh", [&]() {
+    if (pcl_poisson.F.rows() == 0) throw std::runtime_error("no Poisson mesh");
+    return test::remesh_to(pcl_poisson, sites);
+  });
+  cell.rows.back().pipeline_seconds += pcl_poisson_seconds;
+  cell.run("CGAL Poisson + CGAL remesh", [&]() {
+    if (cgal_poisson.F.rows() == 0) throw std::runtime_error("no Poisson mesh");
+    return test::remesh_to(cgal_poisson, sites);
+  });
+  cell.rows.back().pipeline_seconds += cgal_poisson_seconds;
+}
+
+// Ratio of the heatcvt row (the first) and of the two-step rows against the best two-step pipeline.
+void set_ratios(std::vector<Row>& cell) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const Row& r : cell)
+    if (r.method.find("+ CGAL remesh") != std::string::npos && r.F > 0) best = std::min(best, r.mean_dist);
+  Row& h = cell.front();
+  if (std::isfinite(best) && best > 0) h.ratio = h.mean_dist / best;
+  for (Row& r : cell)
+    if (r.method.find("+ CGAL remesh") != std::string::npos && r.F > 0 && std::isfinite(best) && best > 0)
+      r.ratio = r.mean_dist / best;
+}
+
+// The acceptance verdict of a heatcvt row: closed oriented manifold of the source genus, no
+// self-intersections, the angle targets, and the distance ratio when there is one.
+void judge(Row& h, int genus) {
+  h.accepted = h.closed && h.manifold && !h.self_intersecting && h.genus == genus && h.phi_m >= 52.0 &&
+               h.phi_min >= 25.0 && (h.ratio < 0 || h.ratio <= (h.noisy ? 1.5 : 1.2));
+}
+
+// Prints on stderr heatcvt's stage times and mesher counts for one cloud, with its verdict.
+void print_heat_details(const ReconstructionResult& heat, const Row& h) {
+  double iteration_sum = 0;
+  for (double s : heat.iteration_seconds) iteration_sum += s;
+  std::fprintf(stderr, "   heatcvt: laplacian %.2fs factor %.2fs cvt %.2fs (%d it, %.2fs in them) total %.2fs; holes %d "
+               "rejected %d removed %d unused %d fallback %d angle-undone %d; ratio %.3f %s\n",
+               heat.laplacian_seconds, heat.factor_seconds, heat.cvt_seconds, heat.iterations, iteration_sum,
+               heat.total_seconds,
+               heat.holes_filled, heat.rejected_triangles, heat.removed_triangles, heat.unused_sites,
+               heat.polish_fallback ? 1 : 0, heat.angle_polish_undone ? 1 : 0, h.ratio, h.accepted ? "ACCEPTED" : "NOT accepted");
+}
+
+// A source mesh of the benchmark with its bounding-box diagonal and genus.
+struct Shape {
+  std::string name;
+  TriangleMesh mesh;
+  double diag = 0;
+  int genus = -1;
+};
+
+// Reads meshes/<name> from the shared data.
+Shape load_shape(const std::string& name) {
+  Shape shape{name, read_mesh(std::string(HEATCVT_DATA_DIR) + "/meshes/" + name)};
+  const TriangleMesh& src = shape.mesh;
+  shape.diag = (src.V.colwise().maxCoeff() - src.V.colwise().minCoeff()).norm();
+  shape.genus = mesh_genus(src.F, static_cast<int>(src.V.rows()));
+  return shape;
+}
+
+// Samples one cloud from the shape and runs every method on it; returns its rows, heatcvt's first.
+std::vector<Row> bench_cloud(const Shape& shape, double noise, int points, int sites,
+                             const ReconstructionOptions& options, const BenchOptions& o) {
+  const TriangleMesh& src = shape.mesh;
+  const int genus = shape.genus;
+  const Eigen::MatrixX3d P = sample_surface(src.V, src.F, points, 11, noise * shape.diag);
+  char label[128];
+  std::snprintf(label, sizeof label, "%s (g%d) %s", shape.name.c_str(), genus, noise > 0 ? "noisy" : "clean");
+  std::fprintf(stderr, "== %s\n", label);
+  Cell cell{label, noise > 0, genus, src, shape.diag, {}};
+  ReconstructionResult heat;
+  cell.run("heatcvt (-n " + std::to_string(sites) + ")", [&]() {
+    heat = reconstruct_surface(P, options);
+    return heat.mesh;
+  });
+  cell.rows.back().heat = true;
+  if (!o.only_heat) {
+    run_peers(cell, P, o.threads, sites);
+    set_ratios(cell.rows);
+  }
+  Row& h = cell.rows.front();
+  judge(h, genus);
+  print_heat_details(heat, h);
+  return cell.rows;
+}
+
+// Prints the markdown table of every row on stdout, after a paragraph saying what the columns are.
+void print_table(const std::vector<Row>& rows, int points, int sites) {
   std::printf("\n%d points per cloud (area-uniform, seed 11, no normals given), noise = Gaussian sigma 0.25%% of the "
               "bbox diagonal; heatcvt -n %d; distances / bbox diagonal (20000 samples per side). \"time\" is the "
               "method alone; \"pipeline\" is end to end from the bare points: + PCA/MST normals for the other "
@@ -278,5 +347,27 @@ int main(int argc, char** argv) {
                 r.closed ? "yes" : "no", r.genus, r.phi_min, r.phi_m, r.mean_dist, r.hausdorff, ratio,
                 r.heat ? (r.accepted ? "**yes**" : "no") : "", r.note.c_str());
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  BenchOptions o;
+  if (!parse_arguments(argc, argv, o)) return 2;
+  const int points = o.pos.size() > 0 ? std::atoi(o.pos[0].c_str()) : 50000;
+  const int sites = o.pos.size() > 1 ? std::atoi(o.pos[1].c_str()) : 3000;
+  const std::vector<std::string> shapes = shape_list(o);
+  const ReconstructionOptions options = heat_options(o, sites);
+  print_cvt_configuration(options);
+  std::vector<double> noises;
+  if (o.clean) noises.push_back(0.0);
+  if (o.noisy) noises.push_back(0.0025);
+  std::vector<Row> rows;
+  for (const std::string& name : shapes) {
+    const Shape shape = load_shape(name);
+    for (double noise : noises)
+      for (const Row& r : bench_cloud(shape, noise, points, sites, options, o)) rows.push_back(r);
+  }
+  print_table(rows, points, sites);
   return 0;
 }

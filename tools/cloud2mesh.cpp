@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <iostream>
 #include <map>
 #include <memory>
 #include <sys/resource.h>
@@ -233,24 +232,38 @@ double peak_memory_mb() {
   return static_cast<double>(usage.ru_maxrss) / 1024.0;
 }
 
-int main(int argc, char** argv) {
-  CLI::App app{"cloud2mesh: reconstruct a triangle mesh from a point cloud with a heat-diffusion centroidal "
-               "Voronoi tessellation of the points (Herholz et al. 2017, §7-8)"};
+namespace {
+
+// The command line of cloud2mesh.
+struct Settings {
   ReconstructionOptions opt;
   std::vector<std::string> cloud_paths, pose_paths;
   std::string conf_path, out_path, report_path;
   bool quiet = false, write_normals = false;
   long long stream_above = StreamOptions{}.max_raw_points;
   CloudReadOptions read_options;
-  app.add_option("CLOUD", cloud_paths,
+};
+
+// What a run produced: the cloud as read (or its voxel summary when streamed) and the mesh.
+struct Reconstruction {
+  CloudReadReport rr;
+  PointCloud cloud;
+  ReconstructionResult res;
+  StreamedReconstruction streamed;
+  bool stream = false;
+};
+
+// Declares the input options: clouds, poses, holes, streaming, flying pixels, normals, small pieces.
+void add_input_options(CLI::App& app, Settings& s) {
+  app.add_option("CLOUD", s.cloud_paths,
                  "input point clouds (.pcd .ply .xyz .pwn .txt); several scans are merged into one surface");
-  app.add_option("--pose", pose_paths,
+  app.add_option("--pose", s.pose_paths,
                  "rigid pose of an input (a 4x4 or 3x4 matrix file), applied before merging; give one per CLOUD, "
                  "in the same order");
-  app.add_option("--conf", conf_path,
+  app.add_option("--conf", s.conf_path,
                  "Stanford-style .conf listing scans with a translation and quaternion each (bmesh FILE tx ty tz qx qy "
                  "qz qw), instead of CLOUD");
-  app.add_option("--holes", opt.mesher.holes.policy,
+  app.add_option("--holes", s.opt.mesher.holes.policy,
                  "which holes to close: auto (holes inside sampled surface and scan holes the surface continues "
                  "around; the border of an open scan stays open), fill (every hole: watertight wherever the cloud "
                  "encloses a volume), keep (only where the surface is sampled: no invented surface)")
@@ -259,203 +272,264 @@ int main(int argc, char** argv) {
                                                                             {"keep", HolePolicy::keep}},
                                           CLI::ignore_case))
       ->default_str("auto");
-  app.add_option("--stream-above", stream_above,
+  app.add_option("--stream-above", s.stream_above,
                  "a single cloud file with more points than this is streamed into a voxel summary sized for -n "
                  "(memory bounded by the output size) instead of being held whole (about 2.1 KB per point)")
       ->capture_default_str();
-  app.add_option("--flying-pixels", read_options.flying_pixels.neighbour_distance_ratio,
+  app.add_option("--flying-pixels", s.read_options.flying_pixels.neighbour_distance_ratio,
                  "organised PCD clouds (depth-camera frames): a pixel with fewer than 2 of its 8 grid neighbours "
                  "within this fraction of its range from the sensor (the file's VIEWPOINT) is a flying pixel mixed "
                  "from two depths at an edge, and is dropped; 0 keeps every pixel")
       ->capture_default_str();
-  app.add_flag("--normals", write_normals, "write per-vertex normals (outward on closed pieces) with the mesh");
-  app.add_flag("--keep-small", [&](std::int64_t) { opt.mesher.min_piece_faces = 0, opt.mesher.min_piece_vertex_fraction = 0; },
+  app.add_flag("--normals", s.write_normals, "write per-vertex normals (outward on closed pieces) with the mesh");
+  app.add_flag("--keep-small", [&](std::int64_t) { s.opt.mesher.min_piece_faces = 0, s.opt.mesher.min_piece_vertex_fraction = 0; },
                "keep every piece of the mesh; by default pieces of fewer than 20 triangles or fewer than 1 % of the "
                "vertices (stray bits of clutter) are dropped and counted in the report");
-  app.add_option("-o,--output", out_path, "output mesh (.ply .obj .off .stl)")->required();
-  app.add_option("-n,--sites", opt.sites, "number of output vertices (CVT sites)")->capture_default_str();
-  app.add_option("-i,--iterations", opt.iterations, "maximum heat Lloyd iterations (after the surface Lloyd; use 30 with --surface-lloyd 0)")->capture_default_str();
-  app.add_option("-k,--neighbours,--neighbors", opt.neighbors,
+}
+
+// Declares the output and reconstruction options: -o, -n, the cleaning, the CVT, the mesher, -q.
+void add_reconstruction_options(CLI::App& app, Settings& s) {
+  app.add_option("-o,--output", s.out_path, "output mesh (.ply .obj .off .stl)")->required();
+  app.add_option("-n,--sites", s.opt.sites, "number of output vertices (CVT sites)")->capture_default_str();
+  app.add_option("-i,--iterations", s.opt.iterations, "maximum heat Lloyd iterations (after the surface Lloyd; use 30 with --surface-lloyd 0)")->capture_default_str();
+  app.add_option("-k,--neighbours,--neighbors", s.opt.neighbors,
                  "k nearest neighbours of the point Laplacian, in [" + std::to_string(ReconstructionOptions::min_neighbors) +
                      ", " + std::to_string(ReconstructionOptions::max_neighbors) + "]")
       ->capture_default_str();
-  app.add_option("--anisotropy", opt.anisotropy, "lambda of the anisotropic lift (p, lambda n); 0 = isotropic")
+  app.add_option("--anisotropy", s.opt.anisotropy, "lambda of the anisotropic lift (p, lambda n); 0 = isotropic")
       ->capture_default_str();
-  app.add_flag("--denoise", opt.denoise, "statistical outlier removal before reconstruction");
-  app.add_option("--denoise-k", opt.denoise_neighbors, "with --denoise: neighbours of the outlier statistics")
+  app.add_flag("--denoise", s.opt.denoise, "statistical outlier removal before reconstruction");
+  app.add_option("--denoise-k", s.opt.denoise_neighbors, "with --denoise: neighbours of the outlier statistics")
       ->capture_default_str();
-  app.add_option("--denoise-stddev", opt.denoise_stddev,
+  app.add_option("--denoise-stddev", s.opt.denoise_stddev,
                  "with --denoise: points farther than mean + this many standard deviations are outliers")
       ->capture_default_str();
-  app.add_option("--stray-ratio", opt.stray.ratio,
+  app.add_option("--stray-ratio", s.opt.stray.ratio,
                  "a point whose 16th nearest neighbour is more than this times farther than the median of the same "
                  "distance over those neighbours is a stray point (isolated returns, groups of fewer than about 8 "
                  "points off the surface) and is removed; 0 keeps every point")
       ->capture_default_str();
-  app.add_option("--voxel", opt.voxel_size, "voxel-grid downsampling size in input units; 0 = off")
+  app.add_option("--voxel", s.opt.voxel_size, "voxel-grid downsampling size in input units; 0 = off")
       ->capture_default_str();
-  app.add_option("--t-coef", opt.time_coefficient, "time step t = C * (mean edge length)^2")->capture_default_str();
-  app.add_option("--seed", opt.seed, "seed of the initial sites")->capture_default_str();
-  app.add_option("--relaxation", opt.lloyd_relaxation, "Lloyd over-relaxation factor in [1, 2); 1 = plain Lloyd")
+  app.add_option("--t-coef", s.opt.time_coefficient, "time step t = C * (mean edge length)^2")->capture_default_str();
+  app.add_option("--seed", s.opt.seed, "seed of the initial sites")->capture_default_str();
+  app.add_option("--relaxation", s.opt.lloyd_relaxation, "Lloyd over-relaxation factor in [1, 2); 1 = plain Lloyd")
       ->capture_default_str();
-  app.add_option("--tolerance", opt.lloyd_tolerance,
+  app.add_option("--tolerance", s.opt.lloyd_tolerance,
                  "stop the heat Lloyd iterations when no site moves more than TOL * sqrt(area / sites); 0 = run all")
       ->capture_default_str();
-  app.add_option("--mean-tolerance", opt.lloyd_mean_tolerance,
+  app.add_option("--mean-tolerance", s.opt.lloyd_mean_tolerance,
                  "stop the heat Lloyd iterations when the mean site move is below TOL * sqrt(area / sites); 0 = run all")
       ->capture_default_str();
-  app.add_option("--max-hole-edges", opt.max_hole_edges,
+  app.add_option("--max-hole-edges", s.opt.max_hole_edges,
                  "fill boundary loops of up to this many edges (longer ones under the conditions of reconstruct.h)")
       ->capture_default_str();
-  app.add_option("--polish-iterations", opt.relaxation_iterations,
+  app.add_option("--polish-iterations", s.opt.relaxation_iterations,
                  "final polish: tangential relaxation + edge flip iterations; 0 = the plain dual")
       ->capture_default_str();
-  app.add_flag("--fast-start", opt.farthest_point_start,
+  app.add_flag("--fast-start", s.opt.farthest_point_start,
                "with --surface-lloyd 0: farthest-point initial sites relaxed on the point graph instead of seeded "
                "random ones (the paper's)");
-  app.add_option("--surface-lloyd", opt.surface_lloyd_iterations,
+  app.add_option("--surface-lloyd", s.opt.surface_lloyd_iterations,
                  "iterations of the cheap surface Lloyd on farthest-point start sites (during the factorisation); "
                  "0 = the paper's seeded random start")
       ->capture_default_str();
-  app.add_option("--points-per-site", opt.cvt_points_per_site,
+  app.add_option("--points-per-site", s.opt.cvt_points_per_site,
                  "the CVT runs on a uniform subset of about this many points per site (site positions are still "
                  "fitted to every point; a streamed file is summarised into this many voxel points per site); 0 = "
                  "every point")
       ->capture_default_str();
-  app.add_flag("--no-smooth-cvt-points", [&](std::int64_t) { opt.smooth_cvt_points = false; },
+  app.add_flag("--no-smooth-cvt-points", [&](std::int64_t) { s.opt.smooth_cvt_points = false; },
                "build the Laplacian on the raw CVT points instead of their projections onto the fitted surface");
-  app.add_option("--threads", opt.threads, "worker threads (0 = all cores)")->capture_default_str();
-  app.add_option("--report", report_path, "write a JSON report");
-  app.add_flag("-q,--quiet", quiet, "no progress and no summary");
-  if (const int status = cli::parse_command_line(app, argc, argv, "cloud2mesh"); status >= 0) return status;
+  app.add_option("--threads", s.opt.threads, "worker threads (0 = all cores)")->capture_default_str();
+  app.add_option("--report", s.report_path, "write a JSON report");
+  app.add_flag("-q,--quiet", s.quiet, "no progress and no summary");
+}
 
-  return cli::run_tool("cloud2mesh", [&]() -> int {
-    check_options(opt);
-    if (const double r = read_options.flying_pixels.neighbour_distance_ratio; !(r >= 0) || !std::isfinite(r))
-      throw InvalidInputError("--flying-pixels must be a finite number >= 0 (0 keeps every pixel)");
-    if (cloud_paths.empty() && conf_path.empty())
-      throw InvalidInputError("no input: give the clouds as CLOUD arguments or with --conf");
-    if (!cloud_paths.empty() && !conf_path.empty())
-      throw InvalidInputError("give the input clouds either as CLOUD arguments or with --conf, not both");
-    if (!pose_paths.empty() && pose_paths.size() != cloud_paths.size())
-      throw InvalidInputError("--pose: " + std::to_string(pose_paths.size()) + " poses for " +
-                              std::to_string(cloud_paths.size()) + " clouds (give one per CLOUD, in order)");
-    cli::check_output_path(out_path, {".ply", ".obj", ".off", ".stl"});
-    std::string out_ext = std::filesystem::path(out_path).extension().string();
-    std::transform(out_ext.begin(), out_ext.end(), out_ext.begin(), [](unsigned char c) { return std::tolower(c); });
-    if (write_normals && out_ext != ".ply" && out_ext != ".obj")
-      throw InvalidInputError(out_path + ": --normals needs a .ply or .obj output (.off and .stl carry no vertex normals)");
-    cli::check_output_path(report_path, {".json"});
-    cli::check_distinct_outputs({{"-o", out_path}, {"--report", report_path}});
+// Option checks before any work, naming the option at fault; then the output paths.
+void check_settings(const Settings& s) {
+  check_options(s.opt);
+  if (const double r = s.read_options.flying_pixels.neighbour_distance_ratio; !(r >= 0) || !std::isfinite(r))
+    throw InvalidInputError("--flying-pixels must be a finite number >= 0 (0 keeps every pixel)");
+  if (s.cloud_paths.empty() && s.conf_path.empty())
+    throw InvalidInputError("no input: give the clouds as CLOUD arguments or with --conf");
+  if (!s.cloud_paths.empty() && !s.conf_path.empty())
+    throw InvalidInputError("give the input clouds either as CLOUD arguments or with --conf, not both");
+  if (!s.pose_paths.empty() && s.pose_paths.size() != s.cloud_paths.size())
+    throw InvalidInputError("--pose: " + std::to_string(s.pose_paths.size()) + " poses for " +
+                            std::to_string(s.cloud_paths.size()) + " clouds (give one per CLOUD, in order)");
+  cli::check_output_path(s.out_path, {".ply", ".obj", ".off", ".stl"});
+  std::string out_ext = std::filesystem::path(s.out_path).extension().string();
+  std::transform(out_ext.begin(), out_ext.end(), out_ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (s.write_normals && out_ext != ".ply" && out_ext != ".obj")
+    throw InvalidInputError(s.out_path + ": --normals needs a .ply or .obj output (.off and .stl carry no vertex normals)");
+  cli::check_output_path(s.report_path, {".json"});
+  cli::check_distinct_outputs({{"-o", s.out_path}, {"--report", s.report_path}});
+}
 
-    const auto t_start = Clock::now();
-    std::vector<ScanInput> scans;
-    if (!conf_path.empty()) scans = read_stanford_conf(conf_path);
-    for (size_t i = 0; i < cloud_paths.size(); ++i)
-      scans.push_back({cloud_paths[i], pose_paths.empty() ? Eigen::Isometry3d::Identity() : read_pose_file(pose_paths[i])});
-    std::vector<std::string> inputs{conf_path};
-    for (const ScanInput& scan : scans) inputs.push_back(scan.path);
-    cli::check_distinct_outputs({{"-o", out_path}, {"--report", report_path}}, inputs);
-    const std::string cloud_path = scans.size() == 1 ? scans[0].path : !conf_path.empty() ? conf_path
-                                   : scans[0].path + " (+" + std::to_string(scans.size() - 1) + " more)";
-    CloudReadReport rr;
-    PointCloud cloud;
-    ReconstructionResult res;
-    StreamedReconstruction streamed;
-    if (stream_above < 0) throw InvalidInputError("--stream-above must be >= 0");
-    const bool stream = should_stream(scans, opt, stream_above);
-    if (stream) {
-      streamed = reconstruct_streamed(scans[0].path, opt, read_options.flying_pixels, stream_above, quiet);
-      res = std::move(streamed.result);
-      cloud = std::move(streamed.cloud);
-      rr.format = CloudChunkReader(scans[0].path).format();
-      rr.points_in_file = streamed.points_read;
-      rr.flying_pixels_removed = static_cast<long>(streamed.flying_pixels_removed);
-    } else {
-      cloud = read_scans(scans, &rr, read_options);
-      if (!quiet)
-        std::cerr << "read " << cloud_path << ": " << rr.points_in_file << " points, " << rr.non_finite_dropped
-                  << " non-finite dropped, " << rr.flying_pixels_removed << " flying pixels dropped, "
-                  << rr.duplicates_merged << " duplicates merged" << std::endl;
-      reject_far_outliers(cloud.P, cloud_path);
-      if (opt.sites > cloud.P.rows())
-        throw InvalidInputError(cloud_path + ": -n " + std::to_string(opt.sites) + " exceeds the " +
-                                std::to_string(cloud.P.rows()) + " usable points");
-      reject_tiny_voxel(cloud.P, opt.voxel_size, cloud_path);
-      cli::Progress bar("reconstructing", 1000, quiet);
-      res = cli::on_file(cloud_path, [&] { return reconstruct_surface(cloud.P, opt, stage_progress(bar)); });
-      bar.finish();
-    }
-    const double total_s = cli::seconds_since(t_start);
-    const auto& val = res.validation;
-    double iteration_sum = 0;
-    for (double t : res.iteration_seconds) iteration_sum += t;
-    const double per_iter = res.iterations > 0 ? iteration_sum / res.iterations : 0.0;
+// The scans to merge (--conf, or the CLOUD arguments with their poses); no output may overwrite one.
+std::vector<ScanInput> list_scans(const Settings& s) {
+  std::vector<ScanInput> scans;
+  if (!s.conf_path.empty()) scans = read_stanford_conf(s.conf_path);
+  for (size_t i = 0; i < s.cloud_paths.size(); ++i)
+    scans.push_back({s.cloud_paths[i], s.pose_paths.empty() ? Eigen::Isometry3d::Identity() : read_pose_file(s.pose_paths[i])});
+  std::vector<std::string> inputs{s.conf_path};
+  for (const ScanInput& scan : scans) inputs.push_back(scan.path);
+  cli::check_distinct_outputs({{"-o", s.out_path}, {"--report", s.report_path}}, inputs);
+  return scans;
+}
 
-    // Colour (when every input point has one) and, on request, normals of the output vertices.
-    MeshAttributes attributes;
-    if (cloud.has_colours()) {
-      ColourTransferOptions copt;
-      copt.threads = opt.threads;
-      attributes.vertex_color = transfer_colours(cloud.P, cloud.C, res.mesh.V, copt);
-    }
-    if (write_normals) attributes.vertex_normal = vertex_normals(res.mesh.V, res.mesh.F);
-    const std::vector<cli::CheckRecord> checks = cli::check_records(val);
-    cli::Json j = make_report(cloud_path, {out_path, report_path}, rr, opt, res, per_iter, total_s);
-    j["inputs"] = static_cast<long>(scans.size());
-    j["streamed"] = stream;
-    j["voxel_size"] = streamed.voxel_size;
-    j["peak_memory_mb"] = peak_memory_mb();
-    j["colours"] = cloud.has_colours();
-    j["filled_hole_edges"] = res.filled_hole_edges;
-    const int status = cli::finish_report(j, res.stage_seconds, checks);
-    {
-      OutputTransaction outputs;  // all outputs or none (atomic_file.h)
-      write_mesh(out_path, res.mesh.V, res.mesh.F, attributes);
-      if (!report_path.empty()) cli::write_json(report_path, j);
-      outputs.commit();
-    }
-    if (!quiet) {
-      std::printf("cloud2mesh: %s -> %s\n", cloud_path.c_str(), out_path.c_str());
-      std::printf("  points: %ld read, %ld non-finite dropped, %ld flying pixels dropped, %ld duplicates merged, "
-                  "%d outliers removed, %d stray points removed, %d voxel-merged, %d used\n",
-                  rr.points_in_file, rr.non_finite_dropped, rr.flying_pixels_removed, rr.duplicates_merged + res.points_merged,
-                  res.points_denoised, res.points_stray, res.points_voxel_removed, res.points_used);
-      std::printf("  time: Laplacian %.3f s, factor %.3f s, CVT %.3f s (%d heat iterations, %.3f s each), total %.3f s\n",
-                  res.laplacian_seconds, res.factor_seconds, res.cvt_seconds, res.iterations, per_iter, total_s);
-      std::printf("  stages:");
-      for (const auto& [name, seconds] : res.stage_seconds) std::printf(" %s %.2f s;", name.c_str(), seconds);
-      std::printf("\n");
-      std::printf("  mesh: %ld vertices, %ld faces, %d components, %d boundary loops, genus %d; %d holes filled, "
-                  "%d vertices left in no triangle, %d small pieces dropped, %d flying faces removed%s\n",
-                  static_cast<long>(res.mesh.V.rows()), static_cast<long>(res.mesh.F.rows()), val.components,
-                  val.boundary_loops, val.genus, res.holes_filled, res.unused_sites, res.pieces_removed,
-                  res.flying_faces, res.sized ? ", sized to -n" : "");
-      const std::string boundary = val.boundary_loops > 0 ? format_angle(res.boundary_min_angle_deg) : "none";
-      std::printf("  quality: phi_min %.2f deg (boundary triangles %s), phi_m %.2f deg\n", res.min_angle_deg,
-                  boundary.c_str(), res.mean_min_angle_deg);
-      if (res.border.mesh_border_vertices > 0 && res.border.edge_points > 0)
-        std::printf("  border: %.1f %% of the %d border vertices within one site spacing of the scan's edge (90 %% "
-                    "within %.2f), %.1f %% of the scan's %d edge points within one spacing of the mesh\n",
-                    100.0 * res.border.mesh_border_on_edge, res.border.mesh_border_vertices,
-                    res.border.mesh_border_distance, 100.0 * res.border.edge_covered, res.border.edge_points);
-      // The point Laplacian resolves a heat cell from about 10 points (ReconstructionOptions::
-      // cvt_points_per_site); far fewer leave holes and slivers the mesher can only patch.
-      const double points_per_site = static_cast<double>(res.points_used) / opt.sites;
-      if (!stream && points_per_site < kFewPointsPerSite)
-        std::printf("  note: only %.1f points per site; the surface is undersampled for -n %d (about 10 per site "
-                    "give a clean mesh): a smaller -n gives a better one\n",
-                    points_per_site, opt.sites);
-      if (stream)
-        std::printf("  streamed: %ld points in %d passes into voxels of %g, reconstructed from %ld voxel points\n",
-                    static_cast<long>(streamed.points_read), streamed.passes, streamed.voxel_size,
-                    static_cast<long>(cloud.P.rows()));
-      std::printf("  peak memory: %.0f MB\n", peak_memory_mb());
-      cli::print_checks(checks);
-      std::printf("  wrote %s%s\n", out_path.c_str(), report_path.empty() ? "" : (", " + report_path).c_str());
-    }
-    if (status != cli::exit_ok && !quiet)
-      std::cerr << "warning: the reconstruction failed some checks (exit status 3)" << std::endl;
-    return status;
-  });
+// How messages and the report name the input: the one file, the .conf, or the first file and a count.
+std::string input_label(const std::vector<ScanInput>& scans, const std::string& conf_path) {
+  return scans.size() == 1 ? scans[0].path : !conf_path.empty() ? conf_path
+         : scans[0].path + " (+" + std::to_string(scans.size() - 1) + " more)";
+}
+
+// Reads the scans whole, checks the merged cloud against the options and reconstructs its surface.
+void reconstruct_whole(const Settings& s, const std::vector<ScanInput>& scans, const std::string& cloud_path,
+                       Reconstruction& rec) {
+  rec.cloud = read_scans(scans, &rec.rr, s.read_options);
+  cli::log_line(s.quiet, "read " + cloud_path + ": " + std::to_string(rec.rr.points_in_file) + " points, " +
+                             std::to_string(rec.rr.non_finite_dropped) + " non-finite dropped, " +
+                             std::to_string(rec.rr.flying_pixels_removed) + " flying pixels dropped, " +
+                             std::to_string(rec.rr.duplicates_merged) + " duplicates merged");
+  reject_far_outliers(rec.cloud.P, cloud_path);
+  if (s.opt.sites > rec.cloud.P.rows())
+    throw InvalidInputError(cloud_path + ": -n " + std::to_string(s.opt.sites) + " exceeds the " +
+                            std::to_string(rec.cloud.P.rows()) + " usable points");
+  reject_tiny_voxel(rec.cloud.P, s.opt.voxel_size, cloud_path);
+  cli::Progress bar("reconstructing", 1000, s.quiet);
+  rec.res = cli::on_file(cloud_path, [&] { return reconstruct_surface(rec.cloud.P, s.opt, stage_progress(bar)); });
+  bar.finish();
+}
+
+// The reconstruction of the scans: streamed when one large file allows it, else from the whole cloud.
+Reconstruction reconstruct(const Settings& s, const std::vector<ScanInput>& scans, const std::string& cloud_path) {
+  Reconstruction rec;
+  if (s.stream_above < 0) throw InvalidInputError("--stream-above must be >= 0");
+  rec.stream = should_stream(scans, s.opt, s.stream_above);
+  if (rec.stream) {
+    rec.streamed = reconstruct_streamed(scans[0].path, s.opt, s.read_options.flying_pixels, s.stream_above, s.quiet);
+    rec.res = std::move(rec.streamed.result);
+    rec.cloud = std::move(rec.streamed.cloud);
+    rec.rr.format = CloudChunkReader(scans[0].path).format();
+    rec.rr.points_in_file = rec.streamed.points_read;
+    rec.rr.flying_pixels_removed = static_cast<long>(rec.streamed.flying_pixels_removed);
+  } else {
+    reconstruct_whole(s, scans, cloud_path, rec);
+  }
+  return rec;
+}
+
+// Colour (when every input point has one) and, on request, normals of the output vertices.
+MeshAttributes output_attributes(const Settings& s, const Reconstruction& rec) {
+  MeshAttributes attributes;
+  if (rec.cloud.has_colours()) {
+    ColourTransferOptions copt;
+    copt.threads = s.opt.threads;
+    attributes.vertex_color = transfer_colours(rec.cloud.P, rec.cloud.C, rec.res.mesh.V, copt);
+  }
+  if (s.write_normals) attributes.vertex_normal = vertex_normals(rec.res.mesh.V, rec.res.mesh.F);
+  return attributes;
+}
+
+// Writes the mesh and the report: all or none.
+void write_outputs(const Settings& s, const TriangleMesh& mesh, const MeshAttributes& attributes, const cli::Json& j) {
+  OutputTransaction outputs;  // all outputs or none (atomic_file.h)
+  write_mesh(s.out_path, mesh.V, mesh.F, attributes);
+  if (!s.report_path.empty()) cli::write_json(s.report_path, j);
+  outputs.commit();
+}
+
+// Adds the figures of the run beyond make_report()'s: inputs, streaming, peak memory, colours, holes.
+void add_run_figures(cli::Json& j, size_t inputs, const Reconstruction& rec) {
+  j["inputs"] = static_cast<long>(inputs);
+  j["streamed"] = rec.stream;
+  j["voxel_size"] = rec.streamed.voxel_size;
+  j["peak_memory_mb"] = peak_memory_mb();
+  j["colours"] = rec.cloud.has_colours();
+  j["filled_hole_edges"] = rec.res.filled_hole_edges;
+}
+
+// Prints the summary of a run on stdout: points, times, the mesh, its quality and border, the checks.
+void print_summary(const Settings& s, const std::string& cloud_path, const Reconstruction& rec, double per_iter,
+                   double total_s, const std::vector<cli::CheckRecord>& checks) {
+  const CloudReadReport& rr = rec.rr;
+  const ReconstructionResult& res = rec.res;
+  const ReconstructionOptions& opt = s.opt;
+  const ValidationReport& val = res.validation;
+  const StreamedReconstruction& streamed = rec.streamed;
+  std::printf("cloud2mesh: %s -> %s\n", cloud_path.c_str(), s.out_path.c_str());
+  std::printf("  points: %ld read, %ld non-finite dropped, %ld flying pixels dropped, %ld duplicates merged, "
+              "%d outliers removed, %d stray points removed, %d voxel-merged, %d used\n",
+              rr.points_in_file, rr.non_finite_dropped, rr.flying_pixels_removed, rr.duplicates_merged + res.points_merged,
+              res.points_denoised, res.points_stray, res.points_voxel_removed, res.points_used);
+  std::printf("  time: Laplacian %.3f s, factor %.3f s, CVT %.3f s (%d heat iterations, %.3f s each), total %.3f s\n",
+              res.laplacian_seconds, res.factor_seconds, res.cvt_seconds, res.iterations, per_iter, total_s);
+  cli::print_stages(res.stage_seconds);
+  std::printf("  mesh: %ld vertices, %ld faces, %d components, %d boundary loops, genus %d; %d holes filled, "
+              "%d vertices left in no triangle, %d small pieces dropped, %d flying faces removed%s\n",
+              static_cast<long>(res.mesh.V.rows()), static_cast<long>(res.mesh.F.rows()), val.components,
+              val.boundary_loops, val.genus, res.holes_filled, res.unused_sites, res.pieces_removed,
+              res.flying_faces, res.sized ? ", sized to -n" : "");
+  const std::string boundary = val.boundary_loops > 0 ? format_angle(res.boundary_min_angle_deg) : "none";
+  std::printf("  quality: phi_min %.2f deg (boundary triangles %s), phi_m %.2f deg\n", res.min_angle_deg,
+              boundary.c_str(), res.mean_min_angle_deg);
+  if (res.border.mesh_border_vertices > 0 && res.border.edge_points > 0)
+    std::printf("  border: %.1f %% of the %d border vertices within one site spacing of the scan's edge (90 %% "
+                "within %.2f), %.1f %% of the scan's %d edge points within one spacing of the mesh\n",
+                100.0 * res.border.mesh_border_on_edge, res.border.mesh_border_vertices,
+                res.border.mesh_border_distance, 100.0 * res.border.edge_covered, res.border.edge_points);
+  // The point Laplacian resolves a heat cell from about 10 points (ReconstructionOptions::
+  // cvt_points_per_site); far fewer leave holes and slivers the mesher can only patch.
+  const double points_per_site = static_cast<double>(res.points_used) / opt.sites;
+  if (!rec.stream && points_per_site < kFewPointsPerSite)
+    std::printf("  note: only %.1f points per site; the surface is undersampled for -n %d (about 10 per site "
+                "give a clean mesh): a smaller -n gives a better one\n",
+                points_per_site, opt.sites);
+  if (rec.stream)
+    std::printf("  streamed: %ld points in %d passes into voxels of %g, reconstructed from %ld voxel points\n",
+                static_cast<long>(streamed.points_read), streamed.passes, streamed.voxel_size,
+                static_cast<long>(rec.cloud.P.rows()));
+  std::printf("  peak memory: %.0f MB\n", peak_memory_mb());
+  cli::print_checks(checks);
+  std::printf("  wrote %s%s\n", s.out_path.c_str(), s.report_path.empty() ? "" : (", " + s.report_path).c_str());
+}
+
+// Mean seconds per heat Lloyd iteration of a reconstruction (0 without iterations).
+double seconds_per_iteration(const ReconstructionResult& res) {
+  double iteration_sum = 0;
+  for (double t : res.iteration_seconds) iteration_sum += t;
+  return res.iterations > 0 ? iteration_sum / res.iterations : 0.0;
+}
+
+// The whole run after parsing: checks, input, reconstruction, report, outputs, summary; the exit status.
+int run(const Settings& s) {
+  check_settings(s);
+  const auto t_start = Clock::now();
+  const std::vector<ScanInput> scans = list_scans(s);
+  const std::string cloud_path = input_label(scans, s.conf_path);
+  const Reconstruction rec = reconstruct(s, scans, cloud_path);
+  const double total_s = cli::seconds_since(t_start);
+  const double per_iter = seconds_per_iteration(rec.res);
+  const MeshAttributes attributes = output_attributes(s, rec);
+  const std::vector<cli::CheckRecord> checks = cli::check_records(rec.res.validation);
+  cli::Json j = make_report(cloud_path, {s.out_path, s.report_path}, rec.rr, s.opt, rec.res, per_iter, total_s);
+  add_run_figures(j, scans.size(), rec);
+  const int status = cli::finish_report(j, rec.res.stage_seconds, checks);
+  write_outputs(s, rec.res.mesh, attributes, j);
+  if (!s.quiet) print_summary(s, cloud_path, rec, per_iter, total_s, checks);
+  if (status != cli::exit_ok) cli::log_line(s.quiet, "warning: the reconstruction failed some checks (exit status 3)");
+  return status;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"cloud2mesh: reconstruct a triangle mesh from a point cloud with a heat-diffusion centroidal "
+               "Voronoi tessellation of the points (Herholz et al. 2017, §7-8)"};
+  Settings settings;
+  add_input_options(app, settings);
+  add_reconstruction_options(app, settings);
+  return cli::parse_and_run(app, argc, argv, "cloud2mesh", [&] { return run(settings); });
 }

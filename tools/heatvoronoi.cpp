@@ -153,9 +153,7 @@ int main(int argc, char** argv) {
   app.add_option("--report", report_path, "write a JSON report");
   app.add_option("--threads", threads, "worker threads (0 = all cores)")->capture_default_str();
   app.add_flag("-q,--quiet", quiet, "no progress output on stderr");
-  if (const int status = cli::parse_command_line(app, argc, argv, "heatvoronoi"); status >= 0) return status;
-
-  return cli::run_tool("heatvoronoi", [&]() -> int {
+  return cli::parse_and_run(app, argc, argv, "heatvoronoi", [&]() -> int {
     if (!(t_coef > 0) || !std::isfinite(t_coef)) throw InvalidInputError("--t-coef must be a positive number");
     if (threads < 0) throw InvalidInputError("--threads must be >= 0");
     if (centroid_steps < 1) throw InvalidInputError("--centroid-steps must be >= 1");
@@ -165,9 +163,7 @@ int main(int argc, char** argv) {
     cli::check_output_path(report_path, {".json"});
     cli::check_distinct_outputs({{"-o", cells_path}, {"--edges", edges_path}, {"--centroids", centroids_path},
                                  {"--report", report_path}}, {mesh_path});
-    auto log = [&](const std::string& s) {
-      if (!quiet) std::cerr << s << std::endl;
-    };
+    auto log = [&](const std::string& s) { cli::log_line(quiet, s); };
     const auto t_start = Clock::now();
     MeshReadReport read_report;
     TriangleMesh mesh = read_mesh(mesh_path, &read_report);

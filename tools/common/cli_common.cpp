@@ -18,6 +18,10 @@
 
 namespace heatcvt::cli {
 
+void log_line(bool quiet, const std::string& line) {
+  if (!quiet) std::cerr << line << std::endl;
+}
+
 Progress::Progress(std::string label, long total, bool quiet)
     : label_(std::move(label)), total_(total), quiet_(quiet), tty_(isatty(fileno(stderr)) != 0),
       start_(std::chrono::steady_clock::now()), last_(start_) {}
@@ -113,6 +117,11 @@ int run_tool(const std::string& tool, const std::function<int()>& body) {
     report("unknown failure");
     return exit_failure;
   }
+}
+
+int parse_and_run(CLI::App& app, int argc, char** argv, const std::string& tool, const std::function<int()>& body) {
+  if (const int status = parse_command_line(app, argc, argv, tool); status >= 0) return status;
+  return run_tool(tool, body);
 }
 
 void check_distinct_outputs(const std::vector<std::pair<std::string, std::string>>& outputs,

@@ -30,6 +30,9 @@ std::string exit_status_help();
 /// printed as the single line "<tool>: error: <problem> (see <tool> --help)" on stderr.
 int parse_command_line(CLI::App& app, int argc, char** argv, const std::string& tool);
 
+/// Prints `line` on stderr as one line (flushed) unless `quiet`: a tool's notes and warnings.
+void log_line(bool quiet, const std::string& line);
+
 /// Progress on stderr: a bar with ETA when stderr is a terminal, a line every few seconds
 /// otherwise (and one whenever the stage named by update()'s `stage` changes), nothing when
 /// quiet. `stage` and `note` (e.g. the points read so far) are shown after the figures.
@@ -65,6 +68,10 @@ void keep_freed_memory();
 /// bytes replaced) and returns exit_bad_input for InvalidInputError / IOError, exit_failure
 /// otherwise. The body's own return value is passed through.
 int run_tool(const std::string& tool, const std::function<int()>& body);
+
+/// The whole of a tool's main() once its options are declared: parse_command_line(), and unless
+/// that ends the tool (--help, a parse error), `body` under run_tool(). Returns the exit status.
+int parse_and_run(CLI::App& app, int argc, char** argv, const std::string& tool, const std::function<int()>& body);
 
 /// Runs `work` (a library call on the content of `path`) and rethrows any heatcvt::Error of the
 /// same class with the message "<path>: <problem>", the library's internal function name

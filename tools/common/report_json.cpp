@@ -25,6 +25,12 @@ void print_checks(const std::vector<CheckRecord>& checks) {
     std::printf("  %s %s: %s\n", !c.ran ? "SKIP" : (c.passed ? "PASS" : "FAIL"), c.name.c_str(), c.detail.c_str());
 }
 
+void print_stages(const std::vector<std::pair<std::string, double>>& stages) {
+  std::printf("  stages:");
+  for (const auto& [name, seconds] : stages) std::printf(" %s %.2f s;", name.c_str(), seconds);
+  std::printf("\n");
+}
+
 Json report_head(const std::string& tool, const std::string& input, const std::vector<std::string>& outputs) {
   Json j;
   j["tool"] = tool;

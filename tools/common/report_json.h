@@ -33,6 +33,9 @@ bool all_passed(const std::vector<CheckRecord>& checks);
 /// Prints the checks on stdout, one "  PASS|FAIL|SKIP name: detail" line each.
 void print_checks(const std::vector<CheckRecord>& checks);
 
+/// Prints the stage times on stdout as one line "  stages: <name> <seconds> s; ...".
+void print_stages(const std::vector<std::pair<std::string, double>>& stages);
+
 /// A report with the common head: "tool", "input", "outputs" (non-empty paths only).
 Json report_head(const std::string& tool, const std::string& input, const std::vector<std::string>& outputs);
 
