@@ -54,26 +54,6 @@ double polyline_length(const Eigen::MatrixX3d& V, const std::vector<int>& line) 
   return length;
 }
 
-// Points along `line` at `segments` + 1 equal arc-length steps, both ends included.
-std::vector<Eigen::Vector3d> resample(const Eigen::MatrixX3d& V, const std::vector<int>& line, int segments) {
-  const double total = polyline_length(V, line);
-  std::vector<Eigen::Vector3d> out{V.row(line.front()).transpose()};
-  std::size_t i = 1;
-  double done = 0;  // arc length at line[i - 1]
-  for (int s = 1; s < segments; ++s) {
-    const double at = total * s / segments;
-    while (i + 1 < line.size() && done + (V.row(line[i]) - V.row(line[i - 1])).norm() < at) {
-      done += (V.row(line[i]) - V.row(line[i - 1])).norm();
-      ++i;
-    }
-    const double piece = (V.row(line[i]) - V.row(line[i - 1])).norm();
-    const double t = piece > 0 ? std::clamp((at - done) / piece, 0.0, 1.0) : 0.0;
-    out.push_back(((1 - t) * V.row(line[i - 1]) + t * V.row(line[i])).transpose());
-  }
-  out.push_back(V.row(line.back()).transpose());
-  return out;
-}
-
 // The point of `line` at arc length `at` from its first vertex (clamped to the line's ends).
 Eigen::Vector3d point_at(const Eigen::MatrixX3d& V, const std::vector<int>& line, double at) {
   double done = 0;  // arc length at line[i - 1]
@@ -86,6 +66,15 @@ Eigen::Vector3d point_at(const Eigen::MatrixX3d& V, const std::vector<int>& line
     done += piece;
   }
   return at <= 0 ? Eigen::Vector3d(V.row(line.front()).transpose()) : Eigen::Vector3d(V.row(line.back()).transpose());
+}
+
+// Points along `line` at `segments` + 1 equal arc-length steps, both ends included.
+std::vector<Eigen::Vector3d> resample(const Eigen::MatrixX3d& V, const std::vector<int>& line, int segments) {
+  const double total = polyline_length(V, line);
+  std::vector<Eigen::Vector3d> out{V.row(line.front()).transpose()};
+  for (int s = 1; s < segments; ++s) out.push_back(point_at(V, line, total * s / segments));
+  out.push_back(V.row(line.back()).transpose());
+  return out;
 }
 
 // The arc length along `line` of its point nearest x.
