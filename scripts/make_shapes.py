@@ -162,6 +162,9 @@ def main():
         "thin_capsule": capsule(), "perforated": perforated(),
     }
     if len(sys.argv) == 3:
+        for name in ("spot.obj", "kitten.obj"):
+            if not os.path.isfile(os.path.join(sys.argv[2], name)):
+                sys.exit("make_shapes.py: %s: no %s there (expected ../shared/data/meshes)" % (sys.argv[2], name))
         spot = read_obj(os.path.join(sys.argv[2], "spot.obj"))
         kitten = read_obj(os.path.join(sys.argv[2], "kitten.obj"))
         shapes["spot_tiny_far"] = (transformed(spot[0], 1e-4, 1e4), spot[1])
