@@ -257,5 +257,92 @@ TEST(Creases, FandiskRemeshKeepsItsCreases) {
   expect_creases_kept(fandisk, 3000);
 }
 
+
+// A flat sheet of n × n unit cells (scaled to side 1) keeping the cells (i, j) with
+// i + j < n when `staircase`: a right triangle whose hypotenuse is a staircase of cell steps.
+TriangleMesh sheet_mesh(int n, bool staircase) {
+  TriangleMesh m;
+  m.V.resize((n + 1) * (n + 1), 3);
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) m.V.row(j * (n + 1) + i) << static_cast<double>(i) / n, static_cast<double>(j) / n, 0;
+  std::vector<Eigen::Vector3i> faces;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      if (staircase && i + j >= n) continue;
+      const int a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+      faces.emplace_back(a, b, d);
+      faces.emplace_back(a, d, c);
+    }
+  m.F.resize(static_cast<int>(faces.size()), 3);
+  for (std::size_t f = 0; f < faces.size(); ++f) m.F.row(f) = faces[f].transpose();
+  // drop the vertices no face uses (the staircase's far half)
+  std::vector<int> index(m.V.rows(), -1);
+  int used = 0;
+  for (int f = 0; f < m.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k)
+      if (index[m.F(f, k)] < 0) index[m.F(f, k)] = used++;
+  Eigen::MatrixX3d V(used, 3);
+  for (int v = 0; v < m.V.rows(); ++v)
+    if (index[v] >= 0) V.row(index[v]) = m.V.row(v);
+  for (int f = 0; f < m.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) m.F(f, k) = index[m.F(f, k)];
+  m.V = V;
+  return m;
+}
+
+// The border of a square sheet is four border lines between its four corners; the staircase
+// hypotenuse of a triangular sheet turns by 90° at every step, yet at an output spacing of six
+// steps it is one straight line: its steps are no corners, the triangle's three corners are.
+TEST(Creases, BorderCornersAreSeenAtTheOutputsScale) {
+  const TriangleMesh square = sheet_mesh(20, false);
+  const CreaseLines lines = detect_creases(square.V, square.F, {}, 0.1);
+  EXPECT_EQ(lines.lines.size(), 4u);
+  EXPECT_EQ(std::count(lines.border.begin(), lines.border.end(), 1), 4);
+  EXPECT_EQ(std::count(lines.corner.begin(), lines.corner.end(), 1), 4);
+  for (int l = 0; l < 4; ++l) EXPECT_NEAR(lines.length(square.V, l), 1.0, 1e-12);
+  CreaseOptions off;
+  off.border_corners = false;
+  EXPECT_TRUE(detect_creases(square.V, square.F, off, 0.1).lines.empty());
+
+  const int n = 30;
+  const TriangleMesh stairs = sheet_mesh(n, true);
+  const CreaseLines fine = detect_creases(stairs.V, stairs.F, {}, 0.0);
+  ASSERT_GT(std::count(fine.corner.begin(), fine.corner.end(), 1), n) << "every step is a corner at the edges' scale";
+  const CreaseLines coarse = detect_creases(stairs.V, stairs.F, {}, 6.0 / n);
+  EXPECT_EQ(std::count(coarse.corner.begin(), coarse.corner.end(), 1), 3);
+  EXPECT_EQ(coarse.lines.size(), 3u);
+}
+
+// Remeshed, a square sheet keeps its corners exactly (before, the border's relaxation cut each
+// corner about half a spacing off) and its border stays on the input's, with the angle targets.
+TEST(Creases, ASquareSheetRemeshKeepsItsCorners) {
+  const TriangleMesh square = sheet_mesh(40, false);
+  RemeshOptions o;
+  o.cvt.sites = 300;
+  o.creases.border_corners = false;
+  const RemeshResult rounded = remesh_cvt(square, o);
+  const auto corner_gap = [](const TriangleMesh& m) {
+    double worst = 0;
+    for (const Eigen::Vector3d c : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0, 1, 0),
+                                    Eigen::Vector3d(1, 1, 0)})
+      worst = std::max(worst, (m.V.rowwise() - c.transpose()).rowwise().norm().minCoeff());
+    return worst;
+  };
+  const double spacing = std::sqrt(1.0 / o.cvt.sites);
+  ASSERT_GT(corner_gap(rounded.mesh), 0.25 * spacing) << "without the border lines the corners are cut off";
+  o.creases.border_corners = true;
+  const RemeshResult kept = remesh_cvt(square, o);
+  EXPECT_TRUE(kept.creases.border_undone_reason.empty()) << kept.creases.border_undone_reason;
+  EXPECT_EQ(kept.creases.border_lines, 4);
+  EXPECT_LT(corner_gap(kept.mesh), 1e-9);
+  EXPECT_TRUE(kept.checks.ok()) << kept.checks.summary();
+  EXPECT_NEAR(kept.mesh.V.rows(), o.cvt.sites, 0.02 * o.cvt.sites);
+  EXPECT_GE(kept.quality.min_angle_deg, 30);
+  EXPECT_GE(kept.quality.mean_min_angle_deg, 52);
+  EXPECT_LT(kept.mesh.V.col(2).cwiseAbs().maxCoeff(), 1e-12) << "the flat sheet stays flat";
+  EXPECT_GE(kept.mesh.V.col(0).minCoeff(), -1e-12);
+  EXPECT_LE(kept.mesh.V.col(0).maxCoeff(), 1 + 1e-12);
+}
+
 }  // namespace
 }  // namespace heatcvt

@@ -329,7 +329,9 @@ cli::Json make_report(const Settings& s, const TriangleMesh& mesh, int input_gen
                     {"corners", res.creases.corners},
                     {"snapped_vertices", res.creases.snapped}, {"line_edges", res.creases.line_edges},
                     {"missing_edges", res.creases.missing_edges}, {"undone", res.creases.undone},
-                    {"undone_reason", res.creases.undone_reason}};
+                    {"undone_reason", res.creases.undone_reason}, {"border_lines", res.creases.border_lines},
+                    {"border_corners", res.creases.border_corners}, {"border_lines_dropped", res.creases.dropped_lines},
+                    {"border_undone_reason", res.creases.border_undone_reason}};
   rep["coverage"] = {{"uncovered_before", res.coverage.uncovered_before},
                      {"uncovered_after", res.coverage.uncovered_after}, {"moves", res.coverage.moves},
                      {"gap_before", res.coverage.gap_before}, {"gap_after", res.coverage.gap_after}};
@@ -391,6 +393,13 @@ void print_summary(const Settings& s, const RemeshOptions& remesh, const RemeshR
                 res.creases.corners, res.creases.snapped,
                 res.creases.line_edges, res.creases.line_edges + res.creases.missing_edges,
                 res.creases.undone ? ("; not kept: " + res.creases.undone_reason).c_str() : "");
+  if (res.creases.border_lines + res.creases.dropped_lines > 0 || !res.creases.border_undone_reason.empty())
+    std::printf("  border corners: %d border lines between %d corners kept%s%s\n", res.creases.border_lines,
+                res.creases.border_corners,
+                res.creases.dropped_lines > 0
+                    ? (" (" + std::to_string(res.creases.dropped_lines) + " left out: faces next to them fell below the smallest angle)").c_str()
+                    : "",
+                res.creases.border_undone_reason.empty() ? "" : ("; not kept: " + res.creases.border_undone_reason).c_str());
   if (res.repair_rounds)
     std::printf("  %d sites added, %d dropped in %d closed-ball repair rounds\n", res.repair_sites,
                 res.repair_dropped_sites, res.repair_rounds);

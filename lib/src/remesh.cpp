@@ -483,7 +483,7 @@ bool run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options
 // out.mesh only where it fails no check that out.mesh passed.
 void keep_creases(const TriangleMesh& input, const RemeshOptions& options, RemeshResult& out) {
   if (!options.creases.enabled || out.mesh.F.rows() == 0 || out.input.non_orientable) return;
-  const CreaseLines lines = detect_creases(input.V, input.F, options.creases);
+  const CreaseLines lines = detect_creases(input.V, input.F, options.creases, site_spacing(input, options.cvt.sites));
   if (lines.lines.empty()) return;
   const auto t = Clock::now();
   const MeshSurfaceProjector surface(input.V, input.F);

@@ -22,8 +22,14 @@ namespace {
 
 constexpr double kDegree = M_PI / 180.0;
 
-// Crease edges as an adjacency list: for each vertex, the vertices it shares a crease edge with.
-std::vector<std::vector<int>> crease_graph(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, double min_dihedral) {
+// The feature edges of (V, F) as adjacency lists: `crease[v]` the vertices v shares a crease
+// edge with (two faces whose normals differ by more than min_dihedral), `border[v]` the ones it
+// shares a boundary edge with (one face).
+struct FeatureGraph {
+  std::vector<std::vector<int>> crease, border;
+};
+
+FeatureGraph feature_graph(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, double min_dihedral) {
   std::map<std::pair<int, int>, std::vector<int>> edge_faces;
   for (int f = 0; f < F.rows(); ++f)
     for (int k = 0; k < 3; ++k) {
@@ -36,15 +42,27 @@ std::vector<std::vector<int>> crease_graph(const Eigen::MatrixX3d& V, const Eige
     return n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::Zero();
   };
   const double min_cos = std::cos(min_dihedral);
-  std::vector<std::vector<int>> adj(V.rows());
+  FeatureGraph g;
+  g.crease.resize(V.rows());
+  g.border.resize(V.rows());
+  const auto join = [](std::vector<std::vector<int>>& adj, std::pair<int, int> e) {
+    adj[e.first].push_back(e.second);
+    adj[e.second].push_back(e.first);
+  };
   for (const auto& [edge, faces] : edge_faces) {
+    if (faces.size() == 1) join(g.border, edge);
     if (faces.size() != 2) continue;
     const Eigen::Vector3d n0 = normal(faces[0]), n1 = normal(faces[1]);
     if (n0.isZero() || n1.isZero() || n0.dot(n1) >= min_cos) continue;
-    adj[edge.first].push_back(edge.second);
-    adj[edge.second].push_back(edge.first);
+    join(g.crease, edge);
   }
-  return adj;
+  return g;
+}
+
+// Whether the polyline a → v → b turns by more than max_turn (radians) at v.
+bool turns_at(const Eigen::MatrixX3d& V, int a, int v, int b, double max_turn) {
+  const Eigen::Vector3d in = (V.row(v) - V.row(a)).transpose(), on = (V.row(b) - V.row(v)).transpose();
+  return in.norm() > 0 && on.norm() > 0 && std::acos(std::clamp(in.normalized().dot(on.normalized()), -1.0, 1.0)) > max_turn;
 }
 
 // Polyline length of input vertices `line`.
@@ -154,10 +172,10 @@ Eigen::Vector3d nearest_on_line(const Eigen::MatrixX3d& V, const std::vector<int
   return best;
 }
 
-// Joins u and w through a common neighbour x not on a line yet (the one nearest to the segment
-// u–w), moved onto the line: u–x–w is then an edge path along it. Returns x, or −1.
+// Joins u and w through a common neighbour x not on a line yet nor on the border (the one
+// nearest to the segment u–w), moved onto the line: u–x–w is then an edge path along it. Returns x, or −1.
 int bridge(WorkingMesh& mesh, int u, int w, const Eigen::MatrixX3d& V, const std::vector<int>& line,
-           const std::vector<std::vector<int>>& vf, std::vector<char>& taken) {
+           const std::vector<std::vector<int>>& vf, std::vector<char>& taken, const std::vector<char>& border) {
   std::vector<int> around_u;
   for (int f : vf[u])
     for (int v : mesh.face(f)) around_u.push_back(v);
@@ -166,7 +184,7 @@ int bridge(WorkingMesh& mesh, int u, int w, const Eigen::MatrixX3d& V, const std
   double best_d = std::numeric_limits<double>::infinity();
   for (int f : vf[w])
     for (int x : mesh.face(f)) {
-      if (x == u || x == w || taken[x] || std::find(around_u.begin(), around_u.end(), x) == around_u.end()) continue;
+      if (x == u || x == w || taken[x] || border[x] || std::find(around_u.begin(), around_u.end(), x) == around_u.end()) continue;
       const Eigen::Vector3d p = mesh.V.row(x).transpose();
       const double t = std::clamp((p - a).dot(b - a) / std::max((b - a).squaredNorm(), 1e-300), 0.0, 1.0);
       const double d = (a + t * (b - a) - p).norm();
@@ -186,45 +204,127 @@ int bridge(WorkingMesh& mesh, int u, int w, const Eigen::MatrixX3d& V, const std
 
 double CreaseLines::length(const Eigen::MatrixX3d& V, int line) const { return polyline_length(V, lines[line]); }
 
-CreaseLines detect_creases(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const CreaseOptions& options) {
-  CreaseLines out;
-  const std::vector<std::vector<int>> adj = crease_graph(V, F, options.min_dihedral_deg * kDegree);
-  const int nv = static_cast<int>(V.rows());
-  out.corner.assign(nv, 0);
-  for (int v = 0; v < nv; ++v) {
-    if (adj[v].empty()) continue;
-    if (adj[v].size() != 2) {
-      out.corner[v] = 1;
-      continue;
-    }
-    const Eigen::Vector3d in = (V.row(v) - V.row(adj[v][0])).transpose(), on = (V.row(adj[v][1]) - V.row(v)).transpose();
-    if (in.norm() > 0 && on.norm() > 0 &&
-        std::acos(std::clamp(in.normalized().dot(on.normalized()), -1.0, 1.0)) > options.corner_turn_deg * kDegree)
-      out.corner[v] = 1;
+namespace {
+
+// Walks the border from v through its neighbour `first` until `reach` arc length (at least one
+// edge); calls visit(w, arc length) on every vertex passed. Stops early at a vertex with other
+// than two border neighbours or back at v. Returns the last vertex reached.
+template <typename Visit>
+int walk_border(const Eigen::MatrixX3d& V, const std::vector<std::vector<int>>& border, int v, int first, double reach,
+                Visit visit) {
+  int prev = v, at = first;
+  double done = (V.row(at) - V.row(v)).norm();
+  visit(at, done);
+  while (done < reach && at != v && border[at].size() == 2) {
+    const int go = border[at][0] == prev ? border[at][1] : border[at][0];
+    done += (V.row(go) - V.row(at)).norm();
+    prev = at;
+    at = go;
+    visit(at, done);
   }
+  return at;
+}
+
+// Corners of the border seen at the output's scale: the turn of a border vertex is the angle
+// between the chords to the border points `reach` behind and ahead of it (the edges themselves
+// where reach is 0), so a border ragged finer than the output has no corners; of the vertices
+// turning by more than max_turn, the one turning most within `reach` each way is the corner.
+std::vector<int> border_corners(const Eigen::MatrixX3d& V, const std::vector<std::vector<int>>& border, double reach,
+                                double max_turn) {
+  const int nv = static_cast<int>(V.rows());
+  std::vector<double> turn(nv, 0.0);
+  const auto none = [](int, double) {};
+  for (int v = 0; v < nv; ++v) {
+    if (border[v].size() != 2) continue;
+    const int behind = walk_border(V, border, v, border[v][0], reach, none);
+    const int ahead = walk_border(V, border, v, border[v][1], reach, none);
+    const Eigen::Vector3d in = (V.row(v) - V.row(behind)).transpose(), on = (V.row(ahead) - V.row(v)).transpose();
+    if (behind != v && ahead != v && in.norm() > 0 && on.norm() > 0)
+      turn[v] = std::acos(std::clamp(in.normalized().dot(on.normalized()), -1.0, 1.0));
+  }
+  std::vector<int> corners;
+  for (int v = 0; v < nv; ++v) {
+    if (!(turn[v] > max_turn)) continue;
+    bool top = true;
+    const auto beaten = [&](int w, double) { top = top && (turn[w] < turn[v] || (turn[w] == turn[v] && w >= v)); };
+    for (int first : border[v]) walk_border(V, border, v, first, reach, beaten);
+    if (top) corners.push_back(v);
+  }
+  return corners;
+}
+
+// Connected components of the border edges: a label per vertex, −1 off the border.
+std::vector<int> border_loop_labels(const std::vector<std::vector<int>>& border) {
+  std::vector<int> label(border.size(), -1);
+  int loops = 0;
+  for (std::size_t v = 0; v < border.size(); ++v) {
+    if (border[v].empty() || label[v] >= 0) continue;
+    std::vector<int> stack{static_cast<int>(v)};
+    label[v] = loops;
+    while (!stack.empty()) {
+      const int at = stack.back();
+      stack.pop_back();
+      for (int w : border[at])
+        if (label[w] < 0) label[w] = loops, stack.push_back(w);
+    }
+    ++loops;
+  }
+  return label;
+}
+
+}  // namespace
+
+CreaseLines detect_creases(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const CreaseOptions& options,
+                           double spacing) {
+  CreaseLines out;
+  const FeatureGraph g = feature_graph(V, F, options.min_dihedral_deg * kDegree);
+  const int nv = static_cast<int>(V.rows());
+  const double max_turn = options.corner_turn_deg * kDegree;
+  out.corner.assign(nv, 0);
+  out.on_border.assign(nv, 0);
+  for (int v = 0; v < nv; ++v) {
+    const std::vector<int>& c = g.crease[v];
+    const std::vector<int>& b = g.border[v];
+    out.on_border[v] = !b.empty();
+    if (!c.empty()) out.corner[v] = c.size() != 2 || turns_at(V, c[0], v, c[1], max_turn) || !b.empty();
+    if (options.border_corners && !b.empty() && b.size() != 2) out.corner[v] = 1;
+  }
+  if (options.border_corners)
+    for (int v : border_corners(V, g.border, 0.5 * spacing, max_turn)) out.corner[v] = 1;
+  out.border_loop = border_loop_labels(g.border);
+  for (int v = 0; v < nv; ++v)
+    for (int w : g.border[v])
+      if (v < w) out.border_edges.emplace_back(v, w);
+  // From every corner along each unused feature edge to the next corner; then the closed crease
+  // loops (a border loop without corners is no line: the border stages keep it).
   std::map<std::pair<int, int>, char> used;
   const auto take = [&](int a, int b) { return used.emplace(std::make_pair(std::min(a, b), std::max(a, b)), 1).second; };
-  // From every corner along each unused crease edge to the next corner; then the closed loops.
-  const auto walk = [&](int start, int next) {
+  const auto walk = [&](const std::vector<std::vector<int>>& adj, int start, int next, bool border) {
     std::vector<int> line{start};
     int prev = start, at = next;
     while (true) {
       line.push_back(at);
-      if (out.corner[at] || at == start) break;
+      if (out.corner[at] || at == start || adj[at].size() != 2) break;
       const int go = adj[at][0] == prev ? adj[at][1] : adj[at][0];
       if (!take(at, go)) break;
       prev = at;
       at = go;
     }
     out.lines.push_back(std::move(line));
+    out.border.push_back(border);
   };
   for (int v = 0; v < nv; ++v)
     if (out.corner[v])
-      for (int u : adj[v])
-        if (take(v, u)) walk(v, u);
+      for (int u : g.crease[v])
+        if (take(v, u)) walk(g.crease, v, u, false);
+  if (options.border_corners)
+    for (int v = 0; v < nv; ++v)
+      if (out.corner[v] && out.on_border[v] && g.border[v].size() == 2)
+        for (int u : g.border[v])
+          if (take(v, u)) walk(g.border, v, u, true);
   for (int v = 0; v < nv; ++v)
-    for (int u : adj[v])
-      if (take(v, u)) walk(v, u);
+    for (int u : g.crease[v])
+      if (take(v, u)) walk(g.crease, v, u, false);
   return out;
 }
 
@@ -235,9 +335,21 @@ namespace {
 class CreaseRecovery {
  public:
   CreaseRecovery(WorkingMesh& mesh, const SurfaceProjector& surface, const Eigen::MatrixX3d& V,
-                 const CreaseLines& lines, const CreaseOptions& o, double spacing)
-      : mesh_(mesh), surface_(surface), V_(V), lines_(lines), o_(o), spacing_(spacing),
-        taken_(mesh.num_vertices(), 0) {
+                 const CreaseLines& lines, const CreaseOptions& o, double spacing, const std::vector<char>& excluded)
+      : mesh_(mesh), surface_(surface), V_(V), lines_(lines), o_(o), spacing_(spacing), excluded_(excluded),
+        border_pass_(std::find(excluded.begin(), excluded.end(), 0) != excluded.end() &&
+                     lines.border[std::find(excluded.begin(), excluded.end(), 0) - excluded.begin()]),
+        taken_(mesh.num_vertices(), 0), out_border_(mesh.boundary_vertices()), next_(mesh.num_vertices(), -1),
+        prev_(mesh.num_vertices(), -1) {
+    // The output's border as successor and predecessor along its half-edges (−2 where a vertex
+    // has two: a pinched border, no line is recovered through it).
+    for (const MeshFace& f : mesh.faces())
+      for (int k = 0; k < 3; ++k) {
+        const int a = f[k], b = f[(k + 1) % 3];
+        if (mesh.half_edge_face(b, a) >= 0) continue;
+        next_[a] = next_[a] == -1 ? b : -2;
+        prev_[b] = prev_[b] == -1 ? a : -2;
+      }
     // The vertices a sample may take, binned in cells of the snap radius: a vertex not taken
     // keeps its place until polish() (an undo restores the places with the taken flags).
     std::vector<char> in_faces(mesh.num_vertices(), 0);
@@ -246,32 +358,72 @@ class CreaseRecovery {
     cell_size_ = std::max(o_.max_snap_spacings * spacing_, 1e-300);
     for (int v = 0; v < mesh.num_vertices(); ++v)
       if (in_faces[v]) grid_[cell_of(mesh.V.row(v).transpose())].push_back(v);
+    // The input's border edges in every cell their bounding box meets.
+    for (int e = 0; e < static_cast<int>(lines.border_edges.size()); ++e) {
+      const auto [a, b] = lines.border_edges[e];
+      const Cell lo = cell_of(V.row(a).cwiseMin(V.row(b)).transpose()), hi = cell_of(V.row(a).cwiseMax(V.row(b)).transpose());
+      for (long i = lo[0]; i <= hi[0]; ++i)
+        for (long j = lo[1]; j <= hi[1]; ++j)
+          for (long k = lo[2]; k <= hi[2]; ++k) border_grid_[{i, j, k}].push_back(e);
+    }
   }
 
   // Every line long enough resampled at the spacing: its corners first (shared by the lines
   // that end there) all at once, then line by line its other samples, each onto the nearest free
   // vertex, and joined. A line whose snap makes faces cross is undone alone (a crease along a
-  // part thinner than the spacing); so are the corners, all of them, where they do.
+  // part thinner than the spacing); so is a corner (snap_corners()).
   void recover_lines(long crossing_before) {
     std::vector<int> kept;
     std::map<int, int> corner_vertex;
     for (int l = 0; l < static_cast<int>(lines_.lines.size()); ++l)
-      if (lines_.length(V_, l) >= o_.min_line_spacings * spacing_) kept.push_back(l);
-    const Transaction corners = begin();
+      if (!excluded_[l] && lines_.length(V_, l) >= o_.min_line_spacings * spacing_) kept.push_back(l);
+    std::vector<int> ends;
     for (int l : kept)
       for (int end : {lines_.lines[l].front(), lines_.lines[l].back()})
-        if (lines_.corner[end] && !corner_vertex.count(end)) corner_vertex[end] = snap(V_.row(end).transpose());
-    stats.corners = static_cast<int>(corner_vertex.size());
-    if (self_intersecting_pairs(mesh_) > crossing_before) {
-      undo(corners);
-      return;
-    }
+        if (lines_.corner[end] && std::find(ends.begin(), ends.end(), end) == ends.end()) ends.push_back(end);
+    if (!snap_corners(ends, crossing_before, corner_vertex)) return;
+    corner_of_.assign(mesh_.num_vertices(), 0);
+    for (const auto& [input_vertex, v] : corner_vertex)
+      if (v >= 0) corner_of_[v] = 1;
+    for (int l : kept)
+      for (int end : {lines_.lines[l].front(), lines_.lines[l].back()})
+        if (lines_.corner[end] && corner_vertex[end] >= 0) corner_lines_[corner_vertex[end]].push_back(l);
     for (int l : kept) {
       const Transaction line = begin();
-      recover_line(l, corner_vertex);
+      if (lines_.border[l]) recover_border_line(l, corner_vertex);
+      else recover_line(l, corner_vertex);
       if (self_intersecting_pairs(mesh_) > crossing_before) undo(line), ++stats.skipped_lines;
       else ++stats.lines;
     }
+  }
+
+  // The corners `ends` (input vertices) snapped all at once; where that makes faces cross, one
+  // by one, each undone alone where it does (a corner whose nearest vertex is across a part
+  // thinner than the spacing). False where no corner could be kept.
+  bool snap_corners(const std::vector<int>& ends, long crossing_before, std::map<int, int>& corner_vertex) {
+    const Transaction all = begin();
+    for (int end : ends) corner_vertex[end] = snap_corner(end);
+    if (self_intersecting_pairs(mesh_) <= crossing_before) {
+      stats.corners = static_cast<int>(ends.size());
+      return true;
+    }
+    undo(all);
+    corner_vertex.clear();
+    int kept = 0;
+    for (int end : ends) {
+      const Transaction one = begin();
+      const int v = snap_corner(end);
+      if (v >= 0 && self_intersecting_pairs(mesh_) > crossing_before) undo(one), corner_vertex[end] = -1;
+      else corner_vertex[end] = v, kept += v >= 0;
+    }
+    stats.corners = kept;
+    return kept > 0;
+  }
+
+  // Corner `end` (an input vertex) onto the nearest free vertex: for a corner on the input's
+  // border, a vertex of the output's border nearer to that border loop than to any other.
+  int snap_corner(int end) {
+    return snap(V_.row(end).transpose(), lines_.on_border[end], lines_.on_border[end] ? lines_.border_loop[end] : -1);
   }
 
   // Line l resampled, its samples between the corners snapped, consecutive samples joined by an
@@ -314,7 +466,7 @@ class CreaseRecovery {
         run.push_back(w);
         continue;
       }
-      const int x = bridge(mesh_, u, w, V_, line, vf, taken_);
+      const int x = bridge(mesh_, u, w, V_, line, vf, taken_, out_border_);
       if (x < 0) {
         ++stats.missing_edges;
         whole = false;
@@ -333,6 +485,52 @@ class CreaseRecovery {
     if (whole) spread(l, path);
     else
       for (const std::vector<int>& r : runs) record_run(l, r);
+  }
+
+  // Border line l: the output's border path between the vertices of its two corners (the
+  // direction along the border whose vertices lie nearer to their places on the line), its
+  // vertices spread evenly along the input's border between the corners.
+  void recover_border_line(int l, std::map<int, int>& corner_vertex) {
+    const std::vector<int>& line = lines_.lines[l];
+    const int from = corner_vertex[line.front()], to = corner_vertex[line.back()];
+    std::vector<int> best;
+    double best_score = o_.border_snap_spacings * spacing_;
+    if (from >= 0 && to >= 0)
+      for (const std::vector<int>* step : {&next_, &prev_}) {
+        const std::vector<int> path = border_path(from, to, *step);
+        if (path.empty()) continue;
+        const double score = mean_distance_to_spread(line, path);
+        if (score < best_score) best_score = score, best = path;
+      }
+    if (best.empty()) {
+      ++stats.missing_edges;
+      return;
+    }
+    for (std::size_t i = 1; i < best.size(); ++i) mark(best[i - 1], best[i]);
+    for (int v : best) taken_[v] = 1;
+    spread(l, best);
+  }
+
+  // The output's border from vertex `from` along `step` (next_ or prev_) to the first corner
+  // vertex; empty unless that is `to`, or where it passes a vertex a line took already.
+  std::vector<int> border_path(int from, int to, const std::vector<int>& step) const {
+    std::vector<int> path{from};
+    for (int v = step[from]; v >= 0 && path.size() <= static_cast<std::size_t>(mesh_.num_vertices()); v = step[v]) {
+      path.push_back(v);
+      if (corner_of_[v]) return v == to ? path : std::vector<int>{};
+      if (taken_[v]) return {};
+    }
+    return {};
+  }
+
+  // Mean distance from the vertices of `path` to where spread() would put them on `line`.
+  double mean_distance_to_spread(const std::vector<int>& line, const std::vector<int>& path) const {
+    const int segments = static_cast<int>(path.size()) - 1;
+    if (segments < 2) return 0;
+    const std::vector<Eigen::Vector3d> at = resample(V_, line, segments);
+    double sum = 0;
+    for (int i = 1; i < segments; ++i) sum += (mesh_.V.row(path[i]).transpose() - at[i]).norm();
+    return sum / (segments - 1);
   }
 
   // The vertices off the lines relaxed, flipped and polished around them; slivers whose corners
@@ -365,11 +563,16 @@ class CreaseRecovery {
   }
 
   // The faces below `floor` that the lines do not excuse. A face is excused where its smallest
-  // angle is at a corner between two line edges (two crease lines meeting at that angle bound
-  // every triangle between them), or where its three corners are on lines (two lines closer than
-  // the spacing) and its smallest angle is at least half of `floor`.
-  int unexcused_below(double floor) const {
+  // angle is at a corner between two line edges (two lines meeting at that angle bound every
+  // triangle between them), or, between crease lines, where its three corners are on lines (two
+  // lines closer than the spacing) and its smallest angle is at least half of `floor`. `blamed`
+  // gets the lines with a recovered vertex within polish_rings + 1 rings of the faces counted.
+  int unexcused_below(double floor, std::vector<int>& blamed) const {
     int count = 0;
+    std::map<int, std::vector<int>> lines_at = corner_lines_;
+    for (const LinePath& p : paths_)
+      for (int v : p.path) lines_at[v].push_back(p.line);
+    const std::vector<std::vector<int>> vf = mesh_.vertex_faces();
     for (const MeshFace& f : mesh_.faces()) {
       const double smallest = face_min_angle(mesh_, f);
       if (smallest >= floor) continue;
@@ -377,10 +580,27 @@ class CreaseRecovery {
       for (int q = 1; q < 3; ++q)
         if (corner_angle(mesh_, f, q) < corner_angle(mesh_, f, k)) k = q;
       const bool at_corner = on_line(f[k], f[(k + 1) % 3]) && on_line(f[k], f[(k + 2) % 3]);
-      const bool between_lines = taken_[f[0]] && taken_[f[1]] && taken_[f[2]] && smallest >= 0.5 * floor;
-      if (!at_corner && !between_lines) ++count;
+      const bool between_lines = !border_pass_ && taken_[f[0]] && taken_[f[1]] && taken_[f[2]] && smallest >= 0.5 * floor;
+      if (at_corner || between_lines) continue;
+      ++count;
+      for (int w : ring_vertices(f, vf))
+        if (lines_at.count(w)) blamed.insert(blamed.end(), lines_at[w].begin(), lines_at[w].end());
     }
+    std::sort(blamed.begin(), blamed.end());
+    blamed.erase(std::unique(blamed.begin(), blamed.end()), blamed.end());
     return count;
+  }
+
+  // The vertices within polish_rings + 1 rings of face f (the ones the polish around a line
+  // vertex there may have moved).
+  std::vector<int> ring_vertices(const MeshFace& f, const std::vector<std::vector<int>>& vf) const {
+    std::vector<int> near(f.begin(), f.end());
+    for (int ring = 0; ring <= o_.polish_rings; ++ring)
+      for (std::size_t i = 0, n = near.size(); i < n; ++i)
+        for (int g : vf[near[i]])
+          for (int w : mesh_.face(g))
+            if (std::find(near.begin(), near.end(), w) == near.end()) near.push_back(w);
+    return near;
   }
 
   CreaseStats stats;
@@ -390,21 +610,26 @@ class CreaseRecovery {
   // Only a vertex on the same side of the surface as the line (its normal within 90° of the
   // surface's normal at x, about the bisector of the crease's two faces) qualifies: across a
   // plate thinner than the spacing the nearest vertex may be on the other side.
-  int snap(const Eigen::Vector3d& x) {
+  // A border corner (`border`) takes the nearest border vertex within border_snap_spacings; any
+  // other sample a vertex off the border.
+  int snap(const Eigen::Vector3d& x, bool border = false, int loop = -1) {
     Eigen::Vector3d pos, nrm;
     int hint = -1;
     surface_.project(x, hint, pos, nrm);
     const bool sided = nrm.allFinite() && nrm.norm() > 0;
     int best = -1;
-    double best_d = o_.max_snap_spacings * spacing_;
+    double best_d = (border ? o_.border_snap_spacings : o_.max_snap_spacings) * spacing_;
     const Cell c = cell_of(x);
-    for (int i = -1; i <= 1; ++i)
-      for (int j = -1; j <= 1; ++j)
-        for (int k = -1; k <= 1; ++k) {
+    const long reach = std::max(1L, static_cast<long>(std::ceil(best_d / cell_size_)));
+    for (long i = -reach; i <= reach; ++i)
+      for (long j = -reach; j <= reach; ++j)
+        for (long k = -reach; k <= reach; ++k) {
           const auto it = grid_.find({c[0] + i, c[1] + j, c[2] + k});
           if (it == grid_.end()) continue;
           for (int v : it->second) {
-            if (taken_[v] || (sided && !(mesh_.N.row(v).dot(nrm.transpose()) > 0))) continue;
+            if (taken_[v] || out_border_[v] != border || (sided && !(mesh_.N.row(v).dot(nrm.transpose()) > 0)) ||
+                (loop >= 0 && nearest_input_loop(v) != loop))
+              continue;
             const double d = (mesh_.V.row(v).transpose() - x).norm();
             if (d < best_d || (d == best_d && best >= 0 && v < best)) best_d = d, best = v;
           }
@@ -527,8 +752,9 @@ class CreaseRecovery {
   }
   bool on_line(int a, int b) const { return line_edges_.count({std::min(a, b), std::max(a, b)}) > 0; }
 
-  // Max-min-angle flips of the edges between two line vertices that do not run along a line (the
-  // vertex flips above leave them alone), in faces below min_angle_deg only.
+  // Max-min-angle flips of the edges at a line vertex that do not run along a line (the flips of
+  // the polish leave every edge at a line vertex alone), in faces below min_angle_deg only: a
+  // corner of a square sheet split into three 30° faces becomes two 45° ones.
   void flip_between_lines() {
     const double sliver = o_.min_angle_deg * kDegree;
     for (int f1 = 0; f1 < mesh_.num_faces(); ++f1) {
@@ -537,7 +763,7 @@ class CreaseRecovery {
         const MeshFace t = mesh_.face(f1);
         const int a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
         const int f2 = mesh_.half_edge_face(b, a);
-        if (f2 < 0 || !taken_[a] || !taken_[b] || on_line(a, b) || mesh_.valence(a) <= 3 || mesh_.valence(b) <= 3)
+        if (f2 < 0 || (!taken_[a] && !taken_[b]) || on_line(a, b) || mesh_.valence(a) <= 3 || mesh_.valence(b) <= 3)
           continue;
         int d = -1;
         for (int v : mesh_.face(f2))
@@ -561,7 +787,13 @@ class CreaseRecovery {
   const CreaseLines& lines_;
   const CreaseOptions& o_;
   const double spacing_;
+  const std::vector<char>& excluded_;  // lines left out
+  const bool border_pass_;             // the lines recovered are border lines
   std::vector<char> taken_;
+  std::vector<char> out_border_;    // output vertices on its border
+  std::vector<int> next_, prev_;    // along the output's border (−1 off it, −2 pinched)
+  std::vector<char> corner_of_;     // output vertices that a corner took
+  std::map<int, std::vector<int>> corner_lines_;  // the lines ending at each of them
   std::set<std::pair<int, int>> line_edges_;
   // A recovered line (or a run of joined samples of a line with gaps): its edge path of output
   // vertices and their arc lengths along the line.
@@ -578,7 +810,72 @@ class CreaseRecovery {
   }
   double cell_size_ = 1;
   std::map<Cell, std::vector<int>> grid_;  // vertices in faces by cell of side max_snap_spacings · spacing
+  std::map<Cell, std::vector<int>> border_grid_;  // the input's border edges by cell
+
+  // The border loop of the input's border edge nearest to output vertex v, among the edges
+  // within border_snap_spacings of it; −1 if there is none.
+  int nearest_input_loop(int v) const {
+    const Eigen::Vector3d x = mesh_.V.row(v).transpose();
+    const long reach = std::max(1L, static_cast<long>(std::ceil(o_.border_snap_spacings * spacing_ / cell_size_)));
+    const Cell c = cell_of(x);
+    double best = o_.border_snap_spacings * spacing_;
+    int loop = -1;
+    for (long i = -reach; i <= reach; ++i)
+      for (long j = -reach; j <= reach; ++j)
+        for (long k = -reach; k <= reach; ++k) {
+          const auto it = border_grid_.find({c[0] + i, c[1] + j, c[2] + k});
+          if (it == border_grid_.end()) continue;
+          for (int e : it->second) {
+            const auto [a, b] = lines_.border_edges[e];
+            const double d = (nearest_on_line(V_, {a, b}, x) - x).norm();
+            if (d < best) best = d, loop = lines_.border_loop[a];
+          }
+        }
+    return loop;
+  }
 };
+
+}  // namespace
+
+namespace {
+
+// One pass of recover_creases(): the crease lines (`border` false) or the border lines. Kept where
+// nothing crosses that did not and no face falls below the lower of the smallest angle before
+// and min_angle_deg (border_min_angle_deg for the border lines), except at a corner between two
+// lines. Where faces fall below it next to border lines, those lines are left out and the others
+// recovered again (options.retries times): a crease is worth a lower angle, a border corner is not.
+CreaseStats recover_pass(WorkingMesh& mesh, const SurfaceProjector& surface, const Eigen::MatrixX3d& V,
+                         const CreaseLines& lines, const CreaseOptions& options, double spacing, bool border) {
+  std::vector<char> excluded(lines.lines.size(), 0);
+  for (std::size_t l = 0; l < lines.lines.size(); ++l) excluded[l] = lines.border[l] != border;
+  if (std::find(excluded.begin(), excluded.end(), 0) == excluded.end()) return {};
+  const int other_kind = static_cast<int>(std::count(excluded.begin(), excluded.end(), 1));
+  const WorkingMesh::Checkpoint before = mesh.checkpoint();
+  const long crossing_before = self_intersecting_pairs(mesh);
+  const double min_angle = border ? options.border_min_angle_deg : options.min_angle_deg;
+  const double floor = std::min(mesh_min_angle(mesh), min_angle * kDegree) - 1e-9;
+  for (int attempt = 0;; ++attempt) {
+    CreaseRecovery recovery(mesh, surface, V, lines, options, spacing, excluded);
+    recovery.recover_lines(crossing_before);
+    recovery.polish();
+    CreaseStats stats = recovery.stats;
+    stats.dropped_lines = static_cast<int>(std::count(excluded.begin(), excluded.end(), 1)) - other_kind;
+    const long crossing = self_intersecting_pairs(mesh);
+    std::vector<int> blamed;
+    const int below = recovery.unexcused_below(floor, blamed);
+    if (crossing <= crossing_before && below == 0) return stats;
+    mesh.rollback(before);
+    if (border && attempt < options.retries && crossing <= crossing_before && !blamed.empty()) {
+      for (int l : blamed) excluded[l] = 1;
+      continue;
+    }
+    stats.undone = true;
+    stats.undone_reason = crossing > crossing_before
+                              ? std::to_string(crossing - crossing_before) + " more face pairs crossed"
+                              : std::to_string(below) + " faces fell below the smallest angle";
+    return stats;
+  }
+}
 
 }  // namespace
 
@@ -586,24 +883,14 @@ CreaseStats recover_creases(WorkingMesh& mesh, const SurfaceProjector& surface, 
                             const CreaseLines& lines, const CreaseOptions& options) {
   const double spacing = mean_edge_length(mesh);
   if (!options.enabled || !(spacing > 0) || lines.lines.empty()) return {};
-  const WorkingMesh::Checkpoint before = mesh.checkpoint();
-  const long crossing_before = self_intersecting_pairs(mesh);
-  const double min_before = mesh_min_angle(mesh);
-  CreaseRecovery recovery(mesh, surface, V, lines, options, spacing);
-  recovery.recover_lines(crossing_before);
-  recovery.polish();
-  CreaseStats stats = recovery.stats;
-  // Kept where nothing crosses that did not and no face falls below the lower of the smallest
-  // angle before and min_angle_deg, except at a corner between two lines.
-  const double floor = std::min(min_before, options.min_angle_deg * kDegree) - 1e-9;
-  const long crossing = self_intersecting_pairs(mesh);
-  const int below = recovery.unexcused_below(floor);
-  if (crossing > crossing_before || below > 0) {
-    mesh.rollback(before);
-    stats.undone = true;
-    stats.undone_reason = crossing > crossing_before
-                              ? std::to_string(crossing - crossing_before) + " more face pairs crossed"
-                              : std::to_string(below) + " faces fell below the smallest angle";
+  CreaseStats stats = recover_pass(mesh, surface, V, lines, options, spacing, false);
+  stats.dropped_lines = 0;
+  if (options.border_corners) {
+    const CreaseStats b = recover_pass(mesh, surface, V, lines, options, spacing, true);
+    stats.border_lines = b.lines;
+    stats.border_corners = b.corners;
+    stats.dropped_lines = b.dropped_lines;
+    if (b.undone) stats.border_undone_reason = b.undone_reason;
   }
   return stats;
 }

@@ -7,6 +7,7 @@
 /// samples and joined by edges along the line, and the rest of the mesh relaxed around them.
 #include <Eigen/Core>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "heatcvt/mesh.h"
@@ -23,6 +24,14 @@ struct CreaseOptions {
   /// A crease vertex where its line turns by more than this, or where other than two crease
   /// edges meet, is a corner: lines are resampled between corners, which keep their place. Default 60°.
   double corner_turn_deg = 60;
+  /// The border of an open input is kept like a crease where it has corners: a boundary vertex
+  /// where the border turns by more than corner_turn_deg (the corner of a square sheet or
+  /// hole), or where a crease line ends, is a corner, and the boundary between two corners is a
+  /// line. A border corner takes the nearest border vertex of the output within
+  /// border_snap_spacings; the output's border between two corners is spread along the input's.
+  /// A border loop without corners is left to the border stages. Defaults true and 1.
+  bool border_corners = true;
+  double border_snap_spacings = 1;
   /// Lines shorter than this many output spacings (the mean edge length) are not recovered: the
   /// output cannot resolve them. Default 1.
   double min_line_spacings = 1;
@@ -45,6 +54,12 @@ struct CreaseOptions {
   /// corners are on lines (two lines closer than the spacing) and it keeps half of it. Faces
   /// below it are also where the polish flips edges between two line vertices. Default 25°.
   double min_angle_deg = 25;
+  /// The border lines' pass must keep the lower of the mesh's smallest angle before it and this
+  /// (a border corner is worth less than a crease). Default 30°.
+  double border_min_angle_deg = 30;
+  /// Times the border lines' pass is run again without the lines next to faces below its floor
+  /// before it is undone. Default 2.
+  int retries = 2;
   int threads = 0;  ///< 0 = all cores; the result does not depend on it.
 };
 
@@ -52,18 +67,31 @@ struct CreaseOptions {
 /// loop without corners, first vertex repeated at the end).
 struct CreaseLines {
   std::vector<std::vector<int>> lines;  ///< input vertex indices along each line
-  std::vector<char> corner;             ///< per input vertex: a corner of the crease graph
+  std::vector<char> border;             ///< per line: it runs along the input's boundary
+  std::vector<char> corner;             ///< per input vertex: a corner of the crease graph or of the border
+  std::vector<char> on_border;          ///< per input vertex: on a boundary edge
+  std::vector<int> border_loop;         ///< per input vertex: its border loop (connected boundary edges), −1 off it
+  std::vector<std::pair<int, int>> border_edges;  ///< the input's boundary edges
   double length(const Eigen::MatrixX3d& V, int line) const;
 };
 
 /// The crease lines of (V, F): edges with exactly two faces whose normals differ by more than
-/// options.min_dihedral_deg, chained between corners.
-CreaseLines detect_creases(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const CreaseOptions& options = {});
+/// options.min_dihedral_deg, chained between corners; with options.border_corners also the
+/// boundary edges chained between border corners. `spacing` is the output's: the border turns
+/// at a vertex are measured between the chords to the border points half of it behind and ahead
+/// (0: its two border edges), and of the vertices within that distance turning by more than
+/// corner_turn_deg only the one turning most is a corner (a ragged scan border has none).
+CreaseLines detect_creases(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const CreaseOptions& options = {},
+                           double spacing = 0);
 
 /// What recover_creases() did.
 struct CreaseStats {
   int lines = 0;          ///< lines recovered (long enough, and their snap made no faces cross)
   int skipped_lines = 0;  ///< lines long enough whose snap made faces cross: left out (a part thinner than the spacing)
+  int border_lines = 0;    ///< border lines recovered (the fields above count the crease lines)
+  int border_corners = 0;  ///< corners of those
+  int dropped_lines = 0;   ///< border lines left out: faces next to them fell below border_min_angle_deg
+  std::string border_undone_reason;  ///< why no border line was kept (empty when kept or none)
   int corners = 0;        ///< corners of those lines
   int snapped = 0;        ///< output vertices moved onto a line
   int line_edges = 0;     ///< consecutive samples joined by an output edge (after flips)
@@ -83,6 +111,10 @@ struct CreaseStats {
 /// vertices off the lines are relaxed, flipped (no edge between two line vertices) and polished
 /// around them. Undone as a whole where it makes more face pairs cross than before or lowers the
 /// smallest angle (CreaseOptions::min_angle_deg).
+/// Then, in a pass of their own, the border lines: corners onto the output's border, the border
+/// between them spread along the input's, the same polish; where faces fall below
+/// border_min_angle_deg next to them those lines are left out and the rest recovered again
+/// (`retries` times) before the pass is undone.
 CreaseStats recover_creases(WorkingMesh& mesh, const SurfaceProjector& surface, const Eigen::MatrixX3d& V,
                             const CreaseLines& lines, const CreaseOptions& options = {});
 
