@@ -1,5 +1,6 @@
 // Scale benchmark of the streamed, voxel-first front end (reconstruct_stream.h): clouds of 1e5,
-// 1e6, 1e7 (and 1e8 with --huge) points sampled from armadillo (noise 0.1 % of the bbox diagonal,
+// 1e6, 1e7 (and 1e8 with --huge) points sampled from armadillo (noise 0.1 % of the bbox diagonal
+// by default, --noise F for F of it,
 // no normals) are written as binary little-endian PLY (float x y z) to a temporary directory in
 // chunks of 1e6 points (never the whole cloud in memory), then reconstructed through
 // reconstruct_surface_streamed at -n 3000 and at a fixed density (points / 50 sites, capped at
@@ -13,7 +14,7 @@
 //
 // Usage: bench_scale [--sizes 100000,1000000,10000000] [--huge] [--density-max 1000000]
 //                    [--peer-max 1000000] [--sites 3000] [--keep-dir DIR] [--fine F] [--plain-means]
-//                    [--plain-fit] [--glibc-allocator]
+//                    [--plain-fit] [--glibc-allocator] [--noise F]
 // (--fine: StreamOptions::fine_voxel_factor; --plain-means: project_to_surface = false;
 //  --plain-fit: the 3×3×3 voxel plane fit only, VoxelSurfaceFit max_levels = shift_steps = 0;
 //  --glibc-allocator: both children keep glibc's allocator defaults instead of the tools' setting)
@@ -47,7 +48,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr std::int64_t kWriteChunk = 1000000;  // points sampled and written at a time
-constexpr double kNoiseFraction = 0.001;       // noise σ as a fraction of the bbox diagonal
+constexpr double kNoiseFraction = 0.001;       // default noise σ (--noise) as a fraction of the bbox diagonal
 
 // Writes `count` points sampled from (V, F) plus noise as a float binary little-endian PLY.
 void write_sampled_ply(const std::string& path, const TriangleMesh& mesh, std::int64_t count, double sigma) {
@@ -202,6 +203,7 @@ int main(int argc, char** argv) {
   std::int64_t density_max = 1000000;
   std::int64_t peer_max = 1000000;
   int sites = 3000;
+  double noise = kNoiseFraction;
   std::string keep_dir;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -215,6 +217,7 @@ int main(int argc, char** argv) {
     else if (a == "--plain-means") project = false;
     else if (a == "--plain-fit") plain_fit = true;
     else if (a == "--glibc-allocator") setenv(kGlibcAllocatorEnv, "1", 1);
+    else if (a == "--noise" && i + 1 < argc) noise = std::stod(argv[++i]);
     else {
       std::fprintf(stderr, "bench_scale: error: %s: unknown option\n", a.c_str());
       return 2;
@@ -231,10 +234,11 @@ int main(int argc, char** argv) {
   // popen runs through the shell: /proc/self/exe would be the shell, so name this binary.
   const std::string self = fs::read_symlink("/proc/self/exe").string();
   for (const std::int64_t points : sizes) {
-    const fs::path file = dir / ("armadillo_" + std::to_string(points) + ".ply");
+    const std::string tag = noise == kNoiseFraction ? "" : "_noise" + std::to_string(noise);
+    const fs::path file = dir / ("armadillo_" + std::to_string(points) + tag + ".ply");
     if (!fs::exists(file)) {
       const double t0 = bench::now_seconds();
-      write_sampled_ply(file.string(), mesh, points, kNoiseFraction * diag);
+      write_sampled_ply(file.string(), mesh, points, noise * diag);
       std::fprintf(stderr, "wrote %s (%.1f s)\n", file.c_str(), bench::now_seconds() - t0);
     }
     std::vector<int> runs = {sites};
@@ -252,12 +256,12 @@ int main(int argc, char** argv) {
       }
   }
   if (keep_dir.empty()) fs::remove_all(dir);
-  std::printf("\nArmadillo (genus 0), noise σ = %.1f %% of the bbox diagonal, float binary PLY written in chunks of %lld "
+  std::printf("\nArmadillo (genus 0), noise σ = %.2f %% of the bbox diagonal, float binary PLY written in chunks of %lld "
               "points; time = wall time of the child process's work (heatcvt: reconstruct_surface_streamed, both read passes "
               "included; peer: read_cloud, PCA/MST normals, PCL Poisson depth 8, CGAL isotropic remeshing to -n), read = "
               "until the first reconstruction stage (heatcvt) or until the cloud is in memory (peer); peak MB = "
               "ru_maxrss of the child process (taken before the distances); sys s and page faults: its system time and minor page faults (ru_stime, ru_minflt); mean dist and Hausdorff: two-sided, "
               "between the output and armadillo.obj (20,000 samples each way), in ‰ of its bbox diagonal. The peer runs on clouds up to --peer-max points.\n",
-              100 * kNoiseFraction, static_cast<long long>(kWriteChunk));
+              100 * noise, static_cast<long long>(kWriteChunk));
   return 0;
 }

@@ -207,20 +207,20 @@ double CreaseLines::length(const Eigen::MatrixX3d& V, int line) const { return p
 namespace {
 
 // Walks the border from v through its neighbour `first` until `reach` arc length (at least one
-// edge); calls visit(w, arc length) on every vertex passed. Stops early at a vertex with other
+// edge); calls visit(w) on every vertex passed. Stops early at a vertex with other
 // than two border neighbours or back at v. Returns the last vertex reached.
 template <typename Visit>
 int walk_border(const Eigen::MatrixX3d& V, const std::vector<std::vector<int>>& border, int v, int first, double reach,
                 Visit visit) {
   int prev = v, at = first;
   double done = (V.row(at) - V.row(v)).norm();
-  visit(at, done);
+  visit(at);
   while (done < reach && at != v && border[at].size() == 2) {
     const int go = border[at][0] == prev ? border[at][1] : border[at][0];
     done += (V.row(go) - V.row(at)).norm();
     prev = at;
     at = go;
-    visit(at, done);
+    visit(at);
   }
   return at;
 }
@@ -233,7 +233,7 @@ std::vector<int> border_corners(const Eigen::MatrixX3d& V, const std::vector<std
                                 double max_turn) {
   const int nv = static_cast<int>(V.rows());
   std::vector<double> turn(nv, 0.0);
-  const auto none = [](int, double) {};
+  const auto none = [](int) {};
   for (int v = 0; v < nv; ++v) {
     if (border[v].size() != 2) continue;
     const int behind = walk_border(V, border, v, border[v][0], reach, none);
@@ -246,7 +246,7 @@ std::vector<int> border_corners(const Eigen::MatrixX3d& V, const std::vector<std
   for (int v = 0; v < nv; ++v) {
     if (!(turn[v] > max_turn)) continue;
     bool top = true;
-    const auto beaten = [&](int w, double) { top = top && (turn[w] < turn[v] || (turn[w] == turn[v] && w >= v)); };
+    const auto beaten = [&](int w) { top = top && (turn[w] < turn[v] || (turn[w] == turn[v] && w >= v)); };
     for (int first : border[v]) walk_border(V, border, v, first, reach, beaten);
     if (top) corners.push_back(v);
   }
