@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Writes meshes built from formulas into a directory, as inputs for bench_remesh --dir that no
 file of ../shared/data resembles: thin parts, pole fans of slivers, sharp edges across a plate
-thinner than a cell, many holes, far-off coordinates.
+thinner than a cell, many holes, open sheets with corners, far-off coordinates.
 
 Usage: scripts/make_shapes.py OUT_DIR [SHARED_MESHES_DIR]
 
@@ -135,6 +135,17 @@ def perforated(n=80, hole=5):
     return [V[v] for v in used], [tuple(new[x] for x in t) for t in F]
 
 
+def square_sheet(n=40):
+    """A flat unit square (one boundary loop with four 90-degree corners)."""
+    return grid(n, n, lambda u, v: (u, v, 0.0))
+
+
+def saddle_sheet(n=40):
+    """The unit square lifted onto the saddle z = 1.2 (x - 1/2)(y - 1/2): a curved sheet whose
+    border corners are not in one plane."""
+    return grid(n, n, lambda u, v: (u, v, 1.2 * (u - 0.5) * (v - 0.5)))
+
+
 def read_obj(path):
     V, F = [], []
     for line in open(path):
@@ -159,7 +170,8 @@ def main():
     shapes = {
         "thin_torus": thin_torus(), "open_tube": open_tube(), "latlong_sphere": latlong_sphere(),
         "thin_plate": box((1, 1, 0.04), 1 / 40), "coarse_cube": box((1, 1, 1), 1 / 12),
-        "thin_capsule": capsule(), "perforated": perforated(),
+        "thin_capsule": capsule(), "perforated": perforated(), "square_sheet": square_sheet(),
+        "saddle_sheet": saddle_sheet(),
     }
     if len(sys.argv) == 3:
         for name in ("spot.obj", "kitten.obj"):

@@ -134,8 +134,9 @@ void add_stage_options(CLI::App& app, Settings& s) {
                "write the dual triangulation itself, without the post-CVT stages (manifold extraction, hole filling, "
                "untangling, polish, sliver collapse, edge splits; the input mesh is their projector)");
   app.add_flag("--no-features", s.no_features,
-               "do not keep sharp creases: by default edges of the input whose faces meet at more than --crease-angle "
-               "are kept as edge paths of the output, their corners fixed");
+               "do not keep sharp creases nor border corners: by default edges of the input whose faces meet at more "
+               "than --crease-angle are kept as edge paths of the output, their corners fixed, and so are the corners "
+               "of an open input's border (turns above 60 degrees at the output's spacing) with the border between them");
   app.add_option("--crease-angle", s.crease_angle, "dihedral angle (degrees) above which an input edge is a sharp crease")
       ->capture_default_str();
   app.add_flag("--paper", s.paper,
