@@ -52,7 +52,7 @@ struct CreaseOptions {
   /// before and this, unless that smallest angle is at a corner between two line edges (two
   /// crease lines meeting at that angle bound every triangle between them) or the face's three
   /// corners are on lines (two lines closer than the spacing) and it keeps half of it. Faces
-  /// below it are also where the polish flips edges between two line vertices. Default 25°.
+  /// below it are also where the polish flips edges at a line vertex. Default 25°.
   double min_angle_deg = 25;
   /// The border lines' pass must keep the lower of the mesh's smallest angle before it and this
   /// (a border corner is worth less than a crease). Default 30°.
@@ -88,10 +88,6 @@ CreaseLines detect_creases(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
 struct CreaseStats {
   int lines = 0;          ///< lines recovered (long enough, and their snap made no faces cross)
   int skipped_lines = 0;  ///< lines long enough whose snap made faces cross: left out (a part thinner than the spacing)
-  int border_lines = 0;    ///< border lines recovered (the fields above count the crease lines)
-  int border_corners = 0;  ///< corners of those
-  int dropped_lines = 0;   ///< border lines left out: faces next to them fell below border_min_angle_deg
-  std::string border_undone_reason;  ///< why no border line was kept (empty when kept or none)
   int corners = 0;        ///< corners of those lines
   int snapped = 0;        ///< output vertices moved onto a line
   int line_edges = 0;     ///< consecutive samples joined by an output edge (after flips)
@@ -101,6 +97,11 @@ struct CreaseStats {
   /// CreaseOptions::min_angle_deg): the mesh was restored.
   bool undone = false;
   std::string undone_reason;  ///< why, in words (empty when kept)
+  // The border lines' pass (the fields above count the crease lines).
+  int border_lines = 0;    ///< border lines recovered
+  int border_corners = 0;  ///< their corners kept
+  int dropped_lines = 0;   ///< border lines left out: faces next to them fell below border_min_angle_deg
+  std::string border_undone_reason;  ///< why no border line was kept (empty when kept or none)
 };
 
 /// Moves output vertices onto the crease lines of the input `lines` (input positions `V`): each
@@ -108,8 +109,7 @@ struct CreaseStats {
 /// first) takes the nearest output vertex within max_snap_spacings, consecutive samples are
 /// joined by an edge (an existing one, one flip of the edge between them, or through a common
 /// neighbour moved onto the line); a line whose snap makes faces cross is left out; then the
-/// vertices off the lines are relaxed, flipped (no edge between two line vertices) and polished
-/// around them. Undone as a whole where it makes more face pairs cross than before or lowers the
+/// vertices off the lines are relaxed, flipped (no edge along a line) and polished around them. Undone as a whole where it makes more face pairs cross than before or lowers the
 /// smallest angle (CreaseOptions::min_angle_deg).
 /// Then, in a pass of their own, the border lines: corners onto the output's border, the border
 /// between them spread along the input's, the same polish; where faces fall below
