@@ -382,9 +382,6 @@ class CreaseRecovery {
       for (int end : {lines_.lines[l].front(), lines_.lines[l].back()})
         if (lines_.corner[end] && std::find(ends.begin(), ends.end(), end) == ends.end()) ends.push_back(end);
     if (!snap_corners(ends, crossing_before, corner_vertex)) return;
-    corner_of_.assign(mesh_.num_vertices(), 0);
-    for (const auto& [input_vertex, v] : corner_vertex)
-      if (v >= 0) corner_of_[v] = 1;
     for (int l : kept)
       for (int end : {lines_.lines[l].front(), lines_.lines[l].back()})
         if (lines_.corner[end] && corner_vertex[end] >= 0) corner_lines_[corner_vertex[end]].push_back(l);
@@ -517,7 +514,7 @@ class CreaseRecovery {
     std::vector<int> path{from};
     for (int v = step[from]; v >= 0 && path.size() <= static_cast<std::size_t>(mesh_.num_vertices()); v = step[v]) {
       path.push_back(v);
-      if (corner_of_[v]) return v == to ? path : std::vector<int>{};
+      if (corner_lines_.count(v)) return v == to ? path : std::vector<int>{};
       if (taken_[v]) return {};
     }
     return {};
@@ -619,21 +616,13 @@ class CreaseRecovery {
     const bool sided = nrm.allFinite() && nrm.norm() > 0;
     int best = -1;
     double best_d = (border ? o_.border_snap_spacings : o_.max_snap_spacings) * spacing_;
-    const Cell c = cell_of(x);
-    const long reach = std::max(1L, static_cast<long>(std::ceil(best_d / cell_size_)));
-    for (long i = -reach; i <= reach; ++i)
-      for (long j = -reach; j <= reach; ++j)
-        for (long k = -reach; k <= reach; ++k) {
-          const auto it = grid_.find({c[0] + i, c[1] + j, c[2] + k});
-          if (it == grid_.end()) continue;
-          for (int v : it->second) {
-            if (taken_[v] || out_border_[v] != border || (sided && !(mesh_.N.row(v).dot(nrm.transpose()) > 0)) ||
-                (loop >= 0 && nearest_input_loop(v) != loop))
-              continue;
-            const double d = (mesh_.V.row(v).transpose() - x).norm();
-            if (d < best_d || (d == best_d && best >= 0 && v < best)) best_d = d, best = v;
-          }
-        }
+    for_items_near(grid_, x, best_d, [&](int v) {
+      if (taken_[v] || out_border_[v] != border || (sided && !(mesh_.N.row(v).dot(nrm.transpose()) > 0)) ||
+          (loop >= 0 && nearest_input_loop(v) != loop))
+        return;
+      const double d = (mesh_.V.row(v).transpose() - x).norm();
+      if (d < best_d || (d == best_d && best >= 0 && v < best)) best_d = d, best = v;
+    });
     if (best < 0) return -1;
     mesh_.anchor[best] = hint;
     mesh_.V.row(best) = x.transpose();
@@ -792,8 +781,7 @@ class CreaseRecovery {
   std::vector<char> taken_;
   std::vector<char> out_border_;    // output vertices on its border
   std::vector<int> next_, prev_;    // along the output's border (−1 off it, −2 pinched)
-  std::vector<char> corner_of_;     // output vertices that a corner took
-  std::map<int, std::vector<int>> corner_lines_;  // the lines ending at each of them
+  std::map<int, std::vector<int>> corner_lines_;  // output vertices that a corner took: the lines ending there
   std::set<std::pair<int, int>> line_edges_;
   // A recovered line (or a run of joined samples of a line with gaps): its edge path of output
   // vertices and their arc lengths along the line.
@@ -816,22 +804,30 @@ class CreaseRecovery {
   // within border_snap_spacings of it; −1 if there is none.
   int nearest_input_loop(int v) const {
     const Eigen::Vector3d x = mesh_.V.row(v).transpose();
-    const long reach = std::max(1L, static_cast<long>(std::ceil(o_.border_snap_spacings * spacing_ / cell_size_)));
-    const Cell c = cell_of(x);
     double best = o_.border_snap_spacings * spacing_;
     int loop = -1;
+    for_items_near(border_grid_, x, best, [&](int e) {
+      const auto [a, b] = lines_.border_edges[e];
+      const double d = (nearest_on_line(V_, {a, b}, x) - x).norm();
+      if (d < best) best = d, loop = lines_.border_loop[a];
+    });
+    return loop;
+  }
+
+  // Calls visit(item) for the items of `grid` in every cell within `radius` of x (cells of
+  // cell_size_; at least the 3 × 3 × 3 around x's own).
+  template <typename Visit>
+  void for_items_near(const std::map<Cell, std::vector<int>>& grid, const Eigen::Vector3d& x, double radius,
+                      Visit visit) const {
+    const Cell c = cell_of(x);
+    const long reach = std::max(1L, static_cast<long>(std::ceil(radius / cell_size_)));
     for (long i = -reach; i <= reach; ++i)
       for (long j = -reach; j <= reach; ++j)
         for (long k = -reach; k <= reach; ++k) {
-          const auto it = border_grid_.find({c[0] + i, c[1] + j, c[2] + k});
-          if (it == border_grid_.end()) continue;
-          for (int e : it->second) {
-            const auto [a, b] = lines_.border_edges[e];
-            const double d = (nearest_on_line(V_, {a, b}, x) - x).norm();
-            if (d < best) best = d, loop = lines_.border_loop[a];
-          }
+          const auto it = grid.find({c[0] + i, c[1] + j, c[2] + k});
+          if (it == grid.end()) continue;
+          for (int item : it->second) visit(item);
         }
-    return loop;
   }
 };
 
