@@ -25,6 +25,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -51,8 +52,11 @@ constexpr std::int64_t kWriteChunk = 1000000;  // points sampled and written at 
 constexpr double kNoiseFraction = 0.001;       // default noise σ (--noise) as a fraction of the bbox diagonal
 
 // Writes `count` points sampled from (V, F) plus noise as a float binary little-endian PLY.
+// Written to `path`.part and renamed at the end, so an interrupted write leaves no file that a
+// later run with --keep-dir would take for a finished cloud.
 void write_sampled_ply(const std::string& path, const TriangleMesh& mesh, std::int64_t count, double sigma) {
-  std::ofstream out(path, std::ios::binary);
+  const std::string part = path + ".part";
+  std::ofstream out(part, std::ios::binary);
   out << "ply\nformat binary_little_endian 1.0\nelement vertex " << count
       << "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
   std::vector<float> buf;
@@ -65,7 +69,9 @@ void write_sampled_ply(const std::string& path, const TriangleMesh& mesh, std::i
       for (int k = 0; k < 3; ++k) buf[static_cast<std::size_t>(i) * 3 + k] = static_cast<float>(P(i, k));
     out.write(reinterpret_cast<const char*>(buf.data()), static_cast<std::streamsize>(buf.size() * sizeof(float)));
   }
-  if (!out) throw std::runtime_error("cannot write " + path);
+  out.close();
+  if (!out) throw std::runtime_error("cannot write " + part);
+  fs::rename(part, path);
 }
 
 // "mean=… hausdorff=…": two-sided distances between `m` and the source mesh, in ‰ of its diagonal.
@@ -207,21 +213,30 @@ int main(int argc, char** argv) {
   std::string keep_dir;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--sizes" && i + 1 < argc) sizes = parse_sizes(argv[++i]);
-    else if (a == "--huge") sizes.push_back(100000000);
-    else if (a == "--density-max" && i + 1 < argc) density_max = static_cast<std::int64_t>(std::stod(argv[++i]));
-    else if (a == "--sites" && i + 1 < argc) sites = std::atoi(argv[++i]);
-    else if (a == "--peer-max" && i + 1 < argc) peer_max = static_cast<std::int64_t>(std::stod(argv[++i]));
-    else if (a == "--keep-dir" && i + 1 < argc) keep_dir = argv[++i];
-    else if (a == "--fine" && i + 1 < argc) fine_factor = std::stod(argv[++i]);
-    else if (a == "--plain-means") project = false;
-    else if (a == "--plain-fit") plain_fit = true;
-    else if (a == "--glibc-allocator") setenv(kGlibcAllocatorEnv, "1", 1);
-    else if (a == "--noise" && i + 1 < argc) noise = std::stod(argv[++i]);
-    else {
-      std::fprintf(stderr, "bench_scale: error: %s: unknown option\n", a.c_str());
+    try {
+      if (a == "--sizes" && i + 1 < argc) sizes = parse_sizes(argv[++i]);
+      else if (a == "--huge") sizes.push_back(100000000);
+      else if (a == "--density-max" && i + 1 < argc) density_max = static_cast<std::int64_t>(std::stod(argv[++i]));
+      else if (a == "--sites" && i + 1 < argc) sites = std::atoi(argv[++i]);
+      else if (a == "--peer-max" && i + 1 < argc) peer_max = static_cast<std::int64_t>(std::stod(argv[++i]));
+      else if (a == "--keep-dir" && i + 1 < argc) keep_dir = argv[++i];
+      else if (a == "--fine" && i + 1 < argc) fine_factor = std::stod(argv[++i]);
+      else if (a == "--plain-means") project = false;
+      else if (a == "--plain-fit") plain_fit = true;
+      else if (a == "--glibc-allocator") setenv(kGlibcAllocatorEnv, "1", 1);
+      else if (a == "--noise" && i + 1 < argc) noise = std::stod(argv[++i]);
+      else {
+        std::fprintf(stderr, "bench_scale: error: %s: unknown option\n", a.c_str());
+        return 2;
+      }
+    } catch (const std::exception&) {
+      std::fprintf(stderr, "bench_scale: error: %s %s: not a number\n", a.c_str(), argv[i]);
       return 2;
     }
+  }
+  if (!(noise >= 0) || !std::isfinite(noise)) {
+    std::fprintf(stderr, "bench_scale: error: --noise %g: must be a finite fraction >= 0\n", noise);
+    return 2;
   }
   const TriangleMesh mesh = read_mesh(std::string(HEATCVT_DATA_DIR) + "/meshes/armadillo.obj");
   const double diag = (mesh.V.colwise().maxCoeff() - mesh.V.colwise().minCoeff()).norm();
