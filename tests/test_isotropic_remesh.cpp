@@ -43,6 +43,18 @@ ValidationReport validate_open(const TriangleMesh& m) {
   return validate_triangle_mesh(m.V, m.F, o);
 }
 
+// The sized working mesh compacted, checked and returned: valid as an open surface with `loops`
+// border loops, the count within 2 % of `target`, φmin ≥ 25°.
+TriangleMesh expect_sized_open(const WorkingMesh& w, int target, int loops) {
+  const TriangleMesh m = compact_mesh(w);
+  const ValidationReport v = validate_open(m);
+  EXPECT_TRUE(v.ok()) << v.summary();
+  EXPECT_EQ(v.boundary_loops, loops);
+  EXPECT_NEAR(m.V.rows(), target, 0.02 * target);
+  EXPECT_GE(triangle_quality(m.V, m.F).min_angle_deg, 25.0);
+  return m;
+}
+
 IsotropicRemeshOptions sized_to(int target) {
   IsotropicRemeshOptions o;
   o.target_vertices = target;
@@ -152,14 +164,8 @@ TEST(IsotropicRemesh, InsetBorderIsMovedOntoTheSurfacesBorder) {
   MesherStats stats;
   ASSERT_TRUE(needs_sizing(w, surface, sized_to(target)));
   ASSERT_TRUE(size_to_target(w, surface, sized_to(target), stats));
-  const TriangleMesh m = compact_mesh(w);
-  const ValidationReport v = validate_open(m);
-  EXPECT_TRUE(v.ok()) << v.summary();
-  EXPECT_EQ(v.boundary_loops, 1);
-  EXPECT_NEAR(m.V.rows(), target, 0.02 * target);
-  const TriangleQuality q = triangle_quality(m.V, m.F);
-  EXPECT_GE(q.min_angle_deg, 25.0);
-  EXPECT_GE(q.mean_min_angle_deg, 52.0);
+  const TriangleMesh m = expect_sized_open(w, target, 1);
+  EXPECT_GE(triangle_quality(m.V, m.F).mean_min_angle_deg, 52.0);
   // Every border vertex on the square's border; every point of it within one spacing of one.
   const BorderLinks border = border_links(w);
   std::vector<Eigen::Vector3d> on_border;
@@ -181,6 +187,61 @@ TEST(IsotropicRemesh, InsetBorderIsMovedOntoTheSurfacesBorder) {
     for (const Eigen::Vector3d& x : on_border) nearest = std::min(nearest, (x - p).norm());
     EXPECT_LE(nearest, spacing) << "border point " << p.transpose();
   }
+}
+
+// The n×n grid on [0,1]² without the faces whose centroid lies in [lo, hi]² (a square hole).
+TriangleMesh grid_with_hole(int n, double lo, double hi) {
+  const TriangleMesh g = test::grid(n);
+  std::vector<Eigen::RowVector3i> kept;
+  for (Eigen::Index f = 0; f < g.F.rows(); ++f) {
+    const Eigen::Vector3d c = (g.V.row(g.F(f, 0)) + g.V.row(g.F(f, 1)) + g.V.row(g.F(f, 2))).transpose() / 3.0;
+    if (!(c.x() > lo && c.x() < hi && c.y() > lo && c.y() < hi)) kept.push_back(g.F.row(f));
+  }
+  TriangleMesh m;
+  m.V = g.V;
+  m.F.resize(kept.size(), 3);
+  for (std::size_t f = 0; f < kept.size(); ++f) m.F.row(f) = kept[f];
+  return m;
+}
+
+TEST(IsotropicRemesh, ABorderCuttingTheCornersOfAHoleGetsVerticesAtThem) {
+  // The surface: the unit square with a square hole [0.4, 0.6]² (its border is known). The start:
+  // a 10 × 10 grid with the same hole, but each corner of the hole covered by a triangle, so
+  // the hole's border is four chords between the midpoints of its sides, its vertices all on the
+  // surface's border (as a coarse dual leaves a hole two spacings wide).
+  const TriangleMesh plane = grid_with_hole(40, 0.4, 0.6);
+  const MeshSurfaceProjector surface(plane.V, plane.F);
+  ASSERT_TRUE(surface.has_border());
+  TriangleMesh start = grid_with_hole(10, 0.4, 0.6);
+  const auto at = [](int i, int j) { return j * 11 + i; };
+  const int corners[4][3] = {{at(4, 4), at(5, 4), at(4, 5)}, {at(6, 4), at(6, 5), at(5, 4)},
+                             {at(6, 6), at(5, 6), at(6, 5)}, {at(4, 6), at(4, 5), at(5, 6)}};
+  start.F.conservativeResize(start.F.rows() + 4, 3);
+  for (int k = 0; k < 4; ++k) start.F.row(start.F.rows() - 4 + k) << corners[k][0], corners[k][1], corners[k][2];
+  start = compact_mesh(working(start, surface));  // without the grid's centre, in no face
+  ASSERT_TRUE(validate_open(start).ok()) << validate_open(start).summary();
+  const int target = static_cast<int>(start.V.rows());
+  WorkingMesh w = working(start, surface);
+  const SizingFigures before = sizing_figures(w, surface, sized_to(target));
+  // Precondition: every border vertex is on the surface's border; the chords are what is off.
+  ASSERT_LE(before.border_gap, sized_to(target).border_tolerance);
+  ASSERT_GT(before.border_chord_gap, sized_to(target).border_chord_tolerance);
+  ASSERT_TRUE(needs_sizing(w, surface, sized_to(target)));
+  MesherStats stats;
+  ASSERT_TRUE(size_to_target(w, surface, sized_to(target), stats));
+  const SizingFigures after = sizing_figures(w, surface, sized_to(target));
+  EXPECT_LE(after.border_gap, sized_to(target).border_tolerance);
+  EXPECT_LE(after.border_chord_gap, sized_to(target).border_chord_tolerance);
+  // A border vertex at each corner of the hole.
+  const BorderLinks border = border_links(w);
+  for (const Eigen::Vector3d corner : {Eigen::Vector3d(0.4, 0.4, 0), Eigen::Vector3d(0.6, 0.4, 0),
+                                       Eigen::Vector3d(0.6, 0.6, 0), Eigen::Vector3d(0.4, 0.6, 0)}) {
+    double nearest = 1e9;
+    for (int i = 0; i < w.num_vertices(); ++i)
+      if (border.on(i)) nearest = std::min(nearest, (w.V.row(i).transpose() - corner).norm());
+    EXPECT_LE(nearest, 1e-6) << "hole corner " << corner.transpose();
+  }
+  expect_sized_open(w, target, 2);
 }
 
 // The rule that keeps or refuses a sizing result, on figures built by hand (target 1,000).

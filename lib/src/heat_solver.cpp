@@ -156,7 +156,9 @@ HeatSolver::HeatSolver(const Laplacian& laplacian, const HeatSolverOptions& opti
   cholmod_l_start(&common);
   common.print = 0;
   common.error_handler = nullptr;
-  common.supernodal = CHOLMOD_SUPERNODAL;  // fastest factorisation; converted below
+  // Simplicial (no BLAS, the same factor on every machine) on small systems, supernodal (BLAS,
+  // fastest on large ones) above; either is converted below.
+  common.supernodal = n < options.simplicial_max_vertices ? CHOLMOD_SIMPLICIAL : CHOLMOD_SUPERNODAL;
   if (options.ordering != FillOrdering::automatic) {
     common.nmethods = 1;
     common.method[0].ordering = options.ordering == FillOrdering::amd ? CHOLMOD_AMD : CHOLMOD_METIS;

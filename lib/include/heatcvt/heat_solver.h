@@ -39,6 +39,13 @@ struct HeatSolverOptions {
   /// less fill (a smaller factor and cheaper solves) for a slower analysis (docs/benchmarks.md,
   /// bench_cvt with CVT_ORDERING).
   FillOrdering ordering = FillOrdering::automatic;
+  /// Systems with fewer unknowns than this are factored by CHOLMOD's simplicial method, which
+  /// calls no BLAS: the factor has the same bits on every machine. A supernodal factor's last
+  /// bits depend on the BLAS kernel OpenBLAS picks for the CPU, and a CVT, and the mesh after it,
+  /// can follow them. Up to about this size the simplicial method is as fast and smaller
+  /// (docs/benchmarks.md, bench_heat); at and above it the supernodal one (BLAS) is used.
+  /// Default 100,000.
+  int simplicial_max_vertices = 100000;
 };
 
 /// Name and thread count of the BLAS that CHOLMOD calls, e.g. "OpenBLAS 0.3.21 (2 threads)", or

@@ -49,6 +49,12 @@ int third_vertex(const MeshFace& f, int a, int b) {
   return -1;
 }
 
+// Distance from x to the surface's own border; `none` where the surface has no known border.
+double distance_to_border(const SurfaceProjector& surface, const Eigen::Vector3d& x, double none = 0) {
+  Eigen::Vector3d at, nrm;
+  return surface.project_to_border(x, at, nrm) ? (at - x).norm() : none;
+}
+
 // Whether the halves (a, m, c) and (m, b, c) of the face (a, b, c) with m at `pos` face within
 // max_normal_turn_deg of it.
 bool split_keeps_facing(const WorkingMesh& mesh, int a, int b, int c, const Eigen::Vector3d& pos,
@@ -83,8 +89,28 @@ int split_edges(WorkingMesh& mesh, const SurfaceProjector& surface, const Isotro
     Split s{a, b, third_vertex(mesh.face(f1), a, b), f2 >= 0 ? third_vertex(mesh.face(f2), a, b) : -1, f1, f2,
             mesh.anchor[a], {}, {}};
     const Eigen::Vector3d mid = 0.5 * (mesh.V.row(a) + mesh.V.row(b)).transpose();
-    surface.project(mid, s.hint, s.pos, s.nrm);
-    if (!s.pos.allFinite() || !s.nrm.allFinite() || !((s.pos - mid).norm() <= o.max_split_offset * e.length)) continue;
+    // A border edge of a surface with a known border gets its new vertex on that border.
+    // Where the border point is beyond the face's opposite vertex (a corner of the border far
+    // from the edge), the new vertex goes part of the way to it, onto the surface;
+    // snap_border() brings it onto the border once the faces around it have moved.
+    Eigen::Vector3d at;
+    const bool on_border = f2 < 0 && surface.has_border() && surface.project_to_border(mid, at, s.nrm);
+    double max_offset = o.max_split_offset;
+    if (on_border) {
+      max_offset = o.max_border_split_offset;
+      s.pos = at;
+      if ((at - mid).norm() > max_offset * e.length) {
+        at = mid + max_offset * e.length * (at - mid).normalized();
+        surface.project(at, s.hint, s.pos, s.nrm);
+      }
+      for (double t : {0.5, 0.25, 0.0}) {
+        if (s.pos.allFinite() && split_keeps_facing(mesh, a, b, s.c, s.pos, o)) break;
+        surface.project(mid + t * (at - mid), s.hint, s.pos, s.nrm);
+      }
+    } else {
+      surface.project(mid, s.hint, s.pos, s.nrm);
+    }
+    if (!s.pos.allFinite() || !s.nrm.allFinite() || !((s.pos - mid).norm() <= max_offset * e.length)) continue;
     if (!split_keeps_facing(mesh, a, b, s.c, s.pos, o) || (f2 >= 0 && !split_keeps_facing(mesh, b, a, s.d, s.pos, o)))
       continue;
     touched[f1] = 1;
@@ -115,6 +141,24 @@ int split_edges(WorkingMesh& mesh, const SurfaceProjector& surface, const Isotro
   return static_cast<int>(splits.size());
 }
 
+// Border vertices at a corner of the surface's own border, where that border is known: the mesh's
+// border turns there by more than known_border_corner_turn_deg and both its border edges run
+// along the surface's (their midpoints within border_chord_tolerance target lengths `length` of
+// it). The relaxation, the polish and the collapses keep them in place.
+std::vector<char> known_border_corners(const WorkingMesh& mesh, const SurfaceProjector& surface,
+                                       const BorderLinks& border, const IsotropicRemeshOptions& o, double length) {
+  std::vector<char> corner(mesh.num_vertices(), 0);
+  if (!surface.has_border() || !(length > 0)) return corner;
+  const auto along = [&](int a, int b) {
+    const Eigen::Vector3d mid = 0.5 * (mesh.V.row(a) + mesh.V.row(b)).transpose();
+    return distance_to_border(surface, mid, std::numeric_limits<double>::infinity()) <= o.border_chord_tolerance * length;
+  };
+  for (int v = 0; v < mesh.num_vertices(); ++v)
+    corner[v] = border.simple(v) && border_turn(mesh, border, v) > o.known_border_corner_turn_deg * kDegree &&
+                along(border.prev[v], v) && along(v, border.next[v]);
+  return corner;
+}
+
 // One pass of edge collapses: the edges shorter than `limit`, shortest first, at most `budget`
 // (< 0: no limit), none at a frozen vertex or within the ring of an earlier one.
 class Collapser {
@@ -122,7 +166,8 @@ class Collapser {
   Collapser(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o,
             const std::vector<char>& frozen, double long_limit)
       : mesh_(mesh), surface_(surface), o_(o), long_limit_(long_limit), vf_(mesh.vertex_faces()),
-        border_(border_links(mesh)), touched_(frozen), dead_(mesh.num_faces(), 0) {
+        border_(border_links(mesh)), touched_(frozen), dead_(mesh.num_faces(), 0),
+        known_corners_(known_border_corners(mesh, surface, border_, o, long_limit / o.long_factor)) {
     touched_.resize(mesh.num_vertices(), 0);
   }
 
@@ -158,7 +203,10 @@ class Collapser {
   }
 
  private:
-  bool corner(int v) const { return border_turn(mesh_, border_, v) > o_.corner_turn_deg * kDegree; }
+  bool corner(int v) const {
+    return border_turn(mesh_, border_, v) > o_.corner_turn_deg * kDegree ||
+           (v < static_cast<int>(known_corners_.size()) && known_corners_[v]);
+  }
 
   // Which vertex stays (`keep`) and where, or false when the edge must not collapse.
   bool choose(int a, int b, bool border_edge, int& keep, Eigen::Vector3d& pos, Eigen::Vector3d& nrm, int& hint) const {
@@ -189,8 +237,26 @@ class Collapser {
     }
     keep = a;
     hint = mesh_.anchor[a];
-    surface_.project(0.5 * (mesh_.V.row(a) + mesh_.V.row(b)).transpose(), hint, pos, nrm);
+    const Eigen::Vector3d mid = 0.5 * (mesh_.V.row(a) + mesh_.V.row(b)).transpose();
+    if (!border_edge || !surface_.project_to_border(mid, pos, nrm)) surface_.project(mid, hint, pos, nrm);
     return pos.allFinite() && nrm.allFinite();
+  }
+
+  // Where the surface's border is known, a border edge's collapse (its vertex at `pos`) must
+  // not cut across a corner of it: refused where a border edge it makes has its midpoint farther
+  // from that border than border_chord_tolerance target lengths and than the edges it replaces.
+  bool keeps_border_chords(int a, int b, const Eigen::Vector3d& pos) const {
+    if (!surface_.has_border()) return true;
+    if (border_.next[b] == a) std::swap(a, b);
+    if (border_.next[a] != b || border_.prev[a] < 0 || border_.next[b] < 0) return true;
+    const auto gap = [&](const Eigen::Vector3d& x, const Eigen::Vector3d& y) {
+      return distance_to_border(surface_, 0.5 * (x + y));
+    };
+    const auto P = [&](int v) { return Eigen::Vector3d(mesh_.V.row(v).transpose()); };
+    const int p = border_.prev[a], n = border_.next[b];
+    const double before = std::max({gap(P(p), P(a)), gap(P(a), P(b)), gap(P(b), P(n))});
+    const double after = std::max(gap(P(p), pos), gap(pos, P(n)));
+    return after <= std::max(before, o_.border_chord_tolerance * long_limit_ / o_.long_factor);
   }
 
   // Link condition and valences: the opposite vertices of the edge are its only common
@@ -228,7 +294,8 @@ class Collapser {
     if (!topology_allows(a, b, shared, border_edge)) return false;
     int keep = forced_keep, hint = -1;
     Eigen::Vector3d pos, nrm;
-    if (!choose(a, b, border_edge, keep, pos, nrm, hint)) return false;
+    if (!choose(a, b, border_edge, keep, pos, nrm, hint) || (border_edge && !keeps_border_chords(a, b, pos)))
+      return false;
     const int gone = keep == a ? b : a;
     const double min_cos = std::cos(o_.max_normal_turn_deg * kDegree);
     for (int g : ring) {
@@ -267,6 +334,7 @@ class Collapser {
   const std::vector<std::vector<int>> vf_;
   const BorderLinks border_;
   std::vector<char> touched_, dead_;
+  const std::vector<char> known_corners_;  // known_border_corners()
 };
 
 // Sum of the face angles at each vertex (2π inside a flat region, π on a straight border).
@@ -291,6 +359,39 @@ std::vector<int> target_valences(const WorkingMesh& mesh) {
     target[v] = border.simple(v) ? 1 + std::max(1, static_cast<int>(std::lround(angle[v] / (M_PI / 3)))) : mesh.valence(v);
   }
   return target;
+}
+
+// Cuts the faces that cover a corner of the surface's own border, where that border is known (none
+// at a frozen vertex): a face with one border edge a→b whose midpoint is farther than
+// border_chord_tolerance target lengths (`length`) from that border, and whose third vertex c,
+// inside the mesh, is on it (within border_tolerance). Without the face the border runs a→c→b,
+// along the surface's (as a coarse dual leaves it over a hole narrower than two spacings).
+int cut_corner_faces(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o,
+                     const std::vector<char>& frozen, double length) {
+  if (!surface.has_border() || !(length > 0)) return 0;
+  const BorderLinks border = border_links(mesh);
+  const auto gap = [&](const Eigen::Vector3d& x) { return distance_to_border(surface, x) / length; };
+  const auto P = [&](int v) { return Eigen::Vector3d(mesh.V.row(v).transpose()); };
+  std::vector<char> drop(mesh.num_faces(), 0), touched = frozen;
+  touched.resize(mesh.num_vertices(), 0);
+  int cut = 0;
+  for (int g = 0; g < mesh.num_faces(); ++g) {
+    const MeshFace& f = mesh.face(g);
+    int k = -1, border_edges = 0;
+    for (int q = 0; q < 3; ++q)
+      if (!mesh.has_half_edge(f[(q + 1) % 3], f[q])) k = q, ++border_edges;
+    if (border_edges != 1) continue;
+    const int a = f[k], b = f[(k + 1) % 3], c = f[(k + 2) % 3];
+    if (touched[a] || touched[b] || touched[c] || border.on(c)) continue;
+    const double chord = gap(0.5 * (P(a) + P(b)));
+    if (!(chord > o.border_chord_tolerance) || !(gap(P(c)) <= o.border_tolerance)) continue;
+    if (!(std::max(gap(0.5 * (P(a) + P(c))), gap(0.5 * (P(c) + P(b)))) < chord)) continue;
+    drop[g] = 1;
+    touched[a] = touched[b] = touched[c] = 1;
+    ++cut;
+  }
+  if (cut > 0) mesh.remove_faces(drop);
+  return cut;
 }
 
 // Cuts the ears of the border (none at a frozen vertex): faces whose corner v is on the border with no other face and an
@@ -354,22 +455,30 @@ double target_length(const WorkingMesh& mesh, const IsotropicRemeshOptions& o) {
   return o.target_vertices > 0 ? std::sqrt(2.0 * area / (std::sqrt(3.0) * o.target_vertices)) : 0.0;
 }
 
-// Largest distance, in target edge lengths, from a border vertex to the surface's own border,
-// among the border vertices within max_border_gap target lengths of it (the others are on
-// holes of the mesh, not of the surface); 0 where the surface has no known border.
-double border_gap(const WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o) {
-  if (!surface.has_border() || mesh.empty()) return 0;
+// Largest distances, in target edge lengths, from a border vertex to the surface's own border
+// (`vertex_gap`), among the border vertices within max_border_gap target lengths of it (the others
+// are on holes of the mesh, not of the surface), and from the midpoint of a border edge between
+// two of those to it (`chord_gap`); 0 where the surface has no known border.
+void border_gaps(const WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o,
+                 double& vertex_gap, double& chord_gap) {
+  vertex_gap = chord_gap = 0;
+  if (!surface.has_border() || mesh.empty()) return;
   const double length = target_length(mesh, o);
   const BorderLinks border = border_links(mesh);
-  double gap = 0;
+  const auto gap = [&](const Eigen::Vector3d& x) {
+    return distance_to_border(surface, x, std::numeric_limits<double>::infinity()) / length;
+  };
+  std::vector<char> near(mesh.num_vertices(), 0);
   for (int v = 0; v < mesh.num_vertices(); ++v) {
-    Eigen::Vector3d pos, nrm;
-    const Eigen::Vector3d x = mesh.V.row(v);
-    if (!border.on(v) || !surface.project_to_border(x, pos, nrm)) continue;
-    const double d = (pos - x).norm() / length;
-    if (d <= o.max_border_gap) gap = std::max(gap, d);
+    if (!border.on(v)) continue;
+    const double d = gap(mesh.V.row(v).transpose());
+    near[v] = d <= o.max_border_gap;
+    if (near[v]) vertex_gap = std::max(vertex_gap, d);
   }
-  return gap;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const int w = border.on(v) ? border.next[v] : -1;
+    if (w >= 0 && near[v] && near[w]) chord_gap = std::max(chord_gap, gap(0.5 * (mesh.V.row(v) + mesh.V.row(w)).transpose()));
+  }
 }
 
 // The sizing's steps on one mesh, each tried and, where it makes faces cross, redone from the same
@@ -499,6 +608,7 @@ class Sizer {
             .run_spikes(surface_angles(mesh_));
       });
       changed += attempt([&] { return cut_ears(mesh_, o_, frozen()); });
+      changed += attempt([&] { return cut_corner_faces(mesh_, surface_, o_, frozen(), length_); });
       if (changed == 0) break;
     }
   }
@@ -524,6 +634,15 @@ class Sizer {
       active_.resize(mesh_.num_vertices(), 0);
       for (int v = 0; v < mesh_.num_vertices(); ++v) h[v] = h[v] || !active_[v];
     }
+    return h;
+  }
+
+  // The held vertices and the corners of the surface's known border (known_border_corners()):
+  // the vertices the relaxation and the angle polish leave in place.
+  std::vector<char> held_and_corners() {
+    std::vector<char> h = held();
+    const std::vector<char> corners = known_border_corners(mesh_, surface_, border_links(mesh_), o_, length_);
+    for (int v = 0; v < mesh_.num_vertices(); ++v) h[v] = h[v] || corners[v];
     return h;
   }
 
@@ -622,7 +741,7 @@ class Sizer {
     border.slide = true;
     border.follow_sample_border = o_.follow_sample_border;
     border.corner_turn_deg = o_.corner_turn_deg;
-    const std::vector<char> fixed = held();
+    const std::vector<char> fixed = held_and_corners();
     tangential_relaxation(mesh_, surface_, o_.threads, border, &fixed);
     snap_border();
   }
@@ -681,7 +800,7 @@ class Sizer {
     f.max_passes = 5;
     const std::vector<char> movable = flippable();
     int flips = flip_edges(mesh_, f, &movable), moves = 0;
-    const std::vector<char> fixed = held();
+    const std::vector<char> fixed = held_and_corners();
     std::vector<char> settled;  // vertices whose search would find no move (angle_polish())
     for (int cycle = 0; cycle < o_.polish_cycles; ++cycle) {
       moves += angle_polish(mesh_, surface_, 2, fixed, o_.angle, o_.threads, &settled);
@@ -705,10 +824,16 @@ class Sizer {
   std::vector<char> active_;   // vertices near those the local count adjustment added
 };
 
+// The border's vertices are on the surface's border within border_tolerance and its edges'
+// midpoints within border_chord_tolerance.
+bool border_fits(const SizingFigures& q, const IsotropicRemeshOptions& o) {
+  return q.border_gap <= o.border_tolerance && q.border_chord_gap <= o.border_chord_tolerance;
+}
+
 // A mesh misses a shape target, or its count is off by more than reshape_count_error.
 bool reshapes(const SizingFigures& q, const IsotropicRemeshOptions& o) {
   const bool shape_met = q.min_angle >= o.min_angle_deg * kDegree && q.mean_angle >= o.mean_angle_deg * kDegree &&
-                         q.border_gap <= o.border_tolerance;
+                         border_fits(q, o);
   const bool count_near = std::abs(q.vertices - o.target_vertices) <= o.reshape_count_error * o.target_vertices;
   return !(shape_met && count_near);
 }
@@ -749,7 +874,7 @@ int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, cons
 
 SizingFigures sizing_figures(const WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o) {
   SizingFigures q;
-  q.border_gap = border_gap(mesh, surface, o);
+  border_gaps(mesh, surface, o, q.border_gap, q.border_chord_gap);
   q.vertices = vertices_in_faces(mesh);
   for (const MeshFace& f : mesh.faces()) {
     const double a = face_min_angle(mesh, f);
@@ -767,7 +892,7 @@ bool sizing_no_worse(const SizingFigures& after, const SizingFigures& before, co
   const bool count = err_after <= count_slack || err_after <= err_before;
   // A border brought onto the surface's own border may cost up to border_fit_angle_slack_deg of
   // the angle figures: the inset border's triangles were shaped for a border that was not there.
-  const bool border_fitted = before.border_gap > o.border_tolerance && after.border_gap <= o.border_tolerance;
+  const bool border_fitted = !border_fits(before, o) && border_fits(after, o);
   const double slack = border_fitted ? o.border_fit_angle_slack_deg * kDegree : 0.0;
   const double target = o.min_angle_deg * kDegree;
   // A mesh off the count by more than count_first_error is mostly missing: its count comes
@@ -780,7 +905,8 @@ bool sizing_no_worse(const SizingFigures& after, const SizingFigures& before, co
       count_first && after.min_angle >= o.traded_min_angle_deg * kDegree ? o.count_first_mean_slack_deg * kDegree : 0.0;
   const bool mean_angle =
       after.mean_angle >= std::min(before.mean_angle, o.mean_angle_deg * kDegree) - std::max(slack, mean_slack) - 1e-12;
-  const bool border = after.border_gap <= std::max(before.border_gap, o.border_tolerance);
+  const bool border = after.border_gap <= std::max(before.border_gap, o.border_tolerance) &&
+                      after.border_chord_gap <= std::max(before.border_chord_gap, o.border_chord_tolerance);
   if (count && min_angle && mean_angle && border) return true;
   // A result that meets more of the three targets (count, φmin, φm) than before is kept as long
   // as its φmin stays above traded_min_angle_deg and the border is no farther off.
@@ -801,7 +927,7 @@ bool needs_sizing(const WorkingMesh& mesh, const SurfaceProjector& surface, cons
   return std::abs(q.vertices - options.target_vertices) >
              options.count_aim * options.count_tolerance * options.target_vertices ||
          q.min_angle < options.min_angle_deg * kDegree || q.mean_angle < options.mean_angle_deg * kDegree ||
-         q.border_gap > options.border_tolerance;
+         !border_fits(q, options);
 }
 
 bool size_to_target(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options,

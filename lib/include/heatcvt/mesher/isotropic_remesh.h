@@ -43,6 +43,11 @@ struct IsotropicRemeshOptions {
   /// ... and the stage runs when such a vertex is farther than this many target edge lengths
   /// from it. Default 0.02.
   double border_tolerance = 0.02;
+  /// ... or when the midpoint of a border edge between two such vertices is farther than this
+  /// many target edge lengths from it: the edge cuts across a corner of the surface's border
+  /// (a hole narrower than a few spacings left with too few border vertices). A straight edge
+  /// of the target length on a circular border of radius r is off by 1/(8r) of them. Default 0.25.
+  double border_chord_tolerance = 0.25;
   /// A result that brings the border onto the surface's own is kept even where φmin or φm end
   /// up to this much lower than before (or than their targets): the inset border's triangles
   /// were shaped for a border that is not the surface's. Default 1°.
@@ -78,6 +83,11 @@ struct IsotropicRemeshOptions {
   /// A split is refused where the edge's midpoint projects farther than this times the edge's
   /// length from it (the edge spans a gap or a depth jump of the surface). Default 0.25.
   double max_split_offset = 0.25;
+  /// Where the surface's border is known, a border edge is split at the point of that border
+  /// nearest its midpoint (the new vertex stays on the border, and a chord across a corner of it
+  /// gets a vertex at the corner), refused where that point is farther than this times the
+  /// edge's length from the midpoint (half of it at a right-angled corner). Default 0.75.
+  double max_border_split_offset = 0.75;
   /// remove_flying_faces(): faces whose centroid projects to the surface farther than this times
   /// their longest edge do not lie on it (they span a depth jump or the gap between two sheets:
   /// flying triangles). Default 0.25.
@@ -96,6 +106,11 @@ struct IsotropicRemeshOptions {
   /// the middle of their border neighbours, which smooths a ragged border at the site spacing.
   /// Default 120°.
   double corner_turn_deg = 120;
+  /// Where the surface's border is known (an input mesh's boundary), a border vertex where the
+  /// border turns by more than this and whose two border edges run along the surface's border
+  /// (midpoints within border_chord_tolerance) sits at a corner of it: kept in place like the
+  /// corners above. Default 60°.
+  double known_border_corner_turn_deg = 60;
   /// In the relaxation, border vertices near the edge of the samples follow it
   /// (RelaxationBorder::follow_sample_border); an input mesh has no such edge. Default true.
   bool follow_sample_border = true;
@@ -148,6 +163,9 @@ struct SizingFigures {
   /// Largest distance, in target edge lengths, from a border vertex to the surface's own border
   /// (among those within max_border_gap of it); 0 where the surface's border is not known.
   double border_gap = 0;
+  /// Largest distance, in target edge lengths, from the midpoint of a border edge between two
+  /// such vertices to the surface's own border; 0 where that border is not known.
+  double border_chord_gap = 0;
   int vertices = 0;                         ///< vertices in faces
   double min_angle = M_PI, mean_angle = 0;  ///< φmin, φm (radians)
   double below = 0;  ///< fraction of the faces with a smallest angle below min_angle_deg
@@ -161,7 +179,8 @@ SizingFigures sizing_figures(const WorkingMesh& mesh, const SurfaceProjector& su
 /// before (both less border_fit_angle_slack_deg where the border was brought onto the surface's
 /// own; φmin not at all where the count was off by more than count_first_error, and then φm
 /// count_first_mean_slack_deg less where φmin stays ≥ traded_min_angle_deg); the border is on
-/// the surface's border within border_tolerance or no farther off than before. Or: it meets more
+/// the surface's border within border_tolerance (its edges' midpoints within
+/// border_chord_tolerance) or no farther off than before. Or: it meets more
 /// of the three targets than before with φmin ≥ traded_min_angle_deg, the border no farther off.
 bool sizing_no_worse(const SizingFigures& after, const SizingFigures& before, const IsotropicRemeshOptions& options);
 
