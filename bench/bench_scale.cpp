@@ -217,7 +217,7 @@ int main(int argc, char** argv) {
       if (a == "--sizes" && i + 1 < argc) sizes = parse_sizes(argv[++i]);
       else if (a == "--huge") sizes.push_back(100000000);
       else if (a == "--density-max" && i + 1 < argc) density_max = static_cast<std::int64_t>(std::stod(argv[++i]));
-      else if (a == "--sites" && i + 1 < argc) sites = std::atoi(argv[++i]);
+      else if (a == "--sites" && i + 1 < argc) sites = std::stoi(argv[++i]);
       else if (a == "--peer-max" && i + 1 < argc) peer_max = static_cast<std::int64_t>(std::stod(argv[++i]));
       else if (a == "--keep-dir" && i + 1 < argc) keep_dir = argv[++i];
       else if (a == "--fine" && i + 1 < argc) fine_factor = std::stod(argv[++i]);
@@ -233,6 +233,10 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "bench_scale: error: %s %s: not a number\n", a.c_str(), argv[i]);
       return 2;
     }
+  }
+  if (sites < 1) {
+    std::fprintf(stderr, "bench_scale: error: --sites %d: must be at least 1\n", sites);
+    return 2;
   }
   if (!(noise >= 0) || !std::isfinite(noise)) {
     std::fprintf(stderr, "bench_scale: error: --noise %g: must be a finite fraction >= 0\n", noise);

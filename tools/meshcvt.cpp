@@ -304,6 +304,7 @@ cli::Json make_report(const Settings& s, const TriangleMesh& mesh, int input_gen
   rep["converged"] = r.converged;
   rep["reached_quality_target"] = r.reached_quality;
   rep["blas"] = heatcvt::blas_description();
+  rep["factorization"] = heatcvt::factorization_description(res.cvt_vertices);
   rep["laplacian_s"] = f.laplacian_s;
   rep["factor_s"] = r.factor_seconds;
   rep["factor_memory_bytes"] = r.factor_bytes;
@@ -375,7 +376,7 @@ void print_summary(const Settings& s, const RemeshOptions& remesh, const RemeshR
   std::printf("meshcvt: %s (%d vertices) -> %s (%d vertices, %d triangles)\n", s.mesh_path.c_str(), f.input_vertices,
               s.out_path.c_str(), static_cast<int>(res.mesh.V.rows()), q.triangles);
   std::printf("  factor: %.3f s, %.1f MB (%s); %d iterations%s, %.4f s per iteration; total %.2f s\n", r.factor_seconds,
-              r.factor_bytes / 1e6, heatcvt::blas_description().c_str(), f.iterations,
+              r.factor_bytes / 1e6, heatcvt::factorization_description(res.cvt_vertices).c_str(), f.iterations,
               r.converged ? " (converged)" : (r.reached_quality ? " (quality target reached)" : ""), f.per_iteration_s,
               f.total_s);
   cli::print_stages(res.stage_seconds);

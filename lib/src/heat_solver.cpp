@@ -66,6 +66,10 @@ std::string blas_description() {
   return name;
 }
 
+std::string factorization_description(int unknowns, const HeatSolverOptions& options) {
+  return unknowns < options.simplicial_max_vertices ? "simplicial, no BLAS" : "supernodal, " + blas_description();
+}
+
 size_t CholeskyFactor::memory_bytes() const {
   return value.size() * (sizeof(double) + sizeof(int)) + col_ptr.size() * sizeof(int64_t) +
          (perm.size() + inverse_perm.size() + parent.size()) * sizeof(int);

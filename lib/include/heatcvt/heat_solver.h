@@ -53,6 +53,10 @@ struct HeatSolverOptions {
 /// 3–4× slower: install an optimised BLAS, on Debian libopenblas0-pthread).
 std::string blas_description();
 
+/// How HeatSolver factors a system of `unknowns` with `options`: "simplicial, no BLAS" below
+/// options.simplicial_max_vertices, else "supernodal, " followed by blas_description().
+std::string factorization_description(int unknowns, const HeatSolverOptions& options = {});
+
 /// Sparse Cholesky factor `P A Pᵀ = L Lᵀ`, lower triangular, compressed columns with sorted
 /// row indices and the diagonal first in each column. Exposed for localized solves
 /// (paper §6, localized_solve.h).

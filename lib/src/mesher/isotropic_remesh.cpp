@@ -167,7 +167,8 @@ class Collapser {
             const std::vector<char>& frozen, double long_limit)
       : mesh_(mesh), surface_(surface), o_(o), long_limit_(long_limit), vf_(mesh.vertex_faces()),
         border_(border_links(mesh)), touched_(frozen), dead_(mesh.num_faces(), 0),
-        known_corners_(known_border_corners(mesh, surface, border_, o, long_limit / o.long_factor)) {
+        known_corners_(std::isfinite(long_limit) ? known_border_corners(mesh, surface, border_, o, long_limit / o.long_factor)
+                                                 : std::vector<char>()) {
     touched_.resize(mesh.num_vertices(), 0);
   }
 

@@ -109,8 +109,9 @@ struct CreaseStats {
 /// first) takes the nearest output vertex within max_snap_spacings, consecutive samples are
 /// joined by an edge (an existing one, one flip of the edge between them, or through a common
 /// neighbour moved onto the line); a line whose snap makes faces cross is left out; then the
-/// vertices off the lines are relaxed, flipped (no edge along a line) and polished around them. Undone as a whole where it makes more face pairs cross than before or lowers the
-/// smallest angle (CreaseOptions::min_angle_deg).
+/// vertices off the lines are relaxed, flipped (no edge along a line) and polished around them.
+/// Undone as a whole where it makes more face pairs cross than before or lowers the smallest
+/// angle (CreaseOptions::min_angle_deg).
 /// Then, in a pass of their own, the border lines: corners onto the output's border, the border
 /// between them spread along the input's, the same polish; where faces fall below
 /// border_min_angle_deg next to them those lines are left out and the rest recovered again
