@@ -121,6 +121,53 @@ TEST(CvtStart, SurfaceLloydLowersTheEnergyAndKeepsCellsConnected) {
   }
 }
 
+// Mean |p_after − p_before| over the sites, in units of `spacing`.
+double mean_move(const TriangleMesh& m, const std::vector<SurfacePoint>& a, const std::vector<SurfacePoint>& b,
+                 double spacing) {
+  double sum = 0;
+  for (size_t i = 0; i < a.size(); ++i) sum += (position(m.V, m.F, a[i]) - position(m.V, m.F, b[i])).norm();
+  return sum / static_cast<double>(a.size()) / spacing;
+}
+
+TEST(CvtStart, TheMeanMoveRuleStopsTheSurfaceLloydAtTheFirstSmallMeanMove) {
+  const TriangleMesh m = test::icosphere(4);
+  const CvtSurface s(m.V, m.F);
+  const int ns = 200;
+  const std::vector<SurfacePoint> start = initial_sites(m.V, m.F, ns, CvtInitialization::random, 3);
+  SurfaceLloydOptions o;
+  o.iterations = 80;
+  o.tolerance = 0;  // the max-move rule off: only the mean rule may stop early
+  o.relaxation = 1.5;
+  o.spacing = std::sqrt(s.face_area.sum() / ns);
+  const auto run = [&](int iterations, double mean_tolerance, int* done) {
+    SurfaceLloydOptions r = o;
+    r.iterations = iterations;
+    r.mean_tolerance = mean_tolerance;
+    return surface_lloyd(s, start, r, done, nullptr, []() { return 2; });
+  };
+  int full_done = 0, done = 0;
+  const std::vector<SurfacePoint> full = run(o.iterations, 0, &full_done);
+  ASSERT_EQ(full_done, o.iterations);  // precondition: without the rule every iteration runs
+  const double tol = 0.005;
+  const std::vector<SurfacePoint> stopped = run(o.iterations, tol, &done);
+  ASSERT_GT(done, 2);
+  EXPECT_LT(done, o.iterations);
+  // The rule is the first iteration whose mean move is below tol spacings.
+  int d1 = 0, d2 = 0;
+  const std::vector<SurfacePoint> before = run(done - 1, 0, &d1), earlier = run(done - 2, 0, &d2);
+  EXPECT_LT(mean_move(m, stopped, before, o.spacing), tol);
+  EXPECT_GE(mean_move(m, before, earlier, o.spacing), tol);
+  // What the remaining iterations would still gain is small.
+  EXPECT_LT(restricted_energy(s, stopped), 1.02 * restricted_energy(s, full));
+  // A negative tolerance is refused by the CVT.
+  CvtOptions bad;
+  bad.sites = 10;
+  bad.surface_lloyd_iterations = 5;
+  bad.surface_lloyd_mean_tolerance = -1;
+  const Laplacian lap = cotan_laplacian(m.V, m.F);
+  EXPECT_THROW(centroidal_voronoi(m.V, m.F, lap, bad), InvalidInputError);
+}
+
 TEST(CvtStart, UpdatedLabelsStayCompleteAndConnected) {
   const TriangleMesh m = test::icosphere(4);
   const CvtSurface s(m.V, m.F);

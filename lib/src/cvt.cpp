@@ -50,8 +50,9 @@ void validate_cvt_inputs(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, c
     throw InvalidInputError("centroidal_voronoi: relaxation must be in [1, 2), got " + std::to_string(options.relaxation));
   if (options.graph_lloyd_iterations < 0 || options.anderson_depth < 0 || options.quality_patience < 0 || options.quality_start < 0 || !(options.max_inserted_fraction >= 0))
     throw InvalidInputError("centroidal_voronoi: graph_lloyd_iterations, quality_start and max_inserted_fraction must be >= 0");
-  if (options.surface_lloyd_iterations < 0 || options.surface_lloyd_split_rounds < 0 || !(options.surface_lloyd_tolerance >= 0))
-    throw InvalidInputError("centroidal_voronoi: surface_lloyd_iterations, surface_lloyd_split_rounds and surface_lloyd_tolerance must be >= 0");
+  if (options.surface_lloyd_iterations < 0 || options.surface_lloyd_split_rounds < 0 || !(options.surface_lloyd_tolerance >= 0) ||
+      !(options.surface_lloyd_mean_tolerance >= 0))
+    throw InvalidInputError("centroidal_voronoi: surface_lloyd_iterations, surface_lloyd_split_rounds and the surface Lloyd tolerances must be >= 0");
   if (!(options.surface_lloyd_relaxation >= 1.0 && options.surface_lloyd_relaxation < 2.0))
     throw InvalidInputError("centroidal_voronoi: surface_lloyd_relaxation must be in [1, 2), got " +
                             std::to_string(options.surface_lloyd_relaxation));

@@ -129,6 +129,7 @@ StreamedReconstruction reconstruct_surface_from_summary(const VoxelSummary& summ
   ReconstructionOptions subset = options;
   subset.cvt_points_per_site = 0;  // the voxel means already are the uniform subset
   subset.spatial_site_order = true;  // large site counts: keep each cell's data close in memory
+  subset.surface_lloyd_mean_tolerance = stream.surface_lloyd_mean_tolerance;
   const double summary_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   out.result = reconstruct_surface(out.cloud.P, subset, progress);
   out.result.stage_seconds.insert(out.result.stage_seconds.begin(), {"voxel surface points", summary_seconds});

@@ -163,6 +163,11 @@ struct CvtOptions {
   bool spatial_site_order = false;
   /// Early stop of the surface Lloyd: max site move < this · spacing. Default 0.01.
   double surface_lloyd_tolerance = 0.01;
+  /// Early stop of the surface Lloyd on the mean site move: mean move < this · spacing. With many
+  /// sites a few of them keep moving (cells at thin parts and folds swap corners back and forth),
+  /// so the max rule alone runs every iteration, and its cost grows with the site count; the mean
+  /// move falls like the energy. 0 = off. Default 0.
+  double surface_lloyd_mean_tolerance = 0;
   /// Over-relaxation ω ∈ [1, 2) of the surface Lloyd (step capped at half a spacing). Default 1.
   double surface_lloyd_relaxation = 1.0;
   /// With quality_every > 0: evaluate the quality of the start sites (after graph/surface Lloyd)

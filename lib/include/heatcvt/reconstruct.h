@@ -111,6 +111,10 @@ struct ReconstructionOptions {
   /// farthest-point start sites, run while the Cholesky factor is computed; 0 = off (the start
   /// is then `farthest_point_start`'s). Default 40.
   int surface_lloyd_iterations = 40;
+  /// The surface Lloyd also stops when the mean site move falls below this · site spacing
+  /// (CvtOptions::surface_lloyd_mean_tolerance). 0 = off: every iteration runs unless the max
+  /// move rule stops it. Default 0.
+  double surface_lloyd_mean_tolerance = 0;
   /// The CVT (Laplacian, heat Voronoi, Lloyd, dual candidates) runs on a spatially uniform subset
   /// of about this many points per site (one point per voxel of a grid sized to that count, the
   /// one nearest its voxel's centroid); the site positions are still fitted to every point, so

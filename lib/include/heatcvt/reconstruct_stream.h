@@ -52,6 +52,12 @@ struct StreamOptions {
   /// The flying-pixel rule applied to an organised PCD file (flying_pixels.h; read_cloud applies
   /// the same). Default on; neighbour_distance_ratio = 0 keeps every pixel.
   FlyingPixelOptions flying_pixels;
+  /// The summary's reconstruction stops the CVT's surface Lloyd once the mean site move is below
+  /// this · site spacing (ReconstructionOptions::surface_lloyd_mean_tolerance). At tens of
+  /// thousands of sites the max-move rule never stops it (a few sites at folds keep swapping
+  /// corners, 0.3 spacings at 20,000 sites) and the iterations after this point no longer change
+  /// the mesh's quality. 0 = every iteration. Default 0.005 (measurements in docs/benchmarks.md).
+  double surface_lloyd_mean_tolerance = 0.005;
   /// Seed of the reservoir sampling (std::mt19937_64). Default 1.
   std::uint64_t sample_seed = 1;
   /// Reading progress: pass 1 (raw points / sample) or 2 (voxel summary), and the reader's counters.

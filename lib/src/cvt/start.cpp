@@ -440,7 +440,7 @@ std::vector<SurfacePoint> surface_lloyd(const CvtSurface& surface, std::vector<S
         relaxed_targets(sum, mass, P, omega, options.max_extra_step * options.spacing);
     // start of each projection: the cell's vertex closest to the target
     const std::vector<int> nearest = closest_cell_vertices(X, label, mass, target, threads);
-    double max_move = 0;
+    double max_move = 0, sum_move = 0;
     std::vector<SurfacePoint> next = sites;
 #pragma omp parallel for schedule(dynamic, 16) num_threads(threads)
     for (int s = 0; s < ns; ++s) {
@@ -449,17 +449,20 @@ std::vector<SurfacePoint> surface_lloyd(const CvtSurface& surface, std::vector<S
                               options.walk_max_steps, options.walk_min_gain);
     }
     if (revive_restricted(surface, X, label, mass, P, next) > 0) {
-      max_move = std::numeric_limits<double>::infinity();
+      max_move = sum_move = std::numeric_limits<double>::infinity();
       full_flood = true;
     }
     for (int s = 0; s < ns; ++s) {
       const Eigen::Vector3d q = position(V, F, next[s]);
-      max_move = std::max(max_move, (q - P[s]).norm());
+      const double move = (q - P[s]).norm();
+      max_move = std::max(max_move, move);
+      sum_move += move;
       P[s] = q;
     }
     sites.swap(next);
     ++*done;
     if (max_move < options.tolerance * options.spacing) break;
+    if (sum_move < options.mean_tolerance * options.spacing * ns) break;
   }
   if (final_labels) {
     if (full_flood || label.empty()) restricted_labels(surface.graph, X, F, sites, P, label, key);
@@ -473,6 +476,7 @@ SurfaceLloydOptions surface_lloyd_options(const CvtOptions& options, int iterati
   SurfaceLloydOptions o;
   o.iterations = iterations;
   o.tolerance = options.surface_lloyd_tolerance;
+  o.mean_tolerance = options.surface_lloyd_mean_tolerance;
   o.relaxation = options.surface_lloyd_relaxation;
   o.spacing = spacing;
   o.max_extra_step = options.tuning.max_extra_step;

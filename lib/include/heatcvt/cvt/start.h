@@ -59,6 +59,7 @@ void update_restricted_labels(const EdgeGraph& g, const std::vector<Eigen::Vecto
 struct SurfaceLloydOptions {
   int iterations = 0;           ///< at most this many iterations
   double tolerance = 0.01;      ///< stop when no site moved more than tolerance · spacing
+  double mean_tolerance = 0;    ///< or when the mean move is below mean_tolerance · spacing (0 = off)
   double relaxation = 1.0;      ///< over-relaxation ω ∈ [1, 2)
   double spacing = 1.0;         ///< site spacing sqrt(area / sites), input units
   double max_extra_step = 0.5;  ///< the over-relaxed step goes at most this · spacing beyond the centroid
