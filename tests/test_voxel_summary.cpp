@@ -320,6 +320,10 @@ TEST(ReconstructStreamed, SummarisedCloudChunkSizeDoesNotChangeTheMesh) {
     EXPECT_NEAR(static_cast<double>(r.cloud.P.rows()) / (options.sites * stream.voxel.points_per_site), 1.0, 0.3);
     EXPECT_EQ(r.result.validation.genus, 1);
     EXPECT_TRUE(r.result.validation.boundary_loops == 0);
+    // The noise was measured, and it is far below the limit: the CVT ran on every site asked for.
+    EXPECT_GT(r.noise_spacings, 0.0);
+    EXPECT_LT(r.noise_spacings, stream.max_noise_spacings);
+    EXPECT_EQ(r.cvt_sites, options.sites);
     if (chunk == 1000) reference = r.result.mesh;
     else EXPECT_TRUE(same_mesh(r.result.mesh, reference));
   }

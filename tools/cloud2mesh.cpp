@@ -442,10 +442,12 @@ void write_outputs(const Settings& s, const TriangleMesh& mesh, const MeshAttrib
 }
 
 // Adds the figures of the run beyond make_report()'s: inputs, streaming, peak memory, colours, holes.
-void add_run_figures(cli::Json& j, size_t inputs, const Reconstruction& rec) {
+void add_run_figures(cli::Json& j, size_t inputs, int sites, const Reconstruction& rec) {
   j["inputs"] = static_cast<long>(inputs);
   j["streamed"] = rec.stream;
   j["voxel_size"] = rec.streamed.voxel_size;
+  j["noise_spacings"] = rec.streamed.noise_spacings;
+  j["cvt_sites"] = rec.stream ? rec.streamed.cvt_sites : sites;
   j["peak_memory_mb"] = peak_memory_mb();
   j["colours"] = rec.cloud.has_colours();
   j["filled_hole_edges"] = rec.res.filled_hole_edges;
@@ -491,6 +493,10 @@ void print_summary(const Settings& s, const std::string& cloud_path, const Recon
     std::printf("  streamed: %ld points in %d passes into voxels of %g, reconstructed from %ld voxel points\n",
                 static_cast<long>(streamed.points_read), streamed.passes, streamed.voxel_size,
                 static_cast<long>(rec.cloud.P.rows()));
+  if (rec.stream && streamed.cvt_sites < opt.sites)
+    std::printf("  noise: %.2f site spacings wide (the limit is %.2f): the CVT ran on %d sites, the mesh was sized to "
+                "-n on the fitted surface\n",
+                streamed.noise_spacings, StreamOptions{}.max_noise_spacings, streamed.cvt_sites);
   std::printf("  peak memory: %.0f MB\n", peak_memory_mb());
   cli::print_checks(checks);
   std::printf("  wrote %s%s\n", s.out_path.c_str(), s.report_path.empty() ? "" : (", " + s.report_path).c_str());
@@ -515,7 +521,7 @@ int run(const Settings& s) {
   const MeshAttributes attributes = output_attributes(s, rec);
   const std::vector<cli::CheckRecord> checks = cli::check_records(rec.res.validation);
   cli::Json j = make_report(cloud_path, {s.out_path, s.report_path}, rec.rr, s.opt, rec.res, per_iter, total_s);
-  add_run_figures(j, scans.size(), rec);
+  add_run_figures(j, scans.size(), s.opt.sites, rec);
   const int status = cli::finish_report(j, rec.res.stage_seconds, checks);
   write_outputs(s, rec.res.mesh, attributes, j);
   if (!s.quiet) print_summary(s, cloud_path, rec, per_iter, total_s, checks);

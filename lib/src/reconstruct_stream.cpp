@@ -66,6 +66,7 @@ class Reservoir {
     }
   }
   std::int64_t seen() const { return seen_; }
+  void clear() { std::vector<Eigen::RowVector3d>().swap(sample_); }
   Eigen::MatrixX3d sample() const {
     Eigen::MatrixX3d S(static_cast<Eigen::Index>(sample_.size()), 3);
     for (std::size_t i = 0; i < sample_.size(); ++i) S.row(static_cast<Eigen::Index>(i)) = sample_[i];
@@ -87,6 +88,10 @@ void check_stream_options(const StreamOptions& s) {
   if (!(s.min_points_per_fine_voxel > 0 && std::isfinite(s.min_points_per_fine_voxel)))
     throw InvalidInputError("reconstruct_surface_streamed: min_points_per_fine_voxel must be finite and > 0");
   if (s.sample_points < 10) throw InvalidInputError("reconstruct_surface_streamed: sample_points must be >= 10");
+  if (!(s.max_noise_spacings >= 0 && std::isfinite(s.max_noise_spacings)) ||
+      !(s.max_noise_reduction >= 1 && std::isfinite(s.max_noise_reduction)) || s.noise_sample_points_per_site < 0)
+    throw InvalidInputError("reconstruct_surface_streamed: max_noise_spacings must be finite and >= 0, "
+                            "max_noise_reduction finite and >= 1, noise_sample_points_per_site >= 0");
   check_flying_pixel_options(s.flying_pixels);
 }
 
@@ -106,6 +111,7 @@ StreamedReconstruction reconstruct_raw(const CloudChunkSource& source, PointClou
   out.cloud = std::move(cloud);
   out.points_read = in_source;
   out.passes = 1;
+  out.cvt_sites = options.sites;
   return out;
 }
 
@@ -135,15 +141,53 @@ StreamedReconstruction reconstruct_surface_from_summary(const VoxelSummary& summ
   out.result.stage_seconds.insert(out.result.stage_seconds.begin(), {"voxel surface points", summary_seconds});
   out.summarised = true;
   out.voxel_size = summary.voxel_size();
+  out.cvt_sites = options.sites;
   out.points_read = summary.points_added() + summary.non_finite_skipped();
   return out;
 }
+
+namespace {
+
+// The options of a streamed cloud's reconstruction under the noise limit
+// (StreamOptions::max_noise_spacings): where the noise σ measured on `sample` at the requested
+// spacing is too wide for it, fewer CVT sites and the mesher's sizing to the requested count.
+// `noise_spacings` receives σ in requested spacings.
+ReconstructionOptions noise_limited_options(const Eigen::MatrixX3d& sample, const ReconstructionOptions& options,
+                                            const StreamOptions& stream, double& noise_spacings) {
+  ReconstructionOptions out = options;
+  noise_spacings = 0;
+  if (!(stream.max_noise_spacings > 0)) return out;
+  VoxelSizeOptions voxel = stream.voxel;
+  voxel.threads = options.threads;
+  const double spacing = std::sqrt(estimate_surface_area(sample, voxel).area / options.sites);
+  NoiseEstimateOptions noise_options = stream.noise;
+  noise_options.threads = options.threads;
+  const NoiseEstimate noise = estimate_noise(sample, spacing, noise_options);
+  noise_spacings = noise.sigma / spacing;
+  const int sites = noise_limited_sites(options.sites, spacing, noise.sigma, stream.max_noise_spacings,
+                                        stream.max_noise_reduction);
+  if (sites < options.sites) {
+    out.sites = sites;
+    if (out.mesher.sizing.target_vertices == 0) out.mesher.sizing.target_vertices = options.sites;
+    if (out.mesher.split.max_vertices == 0) out.mesher.split.max_vertices = options.sites + options.sites / 50;
+  }
+  return out;
+}
+
+}  // namespace
 
 StreamedReconstruction reconstruct_surface_streamed(CloudChunkSource& source, const ReconstructionOptions& options,
                                                     const StreamOptions& stream, const ReconstructionCallback& progress) {
   check_stream_options(stream);
   RawBuffer raw;
   Reservoir reservoir(stream.sample_points, stream.sample_seed);
+  // The noise sample: denser than the voxel-size sample at large site counts, drawn apart so that
+  // the voxel size does not depend on it.
+  const bool estimate = stream.voxel_size == 0 && stream.max_noise_spacings > 0;
+  Reservoir noise_sample(estimate ? std::max<std::int64_t>(stream.sample_points,
+                                                           stream.noise_sample_points_per_site * options.sites)
+                                  : 10,
+                         stream.sample_seed + 1);
   std::unique_ptr<VoxelSummary> summary;
   if (stream.voxel_size > 0) summary = std::make_unique<VoxelSummary>(stream.voxel_size, options.threads);
   std::int64_t points = 0;
@@ -153,29 +197,40 @@ StreamedReconstruction reconstruct_surface_streamed(CloudChunkSource& source, co
     points += chunk.rows();
     if (raw.kept && points <= stream.max_raw_points) raw.add(chunk);
     else if (raw.kept) raw.drop();
-    if (summary) summary->add(chunk);
-    else reservoir.add(chunk);
+    if (summary) {
+      summary->add(chunk);
+    } else {
+      reservoir.add(chunk);
+      if (estimate) noise_sample.add(chunk);
+    }
   }
   if (raw.kept) return reconstruct_raw(source, raw.cloud(), options, progress);
-  int passes = 1;
   if (!summary) {
     if (reservoir.seen() < 10)
       throw InvalidInputError(source.name() + ": fewer than 10 finite points (" + std::to_string(points) + " points read)");
+    double noise_spacings = 0;
+    const ReconstructionOptions cvt = estimate ? noise_limited_options(noise_sample.sample(), options, stream, noise_spacings)
+                                               : options;
+    noise_sample.clear();
     VoxelSizeOptions voxel = stream.voxel;
     voxel.threads = options.threads;
-    double h = choose_voxel_size(reservoir.sample(), options.sites, voxel);
+    double h = choose_voxel_size(reservoir.sample(), cvt.sites, voxel);
     if (stream.project_to_surface) {
-      const double per_voxel = static_cast<double>(reservoir.seen()) / (options.sites * stream.voxel.points_per_site);
+      const double per_voxel = static_cast<double>(reservoir.seen()) / (cvt.sites * stream.voxel.points_per_site);
       h /= std::min(stream.fine_voxel_factor, std::max(1.0, std::sqrt(per_voxel / stream.min_points_per_fine_voxel)));
     }
     summary = std::make_unique<VoxelSummary>(h, options.threads);
     source.rewind();  // pass 2: every point into the summary
     while (source.next(chunk)) summary->add(chunk);
-    passes = 2;
+    StreamedReconstruction out = reconstruct_surface_from_summary(*summary, cvt, stream, progress);
+    out.points_read = points;
+    out.passes = 2;
+    out.noise_spacings = noise_spacings;
+    return out;
   }
   StreamedReconstruction out = reconstruct_surface_from_summary(*summary, options, stream, progress);
   out.points_read = points;
-  out.passes = passes;
+  out.passes = 1;
   return out;
 }
 

@@ -11,6 +11,7 @@
 
 #include "heatcvt/cloud_io.h"
 #include "heatcvt/cloud_stream.h"
+#include "heatcvt/noise_estimate.h"
 #include "heatcvt/reconstruct.h"
 #include "heatcvt/voxel_summary.h"
 
@@ -58,6 +59,20 @@ struct StreamOptions {
   /// corners, 0.3 spacings at 20,000 sites) and the iterations after this point no longer change
   /// the mesh's quality. 0 = every iteration. Default 0.005 (measurements in docs/benchmarks.md).
   double surface_lloyd_mean_tolerance = 0.005;
+  /// The noise limit of the site count (noise_estimate.h). Pass 1 also keeps a second reservoir
+  /// sample of max(sample_points, noise_sample_points_per_site × sites) points, and
+  /// estimate_noise() measures the noise σ on it at the requested site spacing (the area from
+  /// estimate_surface_area()). Where σ exceeds max_noise_spacings spacings, the CVT runs on
+  /// noise_limited_sites() sites (at most max_noise_reduction times fewer), the summary is built
+  /// for that count, and the mesher's sizing remeshes the result on the fitted surface to the
+  /// requested count. Below the limit nothing changes. 0 = off. Defaults 0.17 spacings (the dual
+  /// broke from about 0.28 on armadillo; with a limit of 0.2 and 0.14 some sized meshes kept a
+  /// second piece or a sliver, measurements in docs/benchmarks.md), 8, 40 points per site (about
+  /// 120 within each query's radius of one spacing; about 1 MB per 1,000 sites while pass 1 runs).
+  double max_noise_spacings = 0.17;
+  double max_noise_reduction = 8.0;
+  std::int64_t noise_sample_points_per_site = 40;
+  NoiseEstimateOptions noise;
   /// Seed of the reservoir sampling (std::mt19937_64). Default 1.
   std::uint64_t sample_seed = 1;
   /// Reading progress: pass 1 (raw points / sample) or 2 (voxel summary), and the reader's counters.
@@ -76,16 +91,23 @@ struct StreamedReconstruction {
   std::int64_t points_read = 0;  ///< points handed out by the source (one pass)
   int passes = 0;                ///< passes over the source (1 or 2)
   std::int64_t flying_pixels_removed = 0;  ///< by StreamOptions::flying_pixels (path version only)
+  /// Noise σ of the cloud in requested site spacings (StreamOptions::max_noise_spacings; 0 when
+  /// not estimated: the raw path, an explicit voxel size, or the limit off).
+  double noise_spacings = 0;
+  /// Sites of the CVT: the requested count, or fewer where the noise limits it (the mesh is
+  /// then sized to the requested count).
+  int cvt_sites = 0;
 };
 
 /// Streams `source` and reconstructs its surface:
 ///  1. pass 1 keeps the raw points while there are at most `max_raw_points` (then drops them) and
 ///     a uniform reservoir sample of `sample_points` finite points; if the source ends within
 ///     `max_raw_points`, the raw points are cleaned as read_cloud does and reconstructed exactly;
-///  2. otherwise pass 2 (after rewind()) bins every point into a VoxelSummary of `voxel_size`
-///     (or choose_voxel_size(sample, options.sites, voxel)) and reconstruct_surface runs on the
-///     voxel means with cvt_points_per_site = 0 (the summary already is the spatially uniform
-///     subset). With an explicit voxel_size the summary is built during pass 1 (one pass).
+///  2. otherwise the noise limit is applied (StreamOptions::max_noise_spacings), pass 2 (after
+///     rewind()) bins every point into a VoxelSummary of `voxel_size` (or choose_voxel_size(sample,
+///     CVT sites, voxel)) and reconstruct_surface runs on the voxel means with
+///     cvt_points_per_site = 0 (the summary already is the spatially uniform subset). With an
+///     explicit voxel_size the summary is built during pass 1 (one pass, no noise limit).
 /// Chunk size does not change the result (per-voxel sums in point order, reservoir sampling
 /// point by point). \throw as the source (IOError) and reconstruct_surface; InvalidInputError
 /// when the source holds no finite point.

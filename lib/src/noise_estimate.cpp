@@ -1,0 +1,85 @@
+// Noise of a point cloud at the scale of the site spacing (noise_estimate.h).
+#include "heatcvt/noise_estimate.h"
+
+#include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "heatcvt/errors.h"
+#include "heatcvt/parallel.h"
+#include "heatcvt/point_index.h"
+
+namespace heatcvt {
+
+namespace {
+
+// RMS residual of the least-squares quadratic height field over the PCA plane of the rows `nb`
+// of P (coordinates divided by `scale` for the conditioning of the fit), in input units; −1 when
+// the quadratic is ill-posed (points on a line or a curve).
+double quadratic_residual(const Eigen::MatrixX3d& P, const std::vector<int>& nb, double scale) {
+  const auto m = static_cast<Eigen::Index>(nb.size());
+  Eigen::Vector3d mu = Eigen::Vector3d::Zero();
+  for (const int j : nb) mu += P.row(j).transpose();
+  mu /= static_cast<double>(m);
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const int j : nb) {
+    const Eigen::Vector3d d = (P.row(j).transpose() - mu) / scale;
+    cov += d * d.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  const Eigen::Vector3d n = eig.eigenvectors().col(0), t1 = eig.eigenvectors().col(2), t2 = eig.eigenvectors().col(1);
+  Eigen::MatrixXd A(m, 6);
+  Eigen::VectorXd h(m);
+  for (Eigen::Index k = 0; k < m; ++k) {
+    const Eigen::Vector3d d = (P.row(nb[static_cast<std::size_t>(k)]).transpose() - mu) / scale;
+    const double u = d.dot(t1), v = d.dot(t2);
+    A.row(k) << 1.0, u, v, u * u, u * v, v * v;
+    h(k) = d.dot(n);
+  }
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+  if (qr.rank() < 6) return -1;
+  const Eigen::VectorXd c = qr.solve(h);
+  return scale * std::sqrt((A * c - h).squaredNorm() / static_cast<double>(m));
+}
+
+}  // namespace
+
+NoiseEstimate estimate_noise(const Eigen::MatrixX3d& P, double spacing, const NoiseEstimateOptions& options) {
+  if (!(spacing > 0) || !std::isfinite(spacing))
+    throw InvalidInputError("estimate_noise: spacing must be finite and > 0, got " + std::to_string(spacing));
+  if (options.queries < 1 || !(options.radius_spacings > 0) || options.min_neighbors < 6)
+    throw InvalidInputError("estimate_noise: queries must be >= 1, radius_spacings > 0 and min_neighbors >= 6");
+  NoiseEstimate out;
+  const Eigen::Index n = P.rows();
+  if (n < options.min_neighbors) return out;
+  const PointIndex index(P);
+  const int queries = static_cast<int>(std::min<Eigen::Index>(options.queries, n));
+  const double radius = options.radius_spacings * spacing;
+  std::vector<double> residual(static_cast<std::size_t>(queries), -1.0);
+#pragma omp parallel for schedule(dynamic, 16) num_threads(resolve_threads(options.threads))
+  for (int q = 0; q < queries; ++q) {
+    const Eigen::Index row = static_cast<Eigen::Index>(q) * n / queries;
+    const std::vector<int> nb = index.within(P.row(row).transpose(), radius);
+    if (static_cast<int>(nb.size()) >= options.min_neighbors)
+      residual[static_cast<std::size_t>(q)] = quadratic_residual(P, nb, radius);
+  }
+  residual.erase(std::remove_if(residual.begin(), residual.end(), [](double r) { return r < 0; }), residual.end());
+  if (residual.empty()) return out;
+  const auto mid = residual.begin() + static_cast<std::ptrdiff_t>(residual.size() / 2);
+  std::nth_element(residual.begin(), mid, residual.end());
+  out.sigma = *mid;
+  out.queries_used = static_cast<int>(residual.size());
+  return out;
+}
+
+int noise_limited_sites(int sites, double spacing, double sigma, double max_noise_spacings, double max_reduction) {
+  if (!(sigma > max_noise_spacings * spacing)) return sites;
+  const double ratio = max_noise_spacings * spacing / sigma;
+  const double limited = std::max(static_cast<double>(sites) * ratio * ratio, static_cast<double>(sites) / max_reduction);
+  return std::min(sites, std::max(4, static_cast<int>(std::lround(limited))));
+}
+
+}  // namespace heatcvt
