@@ -209,9 +209,11 @@ StreamedReconstruction reconstruct_surface_streamed(CloudChunkSource& source, co
     if (reservoir.seen() < 10)
       throw InvalidInputError(source.name() + ": fewer than 10 finite points (" + std::to_string(points) + " points read)");
     double noise_spacings = 0;
+    const auto t_noise = std::chrono::steady_clock::now();
     const ReconstructionOptions cvt = estimate ? noise_limited_options(noise_sample.sample(), options, stream, noise_spacings)
                                                : options;
     noise_sample.clear();
+    const double noise_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_noise).count();
     VoxelSizeOptions voxel = stream.voxel;
     voxel.threads = options.threads;
     double h = choose_voxel_size(reservoir.sample(), cvt.sites, voxel);
@@ -226,6 +228,7 @@ StreamedReconstruction reconstruct_surface_streamed(CloudChunkSource& source, co
     out.points_read = points;
     out.passes = 2;
     out.noise_spacings = noise_spacings;
+    if (estimate) out.result.stage_seconds.insert(out.result.stage_seconds.begin(), {"noise estimate", noise_seconds});
     return out;
   }
   StreamedReconstruction out = reconstruct_surface_from_summary(*summary, options, stream, progress);

@@ -68,7 +68,8 @@ struct StreamOptions {
   /// requested count. Below the limit nothing changes. 0 = off. Defaults 0.17 spacings (the dual
   /// broke from about 0.28 on armadillo; with a limit of 0.2 and 0.14 some sized meshes kept a
   /// second piece or a sliver, measurements in docs/benchmarks.md), 8, 40 points per site (about
-  /// 120 within each query's radius of one spacing; about 1 MB per 1,000 sites while pass 1 runs).
+  /// 120 within each query's radius of one spacing; the sample, its copy and its kd-tree take
+  /// about 3 MB per 1,000 sites until pass 2 starts).
   double max_noise_spacings = 0.17;
   double max_noise_reduction = 8.0;
   std::int64_t noise_sample_points_per_site = 40;
