@@ -293,3 +293,20 @@ TEST(MeshcvtTool, FailureLeavesAnExistingOutputUntouched) {
                             {dir.path("nope.obj")}, dir, 1);
   EXPECT_EQ(test::read_file(dir.path("o.ply")), "keep me");
 }
+
+// casting (genus 9) at 150 sites: the closed-ball repair runs the CVT a second time, and the
+// progress names that run (its count starts again from 1 under its own clock).
+TEST(MeshcvtTool, EachRunOfTheCvtHasItsOwnProgress) {
+  test::ScratchDir dir("meshcvt_progress");
+  const std::string report = dir.path("r.json");
+  const auto r = test::run_tool("meshcvt", test::data_path("meshes/casting.obj") + " -n 150 -o " + dir.path("out.obj") +
+                                                " --report " + report);
+  ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 3) << r.err;
+  ASSERT_EQ(test::read_file(report).find("\"repair_rounds\": 0"), std::string::npos) << "precondition: a repair round runs";
+  const auto at = r.err.find("(CVT run 2)");
+  ASSERT_NE(at, std::string::npos) << r.err;
+  const auto line = r.err.rfind('\n', at);
+  const std::string progress = r.err.substr(line == std::string::npos ? 0 : line + 1, at - line);
+  EXPECT_EQ(progress.rfind("lloyd: ", 0), 0u) << progress;
+  EXPECT_NE(progress.find("/100"), std::string::npos) << progress;
+}

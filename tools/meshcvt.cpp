@@ -234,14 +234,22 @@ TriangleMesh read_input(const Settings& s, SurfaceDescription& input) {
   return mesh;
 }
 
-// Runs the remeshing with a progress bar over the Lloyd iterations.
+// Runs the remeshing with a progress bar over the Lloyd iterations. The closed-ball repair and
+// the fallback run the CVT again: each further run is labelled "CVT run k" and timed from its
+// own start, so that its ETA is its own.
 RemeshResult run_remesh(const TriangleMesh& mesh, const RemeshOptions& remesh, const Settings& s) {
   cli::Progress progress("lloyd", s.iterations, s.quiet);
+  int last_iteration = 0, run = 1;
   // remesh_cvt works in the mesh's unit bounding-box frame (normalize.h) and returns input
   // coordinates: the result does not depend on the units.
   RemeshResult res = cli::on_file(s.mesh_path, [&] {
     return remesh_cvt(mesh, remesh, [&](const CvtIterationStats& st) {
-      progress.update(st.iteration);
+      if (st.iteration <= last_iteration) {
+        ++run;
+        progress.restart();
+      }
+      last_iteration = st.iteration;
+      progress.update(st.iteration, run > 1 ? "CVT run " + std::to_string(run) : "");
       return true;
     });
   });

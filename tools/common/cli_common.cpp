@@ -50,6 +50,11 @@ void Progress::update(long done, const std::string& stage, const std::string& no
   std::fflush(stderr);
 }
 
+void Progress::restart() {
+  start_ = last_ = std::chrono::steady_clock::now();
+  stage_.clear();
+}
+
 void Progress::finish() {
   if (quiet_ || finished_ || total_ <= 0) return;
   finished_ = true;

@@ -40,6 +40,8 @@ class Progress {
  public:
   Progress(std::string label, long total, bool quiet);
   void update(long done, const std::string& stage = "", const std::string& note = "");
+  /// Starts the count again (a new run of the same work): elapsed time and ETA from now.
+  void restart();
   void finish();
  private:
   std::string label_;
