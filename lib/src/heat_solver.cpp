@@ -66,8 +66,15 @@ std::string blas_description() {
   return name;
 }
 
+namespace {
+// Whether a system of `unknowns` is factored by the simplicial method (HeatSolverOptions::simplicial_max_vertices).
+bool factored_simplicial(Eigen::Index unknowns, const HeatSolverOptions& options) {
+  return unknowns < options.simplicial_max_vertices;
+}
+}  // namespace
+
 std::string factorization_description(int unknowns, const HeatSolverOptions& options) {
-  return unknowns < options.simplicial_max_vertices ? "simplicial, no BLAS" : "supernodal, " + blas_description();
+  return factored_simplicial(unknowns, options) ? "simplicial, no BLAS" : "supernodal, " + blas_description();
 }
 
 size_t CholeskyFactor::memory_bytes() const {
@@ -162,7 +169,7 @@ HeatSolver::HeatSolver(const Laplacian& laplacian, const HeatSolverOptions& opti
   common.error_handler = nullptr;
   // Simplicial (no BLAS, the same factor on every machine) on small systems, supernodal (BLAS,
   // fastest on large ones) above; either is converted below.
-  common.supernodal = n < options.simplicial_max_vertices ? CHOLMOD_SIMPLICIAL : CHOLMOD_SUPERNODAL;
+  common.supernodal = factored_simplicial(n, options) ? CHOLMOD_SIMPLICIAL : CHOLMOD_SUPERNODAL;
   if (options.ordering != FillOrdering::automatic) {
     common.nmethods = 1;
     common.method[0].ordering = options.ordering == FillOrdering::amd ? CHOLMOD_AMD : CHOLMOD_METIS;
