@@ -5,7 +5,10 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <array>
+#include <cstdint>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 #include "heatcvt/errors.h"
@@ -45,6 +48,42 @@ double quadratic_residual(const Eigen::MatrixX3d& P, const std::vector<int>& nb,
   return scale * std::sqrt((A * c - h).squaredNorm() / static_cast<double>(m));
 }
 
+// Grid cell of x for cells of side `cell`.
+using Cell = std::array<std::int64_t, 3>;
+Cell cell_of(const Eigen::Vector3d& x, double cell) {
+  return {static_cast<std::int64_t>(std::floor(x.x() / cell)), static_cast<std::int64_t>(std::floor(x.y() / cell)),
+          static_cast<std::int64_t>(std::floor(x.z() / cell))};
+}
+struct CellHash {
+  std::size_t operator()(const Cell& c) const {
+    return static_cast<std::size_t>(c[0] * 73856093LL ^ c[1] * 19349663LL ^ c[2] * 83492791LL);
+  }
+};
+
+// The rows of P within one cell (of side a little over `radius`) of a cell holding a query row,
+// ascending: every point within `radius` of a query is among them. A sample of millions of points
+// is thus indexed only where the queries look.
+std::vector<int> rows_near_queries(const Eigen::MatrixX3d& P, const std::vector<Eigen::Index>& query_rows,
+                                   double radius, int threads) {
+  const double cell = radius * (1 + 1e-5);
+  std::unordered_set<Cell, CellHash> near;
+  for (const Eigen::Index row : query_rows) {
+    const Cell c = cell_of(P.row(row).transpose(), cell);
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) near.insert({c[0] + dx, c[1] + dy, c[2] + dz});
+  }
+  const Eigen::Index n = P.rows();
+  std::vector<char> keep(static_cast<std::size_t>(n), 0);
+#pragma omp parallel for schedule(static) num_threads(resolve_threads(threads))
+  for (Eigen::Index i = 0; i < n; ++i)
+    keep[static_cast<std::size_t>(i)] = near.count(cell_of(P.row(i).transpose(), cell)) > 0;
+  std::vector<int> rows;
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (keep[static_cast<std::size_t>(i)]) rows.push_back(static_cast<int>(i));
+  return rows;
+}
+
 }  // namespace
 
 NoiseEstimate estimate_noise(const Eigen::MatrixX3d& P, double spacing, const NoiseEstimateOptions& options) {
@@ -55,14 +94,19 @@ NoiseEstimate estimate_noise(const Eigen::MatrixX3d& P, double spacing, const No
   NoiseEstimate out;
   const Eigen::Index n = P.rows();
   if (n < options.min_neighbors) return out;
-  const PointIndex index(P);
   const int queries = static_cast<int>(std::min<Eigen::Index>(options.queries, n));
   const double radius = options.radius_spacings * spacing;
+  std::vector<Eigen::Index> query_rows(static_cast<std::size_t>(queries));
+  for (int q = 0; q < queries; ++q) query_rows[static_cast<std::size_t>(q)] = static_cast<Eigen::Index>(q) * n / queries;
+  const std::vector<int> near = rows_near_queries(P, query_rows, radius, options.threads);
+  Eigen::MatrixX3d near_points(static_cast<Eigen::Index>(near.size()), 3);
+  for (std::size_t k = 0; k < near.size(); ++k) near_points.row(static_cast<Eigen::Index>(k)) = P.row(near[k]);
+  const PointIndex index(near_points);
   std::vector<double> residual(static_cast<std::size_t>(queries), -1.0);
 #pragma omp parallel for schedule(dynamic, 16) num_threads(resolve_threads(options.threads))
   for (int q = 0; q < queries; ++q) {
-    const Eigen::Index row = static_cast<Eigen::Index>(q) * n / queries;
-    const std::vector<int> nb = index.within(P.row(row).transpose(), radius);
+    std::vector<int> nb = index.within(P.row(query_rows[static_cast<std::size_t>(q)]).transpose(), radius);
+    for (int& j : nb) j = near[static_cast<std::size_t>(j)];  // ascending rows of P, as `near` is
     if (static_cast<int>(nb.size()) >= options.min_neighbors)
       residual[static_cast<std::size_t>(q)] = quadratic_residual(P, nb, radius);
   }

@@ -32,12 +32,13 @@ class FlipRule {
     *d_out = d;
     if (d < 0 || d == c) return false;
     if (only_at_ && !(*only_at_)[a] && !(*only_at_)[b]) return false;
-    if (mesh_.edge_face_count(c, d) > 0) return false;
     if (mesh_.valence(a) <= 3 || mesh_.valence(b) <= 3) return false;
+    // The valence test needs no geometry and no edge search: it goes first.
+    if (o_.valence_mode && !valence_gain(a, b, c, d)) return false;
+    if (mesh_.edge_face_count(c, d) > 0) return false;
     const double before = std::min(min_angle(a, b, c), min_angle(b, a, d));
     const double after = std::min(min_angle(c, a, d), min_angle(d, b, c));
     if (o_.valence_mode) {
-      if (!valence_gain(a, b, c, d)) return false;
       // Never across creases or thin parts, where a valence flip can fold the surface
       // through itself.
       if (!(normal(a, b, c).normalized().dot(normal(b, a, d).normalized()) > flat_cos_)) return false;

@@ -708,6 +708,8 @@ class Sizer {
       const MesherStats stats_before = stats_;
       const TopologyTarget topology_before = topology_of_if_kept();
       const int changed = step();
+      // A step that left the mesh as it was cannot have made faces cross.
+      if (mesh_.V == before.V && mesh_.faces() == before.faces) return changed;
       std::vector<int> bad = self_intersecting_faces(mesh_);
       const bool broken = breaks_topology(o_.keep_topology, topology_before, topology_of_if_kept());
       if (bad.size() <= crossings_.size() && !broken) {

@@ -98,6 +98,10 @@ bool faces_intersect(const WorkingMesh& mesh, const MeshFace& f, const MeshFace&
   if (shared == 1) {
     const K::Segment_3 sf(point(mesh, f[(fi + 1) % 3]), point(mesh, f[(fi + 2) % 3]));
     const K::Segment_3 sg(point(mesh, g[(gj + 1) % 3]), point(mesh, g[(gj + 2) % 3]));
+    // Each far side of one face beyond eps from the plane of the other: neither test below can
+    // hold (segment_near() starts with the same test), so the exact predicates are skipped.
+    const K::Point_3 ends_f[2] = {sf.source(), sf.target()}, ends_g[2] = {sg.source(), sg.target()};
+    if (apart_by_plane(tf, ends_g, 2, eps) && apart_by_plane(tg, ends_f, 2, eps)) return false;
     return CGAL::do_intersect(tf, sg) || CGAL::do_intersect(tg, sf) || segment_near(sg, tf, eps) ||
            segment_near(sf, tg, eps);
   }
