@@ -3,6 +3,8 @@
 // Shapes built in code.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -61,6 +63,54 @@ TEST(MeshChecks, IntersectingPairsAreTheValidatorsOnACrumpledSphere) {
   const std::vector<std::pair<int, int>> pairs = intersecting_face_pairs(working(m.V, m.F));
   ASSERT_GT(pairs.size(), 5u);
   EXPECT_EQ(pairs, validated_pairs(m.V, m.F));
+}
+
+// The pairs sorted, each as (smaller face, larger face) by their corners: comparable as sets.
+std::vector<FacePair> normalised(std::vector<FacePair> pairs) {
+  for (FacePair& p : pairs)
+    if (p.second < p.first) std::swap(p.first, p.second);
+  std::sort(pairs.begin(), pairs.end());
+  return pairs;
+}
+
+TEST(MeshChecks, PairsAfterAnEditAreThoseOfAFullCheck) {
+  // A crumpled sphere (crossings to start from, asserted); then edits of each kind: a few
+  // vertices pushed across their rings (new crossings, asserted), faces removed (the others
+  // renumbered), a pushed vertex pulled back. After each, the pairs found from the faces the edit
+  // changed must be those of a full check; and where most faces move, it is the full check.
+  TriangleMesh m = test::icosphere(3);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> jitter(0, 0.05);
+  for (Eigen::Index v = 0; v < m.V.rows(); ++v) m.V.row(v) += Eigen::RowVector3d(jitter(rng), jitter(rng), jitter(rng));
+  WorkingMesh w = working(m.V, m.F);
+  std::vector<FacePair> pairs = crossing_face_pairs(w);
+  ASSERT_GT(pairs.size(), 5u);
+  auto check = [&](const WorkingMesh::Checkpoint& before, const char* edit) {
+    const std::vector<FacePair> after = crossing_face_pairs_after(w, before, pairs);
+    const std::vector<FacePair> full = crossing_face_pairs(w);
+    EXPECT_EQ(normalised(after), normalised(full)) << edit;
+    EXPECT_EQ(faces_in_pairs(w, after), self_intersecting_faces(w)) << edit;
+    pairs = after;
+    return normalised(full);
+  };
+  const std::vector<FacePair> crumpled = normalised(pairs);
+  WorkingMesh::Checkpoint before = w.checkpoint();
+  for (int v : {3, 40, 77}) {  // pushed sideways across their rings: their fans fold over
+    const Eigen::Vector3d x = w.V.row(v);
+    w.V.row(v) += 0.35 * x.unitOrthogonal().transpose();
+  }
+  ASSERT_NE(check(before, "pushed"), crumpled);
+  before = w.checkpoint();
+  std::vector<char> drop(w.num_faces(), 0);
+  for (int f = 0; f < w.num_faces(); f += 37) drop[f] = 1;
+  w.remove_faces(drop);
+  check(before, "removed");
+  before = w.checkpoint();
+  w.V.row(40) = m.V.row(40);
+  check(before, "pulled back");
+  before = w.checkpoint();
+  for (Eigen::Index v = 0; v < w.V.rows(); ++v) w.V.row(v) *= 1.01;  // every face moves: the full check
+  check(before, "scaled");
 }
 
 TEST(MeshChecks, FacesSharingAnEdgeOrAVertexIntersectOnlyWhenTheyOverlap) {

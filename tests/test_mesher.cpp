@@ -668,6 +668,37 @@ TEST(EdgeFlips, PassesAfterTheFirstFlipWhatFullScansFlip) {
   }
 }
 
+TEST(EdgeFlips, AContinuedCallWithDirtyMarksFlipsWhatAFullScanFlips) {
+  // After a converged call, some vertices move (a smoothing step); a call told which vertices
+  // moved (moved_vertex_rings()) must flip exactly what a full scan flips. Both flip rules, on a
+  // jittered grid where a second jitter of a patch makes new flips (asserted).
+  TriangleMesh grid = test::grid(20, 0, 1, 0, 1, true);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> jitter(-0.015, 0.015);
+  for (Eigen::Index v = 0; v < grid.V.rows(); ++v) grid.V.row(v) += Eigen::RowVector3d(jitter(rng), jitter(rng), 0);
+  for (const bool valence_mode : {false, true}) {
+    FlipOptions o;
+    o.valence_mode = valence_mode;
+    o.max_passes = 50;
+    WorkingMesh start = test::working_mesh(grid);
+    bool converged = false;
+    flip_edges(start, o, nullptr, nullptr, nullptr, &converged);
+    ASSERT_TRUE(converged);
+    const Eigen::MatrixX3d unmoved = start.V;
+    for (int v = 0; v < start.num_vertices(); ++v)
+      if (start.V(v, 0) > 0.3 && start.V(v, 0) < 0.6 && start.V(v, 1) > 0.2 && start.V(v, 1) < 0.5)
+        start.V.row(v) += Eigen::RowVector3d(2 * jitter(rng), 2 * jitter(rng), 0);
+    const std::vector<char> dirty = moved_vertex_rings(start, unmoved);
+    ASSERT_GT(std::count(dirty.begin(), dirty.end(), 1), 0);
+    ASSERT_LT(std::count(dirty.begin(), dirty.end(), 1), start.num_vertices() / 2);
+    WorkingMesh full = start, continued = start;
+    const int full_flips = flip_edges(full, o);
+    ASSERT_GT(full_flips, 0) << "valence_mode " << valence_mode;
+    EXPECT_EQ(flip_edges(continued, o, nullptr, nullptr, &dirty), full_flips) << "valence_mode " << valence_mode;
+    EXPECT_EQ(continued.faces(), full.faces()) << "valence_mode " << valence_mode;
+  }
+}
+
 TEST(Polish, TangentialRelaxationEvensOutAndStaysOnTheSurface) {
   const TriangleMesh fine = test::icosphere(5);
   const MeshSurfaceProjector surface(fine.V, fine.F);

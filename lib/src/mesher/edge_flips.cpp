@@ -77,8 +77,18 @@ class FlipRule {
 
 }  // namespace
 
+std::vector<char> moved_vertex_rings(const WorkingMesh& mesh, const Eigen::MatrixX3d& before) {
+  const int nv = mesh.num_vertices();
+  std::vector<char> moved(nv, 0), dirty(nv, 0);
+  for (int v = 0; v < nv; ++v) moved[v] = v >= before.rows() || mesh.V.row(v) != before.row(v);
+  for (const MeshFace& f : mesh.faces())
+    if (moved[f[0]] || moved[f[1]] || moved[f[2]]) dirty[f[0]] = dirty[f[1]] = dirty[f[2]] = 1;
+  for (int v = 0; v < nv; ++v) dirty[v] = dirty[v] || moved[v];
+  return dirty;
+}
+
 int flip_edges(WorkingMesh& mesh, const FlipOptions& options, const std::vector<char>* only_at,
-               const std::vector<int>* target_valence) {
+               const std::vector<int>* target_valence, const std::vector<char>* dirty, bool* converged) {
   const FlipRule rule(mesh, options, only_at, target_valence);
   // A rejected edge stays rejected while none of a, b, c, d is in a flip: the rule reads only
   // their valences and edges (positions do not move here). `changed` stamps the vertices of
@@ -91,7 +101,16 @@ int flip_edges(WorkingMesh& mesh, const FlipOptions& options, const std::vector<
   long clock = 0;
   auto in_range = [nv](int v) { return v >= 0 && v < nv; };
   auto still = [&](int v, long when) { return !in_range(v) || changed[v] <= when; };
+  // With `dirty`, an edge with neither end dirty still has the verdict of the converged call
+  // before: recorded as rejected at clock 0. A change of its twin face stamps a or b.
+  if (dirty)
+    for (int f1 = 0; f1 < mesh.num_faces(); ++f1)
+      for (int k = 0; k < 3; ++k) {
+        const int a = mesh.face(f1)[k], b = mesh.face(f1)[(k + 1) % 3];
+        if (in_range(a) && in_range(b) && !(*dirty)[a] && !(*dirty)[b]) checked[3 * static_cast<size_t>(f1) + k] = 0;
+      }
   int flips = 0;
+  if (converged) *converged = false;
   for (int pass = 0; pass < options.max_passes; ++pass) {
     int pass_flips = 0;
     for (int f1 = 0; f1 < mesh.num_faces(); ++f1)
@@ -120,7 +139,10 @@ int flip_edges(WorkingMesh& mesh, const FlipOptions& options, const std::vector<
         break;  // face f1 changed: move on to the next face
       }
     flips += pass_flips;
-    if (pass_flips == 0) break;
+    if (pass_flips == 0) {
+      if (converged) *converged = true;
+      break;
+    }
   }
   return flips;
 }

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <set>
+#include <unordered_set>
 
 #include "heatcvt/mesher/manifold_extraction.h"
 #include "heatcvt/mesher/mesh_checks.h"
@@ -33,6 +34,19 @@ std::vector<Edge> mesh_edges(const WorkingMesh& mesh) {
       if (a < b || !mesh.has_half_edge(b, a)) edges.push_back({(mesh.V.row(a) - mesh.V.row(b)).norm(), a, b});
     }
   return edges;
+}
+
+// Fraction of the mesh's edges longer than `limit`.
+double long_edge_fraction(const WorkingMesh& mesh, double limit) {
+  long edges = 0, long_edges = 0;
+  for (const MeshFace& f : mesh.faces())
+    for (int k = 0; k < 3; ++k) {
+      const int a = f[k], b = f[(k + 1) % 3];
+      if (a > b && mesh.has_half_edge(b, a)) continue;  // the interior edge counted from a < b
+      ++edges;
+      long_edges += (mesh.V.row(a) - mesh.V.row(b)).norm() > limit;
+    }
+  return edges > 0 ? static_cast<double>(long_edges) / static_cast<double>(edges) : 0.0;
 }
 
 // Orders edges by length (longest first when `longest_first`), ties by vertex indices.
@@ -489,7 +503,8 @@ class Sizer {
  public:
   Sizer(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o, MesherStats& stats)
       : mesh_(mesh), surface_(surface), o_(o), stats_(stats), frozen_(mesh.num_vertices(), 0) {
-    crossings_ = self_intersecting_faces(mesh);  // faces crossing already are left alone
+    crossing_pairs_ = crossing_face_pairs(mesh);
+    crossings_ = faces_in_pairs(mesh, crossing_pairs_);  // faces crossing already are left alone
     freeze_around(crossings_);
   }
 
@@ -509,8 +524,13 @@ class Sizer {
           flip_and_relax();
           return splits + collapses;
         });
-        // Borders and pieces make the equilateral estimate off: correct it by the count reached.
-        length *= std::sqrt(static_cast<double>(vertices_in_faces(mesh_)) / o_.target_vertices);
+        // Borders and pieces make the equilateral estimate off: correct it by the count reached,
+        // once the mesh has come to the length. While splits are still capped at one per face (a
+        // mesh a few times coarser than the target), the count lags behind the length: a
+        // correction then would shrink the length further, and the next rounds overshoot the
+        // count and collapse it back.
+        if (long_edge_fraction(mesh_, o_.long_factor * length) <= o_.settled_long_edge_fraction)
+          length *= std::sqrt(static_cast<double>(vertices_in_faces(mesh_)) / o_.target_vertices);
       }
       clean_border();
     }
@@ -539,9 +559,10 @@ class Sizer {
       WorkingMesh::Checkpoint mesh;
       MesherStats stats;
       std::vector<int> crossings;
+      std::vector<FacePair> crossing_pairs;
       double min_angle;
     };
-    State best{mesh_.checkpoint(), stats_, crossings_, smallest_angle()};
+    State best{mesh_.checkpoint(), stats_, crossings_, crossing_pairs_, smallest_angle()};
     for (int pass = 0; pass < o_.sliver_passes && figures_below_target(); ++pass) {
       thaw();
       // Each kind of edit is its own attempt: a collapse that makes faces cross costs neither
@@ -568,12 +589,13 @@ class Sizer {
       adjust_count(o_.long_factor * length);
       attempt([&] { return final_polish(); });
       const double now = smallest_angle();
-      if (now > best.min_angle && count_within_aim()) best = {mesh_.checkpoint(), stats_, crossings_, now};
+      if (now > best.min_angle && count_within_aim()) best = {mesh_.checkpoint(), stats_, crossings_, crossing_pairs_, now};
     }
     if (smallest_angle() < best.min_angle) {
       mesh_.rollback(best.mesh);
       stats_ = best.stats;
       crossings_ = best.crossings;
+      crossing_pairs_ = best.crossing_pairs;
     }
     if (figures_below_target()) {
       thaw();
@@ -710,10 +732,13 @@ class Sizer {
       const int changed = step();
       // A step that left the mesh as it was cannot have made faces cross.
       if (mesh_.V == before.V && mesh_.faces() == before.faces) return changed;
-      std::vector<int> bad = self_intersecting_faces(mesh_);
+      // Only the faces the step made or moved are checked again (crossing_face_pairs_after()).
+      std::vector<FacePair> bad_pairs = crossing_face_pairs_after(mesh_, before, crossing_pairs_);
+      std::vector<int> bad = faces_in_pairs(mesh_, bad_pairs);
       const bool broken = breaks_topology(o_.keep_topology, topology_before, topology_of_if_kept());
       if (bad.size() <= crossings_.size() && !broken) {
         crossings_ = std::move(bad);  // what the next step is measured against
+        crossing_pairs_ = std::move(bad_pairs);
         return changed;
       }
       freeze_around(bad);
@@ -802,18 +827,55 @@ class Sizer {
     f.valence_mode = false;
     f.max_passes = 5;
     const std::vector<char> movable = flippable();
-    int flips = flip_edges(mesh_, f, &movable), moves = 0;
+    bool converged = false;
+    int flips = flip_edges(mesh_, f, &movable, nullptr, nullptr, &converged), moves = 0;
     const std::vector<char> fixed = held_and_corners();
-    std::vector<char> settled;  // vertices whose search would find no move (angle_polish())
+    std::vector<char>& settled = settled_since_last_polish();
     for (int cycle = 0; cycle < o_.polish_cycles; ++cycle) {
+      const Eigen::MatrixX3d unpolished = mesh_.V;
       moves += angle_polish(mesh_, surface_, 2, fixed, o_.angle, o_.threads, &settled);
       const std::vector<MeshFace> unflipped = mesh_.faces();
-      flips += flip_edges(mesh_, f, &movable);
+      // After a converged call, only the edges near the vertices the polish moved can flip.
+      const std::vector<char> dirty = converged ? moved_vertex_rings(mesh_, unpolished) : std::vector<char>();
+      flips += flip_edges(mesh_, f, &movable, nullptr, converged ? &dirty : nullptr, &converged);
       unsettle_changed_faces(unflipped, mesh_, settled);
     }
+    polished_ = mesh_.checkpoint();  // the marks hold for this state; the snap below is a change
     moves += snap_border();
     stats_.flipped_edges += flips;
     return flips + moves;
+  }
+
+  // The angle polish's `settled` marks (angle_polish()) as the last final_polish() left them,
+  // cleared where the mesh has changed since (polished_): at the vertices that moved or were
+  // added (or whose normal or projector hint changed), at those sharing a face with one, and at
+  // the corners of faces made or removed. A
+  // vertex whose ring is as it was would find no move again, so the polish that follows is the
+  // same as one that searches every vertex, at the cost of the changes only (the sliver passes
+  // polish the whole mesh after a few local edits). A step rolled back counts as a change from
+  // the state it left, so the marks stay right.
+  std::vector<char>& settled_since_last_polish() {
+    const int nv = mesh_.num_vertices();
+    if (polished_.V.rows() == 0) {
+      settled_.assign(nv, 0);
+      return settled_;
+    }
+    settled_.resize(nv, 0);
+    std::vector<char> moved(nv, 0);
+    for (int v = 0; v < nv; ++v)
+      moved[v] = v >= polished_.V.rows() || mesh_.V.row(v) != polished_.V.row(v) ||
+                 mesh_.N.row(v) != polished_.N.row(v) || mesh_.anchor[v] != polished_.anchor[v];
+    const std::unordered_set<MeshFace, MeshFaceHash> then(polished_.faces.begin(), polished_.faces.end());
+    const std::unordered_set<MeshFace, MeshFaceHash> now(mesh_.faces().begin(), mesh_.faces().end());
+    for (const MeshFace& f : mesh_.faces())
+      if (moved[f[0]] || moved[f[1]] || moved[f[2]] || !then.count(f)) settled_[f[0]] = settled_[f[1]] = settled_[f[2]] = 0;
+    for (const MeshFace& f : polished_.faces)
+      if (!now.count(f))
+        for (int v : f)
+          if (v < nv) settled_[v] = 0;
+    for (int v = 0; v < nv; ++v)
+      if (moved[v]) settled_[v] = 0;
+    return settled_;
   }
 
   WorkingMesh& mesh_;
@@ -822,9 +884,12 @@ class Sizer {
   MesherStats& stats_;
   std::vector<char> frozen_;
   std::vector<int> crossings_;
+  std::vector<FacePair> crossing_pairs_;  // the pairs of crossings_, by their corners
   double length_ = 0;          // the target edge length, corrected by the count each round
   bool local_ = false;         // count adjustment on a mesh of the right shape: see held()
   std::vector<char> active_;   // vertices near those the local count adjustment added
+  WorkingMesh::Checkpoint polished_;  // the mesh as the last final_polish() left it
+  std::vector<char> settled_;         // its angle polish marks (settled_since_last_polish())
 };
 
 // The border's vertices are on the surface's border within border_tolerance and its edges'

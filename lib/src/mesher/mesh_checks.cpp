@@ -9,8 +9,11 @@
 #include <CGAL/squared_distance_3.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <unordered_map>
+#include <unordered_set>
 
 namespace heatcvt {
 
@@ -108,25 +111,103 @@ bool faces_intersect(const WorkingMesh& mesh, const MeshFace& f, const MeshFace&
   return CGAL::do_intersect(tf, tg) || triangles_near(tf, tg, eps);
 }
 
+// The contact tolerance of intersecting_face_pairs() for the mesh: kContactTolerance times the
+// diagonal of the bounding box of its faces.
+double contact_tolerance(const WorkingMesh& mesh) {
+  CGAL::Bbox_3 all;
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int v : mesh.face(f)) all += point(mesh, v).bbox();
+  return kContactTolerance * std::sqrt(CGAL::square(all.xmax() - all.xmin()) + CGAL::square(all.ymax() - all.ymin()) +
+                                       CGAL::square(all.zmax() - all.zmin()));
+}
+
+// The bounding box of face f grown by eps, or false where its corners are collinear (such faces
+// are skipped).
+bool face_box(const WorkingMesh& mesh, int f, double eps, CGAL::Bbox_3& box) {
+  const MeshFace& t = mesh.face(f);
+  const K::Point_3 p = point(mesh, t[0]), q = point(mesh, t[1]), r = point(mesh, t[2]);
+  if (CGAL::collinear(p, q, r)) return false;
+  const CGAL::Bbox_3 b = p.bbox() + q.bbox() + r.bbox();
+  box = CGAL::Bbox_3(b.xmin() - eps, b.ymin() - eps, b.zmin() - eps, b.xmax() + eps, b.ymax() + eps, b.zmax() + eps);
+  return true;
+}
+
+// The pairs (f, g), f < g, ascending, of intersecting faces of which at least one is marked in
+// `changed`: the boxes of the marked faces go into a grid of cells as wide as the widest of them,
+// and every face's box looks up the cells it overlaps.
+std::vector<std::pair<int, int>> intersecting_pairs_at(const WorkingMesh& mesh, const std::vector<char>& changed) {
+  const double eps = contact_tolerance(mesh);
+  std::vector<std::pair<int, CGAL::Bbox_3>> marked;
+  double cell = 0;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    CGAL::Bbox_3 b;
+    if (!changed[f] || !face_box(mesh, f, eps, b)) continue;
+    marked.emplace_back(f, b);
+    cell = std::max({cell, b.xmax() - b.xmin(), b.ymax() - b.ymin(), b.zmax() - b.zmin()});
+  }
+  std::vector<std::pair<int, int>> pairs;
+  if (marked.empty() || !(cell > 0)) return pairs;
+  using Key = std::array<long long, 3>;
+  struct KeyHash {
+    std::size_t operator()(const Key& k) const {
+      return static_cast<std::size_t>(k[0] * 73856093LL ^ k[1] * 19349663LL ^ k[2] * 83492791LL);
+    }
+  };
+  auto lo = [&](const CGAL::Bbox_3& b, int d) { return static_cast<long long>(std::floor(b.min(d) / cell)); };
+  auto hi = [&](const CGAL::Bbox_3& b, int d) { return static_cast<long long>(std::floor(b.max(d) / cell)); };
+  std::unordered_map<Key, std::vector<int>, KeyHash> grid;
+  for (int i = 0; i < static_cast<int>(marked.size()); ++i) {
+    const CGAL::Bbox_3& b = marked[static_cast<std::size_t>(i)].second;
+    for (long long x = lo(b, 0); x <= hi(b, 0); ++x)
+      for (long long y = lo(b, 1); y <= hi(b, 1); ++y)
+        for (long long z = lo(b, 2); z <= hi(b, 2); ++z) grid[{x, y, z}].push_back(i);
+  }
+  std::vector<int> seen(marked.size(), -1);
+  for (int g = 0; g < mesh.num_faces(); ++g) {
+    CGAL::Bbox_3 b;
+    if (!face_box(mesh, g, eps, b)) continue;
+    // A face wider than many cells is compared with every marked face instead.
+    const long long cells = (hi(b, 0) - lo(b, 0) + 1) * (hi(b, 1) - lo(b, 1) + 1) * (hi(b, 2) - lo(b, 2) + 1);
+    auto consider = [&](int i) {
+      if (seen[static_cast<std::size_t>(i)] == g) return;
+      seen[static_cast<std::size_t>(i)] = g;
+      const int f = marked[static_cast<std::size_t>(i)].first;
+      if (f == g || (changed[g] && g < f) || !CGAL::do_overlap(b, marked[static_cast<std::size_t>(i)].second)) return;
+      const int a = std::min(f, g), c = std::max(f, g);
+      if (faces_intersect(mesh, mesh.face(a), mesh.face(c), eps)) pairs.emplace_back(a, c);
+    };
+    if (cells > static_cast<long long>(marked.size())) {
+      for (int i = 0; i < static_cast<int>(marked.size()); ++i) consider(i);
+      continue;
+    }
+    for (long long x = lo(b, 0); x <= hi(b, 0); ++x)
+      for (long long y = lo(b, 1); y <= hi(b, 1); ++y)
+        for (long long z = lo(b, 2); z <= hi(b, 2); ++z) {
+          const auto it = grid.find({x, y, z});
+          if (it != grid.end())
+            for (int i : it->second) consider(i);
+        }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  return pairs;
+}
+
+std::vector<FacePair> by_corners(const WorkingMesh& mesh, const std::vector<std::pair<int, int>>& pairs) {
+  std::vector<FacePair> out;
+  out.reserve(pairs.size());
+  for (const auto& [f, g] : pairs) out.emplace_back(mesh.face(f), mesh.face(g));
+  return out;
+}
+
 }  // namespace
 
 std::vector<std::pair<int, int>> intersecting_face_pairs(const WorkingMesh& mesh) {
   std::vector<Box> boxes;
   boxes.reserve(static_cast<std::size_t>(mesh.num_faces()));
-  CGAL::Bbox_3 all;
-  for (int f = 0; f < mesh.num_faces(); ++f)
-    for (int v : mesh.face(f)) all += point(mesh, v).bbox();
-  const double eps = kContactTolerance * std::sqrt(CGAL::square(all.xmax() - all.xmin()) +
-                                                   CGAL::square(all.ymax() - all.ymin()) +
-                                                   CGAL::square(all.zmax() - all.zmin()));
+  const double eps = contact_tolerance(mesh);
   for (int f = 0; f < mesh.num_faces(); ++f) {
-    const MeshFace& t = mesh.face(f);
-    const K::Point_3 p = point(mesh, t[0]), q = point(mesh, t[1]), r = point(mesh, t[2]);
-    if (CGAL::collinear(p, q, r)) continue;
-    const CGAL::Bbox_3 b = p.bbox() + q.bbox() + r.bbox();
-    boxes.emplace_back(CGAL::Bbox_3(b.xmin() - eps, b.ymin() - eps, b.zmin() - eps, b.xmax() + eps,
-                                    b.ymax() + eps, b.zmax() + eps),
-                       f);
+    CGAL::Bbox_3 b;
+    if (face_box(mesh, f, eps, b)) boxes.emplace_back(b, f);
   }
   std::vector<std::pair<int, int>> pairs;
   CGAL::box_self_intersection_d<CGAL::Sequential_tag>(
@@ -152,6 +233,44 @@ std::vector<int> self_intersecting_faces(const WorkingMesh& mesh) {
 }
 
 long self_intersecting_pairs(const WorkingMesh& mesh) { return static_cast<long>(intersecting_face_pairs(mesh).size()); }
+
+std::vector<FacePair> crossing_face_pairs(const WorkingMesh& mesh) { return by_corners(mesh, intersecting_face_pairs(mesh)); }
+
+std::vector<FacePair> crossing_face_pairs_after(const WorkingMesh& mesh, const WorkingMesh::Checkpoint& before,
+                                                const std::vector<FacePair>& pairs_before, double max_changed_fraction) {
+  const int nv = mesh.num_vertices();
+  std::vector<char> moved(nv, 0);
+  for (int v = 0; v < nv; ++v) moved[v] = v >= before.V.rows() || mesh.V.row(v) != before.V.row(v);
+  const std::unordered_set<MeshFace, MeshFaceHash> then(before.faces.begin(), before.faces.end());
+  std::vector<char> changed(mesh.num_faces(), 0);
+  long count = 0;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const MeshFace& t = mesh.face(f);
+    changed[f] = moved[t[0]] || moved[t[1]] || moved[t[2]] || !then.count(t);
+    count += changed[f];
+  }
+  if (count > max_changed_fraction * mesh.num_faces()) return crossing_face_pairs(mesh);
+  // Pairs of two faces left alone: both still there, no corner moved.
+  std::unordered_set<MeshFace, MeshFaceHash> now(mesh.faces().begin(), mesh.faces().end());
+  auto kept = [&](const MeshFace& t) {
+    return now.count(t) && !moved[t[0]] && !moved[t[1]] && !moved[t[2]];
+  };
+  std::vector<FacePair> out;
+  for (const FacePair& p : pairs_before)
+    if (kept(p.first) && kept(p.second)) out.push_back(p);
+  const std::vector<FacePair> fresh = by_corners(mesh, intersecting_pairs_at(mesh, changed));
+  out.insert(out.end(), fresh.begin(), fresh.end());
+  return out;
+}
+
+std::vector<int> faces_in_pairs(const WorkingMesh& mesh, const std::vector<FacePair>& pairs) {
+  std::unordered_set<MeshFace, MeshFaceHash> named;
+  for (const FacePair& p : pairs) named.insert(p.first), named.insert(p.second);
+  std::vector<int> out;
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (named.count(mesh.face(f))) out.push_back(f);
+  return out;
+}
 
 namespace {
 

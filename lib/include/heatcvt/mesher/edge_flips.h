@@ -27,8 +27,18 @@ struct FlipOptions {
 /// yet, a and b keep valence ≥ 3 and the rule of `options` holds; with `only_at`, only edges
 /// with an end vertex v with (*only_at)[v]. Faces are visited in order, one flip per face per
 /// pass. In valence mode the valences move towards 6, or towards (*target_valence)[v] when given
-/// (the isotropic remesh asks fewer on a border). Returns the number of flips.
+/// (the isotropic remesh asks fewer on a border). Returns the number of flips; `converged`
+/// receives whether the last pass flipped nothing (every edge is then rejected by the rule).
+/// With `dirty`, the call continues one that converged with the same options and `only_at`:
+/// `dirty` marks every vertex that has moved or changed its faces since, and every vertex that
+/// shares a face with one (moved_vertex_rings()). Edges with neither end dirty are not looked at
+/// again until a flip reaches them; the flips are the same as without it.
+/// The vertices whose position differs from `before` (rows beyond it count as moved) and those
+/// sharing a face with one: the `dirty` marks of flip_edges() after a smoothing step.
+std::vector<char> moved_vertex_rings(const WorkingMesh& mesh, const Eigen::MatrixX3d& before);
+
 int flip_edges(WorkingMesh& mesh, const FlipOptions& options = {}, const std::vector<char>* only_at = nullptr,
-               const std::vector<int>* target_valence = nullptr);
+               const std::vector<int>* target_valence = nullptr, const std::vector<char>* dirty = nullptr,
+               bool* converged = nullptr);
 
 }  // namespace heatcvt

@@ -27,6 +27,27 @@ std::vector<int> self_intersecting_faces(const WorkingMesh& mesh);
 /// Number of intersecting face pairs (0 for an empty mesh).
 long self_intersecting_pairs(const WorkingMesh& mesh);
 
+/// A pair of faces by their corners: it names the same faces after edits that renumber them.
+using FacePair = std::pair<MeshFace, MeshFace>;
+
+/// The intersecting face pairs (intersecting_face_pairs()) by their corners.
+std::vector<FacePair> crossing_face_pairs(const WorkingMesh& mesh);
+
+/// The intersecting face pairs of `mesh` after an edit from the state `before`, whose pairs were
+/// `pairs_before`. A face the edit left alone (same corners, none moved) still crosses what it
+/// crossed; so the pairs of two such faces are kept, and only the faces the edit made or moved are
+/// checked, against every face: a grid of their boxes is met by each face's box. Where more than
+/// `max_changed_fraction` of the faces changed (a smoothing of the whole mesh), it is
+/// crossing_face_pairs(). The pairs are those of crossing_face_pairs(mesh), but for a pair of
+/// faces that only just meets, whose verdict depends on the contact tolerance the bounding box
+/// sets (a box changed by the edit).
+std::vector<FacePair> crossing_face_pairs_after(const WorkingMesh& mesh, const WorkingMesh::Checkpoint& before,
+                                                const std::vector<FacePair>& pairs_before,
+                                                double max_changed_fraction = 0.1);
+
+/// The faces of `mesh` named in `pairs`, ascending, each once.
+std::vector<int> faces_in_pairs(const WorkingMesh& mesh, const std::vector<FacePair>& pairs);
+
 /// The topology a mesh is to keep through the mesher's stages: its edge-connected components,
 /// boundary loops and Euler characteristic (an input mesh's, for its remesh). components < 0:
 /// no target.
