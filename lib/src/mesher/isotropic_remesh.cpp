@@ -36,19 +36,6 @@ std::vector<Edge> mesh_edges(const WorkingMesh& mesh) {
   return edges;
 }
 
-// Fraction of the mesh's edges longer than `limit`.
-double long_edge_fraction(const WorkingMesh& mesh, double limit) {
-  long edges = 0, long_edges = 0;
-  for (const MeshFace& f : mesh.faces())
-    for (int k = 0; k < 3; ++k) {
-      const int a = f[k], b = f[(k + 1) % 3];
-      if (a > b && mesh.has_half_edge(b, a)) continue;  // the interior edge counted from a < b
-      ++edges;
-      long_edges += (mesh.V.row(a) - mesh.V.row(b)).norm() > limit;
-    }
-  return edges > 0 ? static_cast<double>(long_edges) / static_cast<double>(edges) : 0.0;
-}
-
 // Orders edges by length (longest first when `longest_first`), ties by vertex indices.
 void sort_edges(std::vector<Edge>& edges, bool longest_first) {
   std::sort(edges.begin(), edges.end(), [&](const Edge& x, const Edge& y) {
@@ -524,13 +511,8 @@ class Sizer {
           flip_and_relax();
           return splits + collapses;
         });
-        // Borders and pieces make the equilateral estimate off: correct it by the count reached,
-        // once the mesh has come to the length. While splits are still capped at one per face (a
-        // mesh a few times coarser than the target), the count lags behind the length: a
-        // correction then would shrink the length further, and the next rounds overshoot the
-        // count and collapse it back.
-        if (long_edge_fraction(mesh_, o_.long_factor * length) <= o_.settled_long_edge_fraction)
-          length *= std::sqrt(static_cast<double>(vertices_in_faces(mesh_)) / o_.target_vertices);
+        // Borders and pieces make the equilateral estimate off: correct it by the count reached.
+        length *= std::sqrt(static_cast<double>(vertices_in_faces(mesh_)) / o_.target_vertices);
       }
       clean_border();
     }
@@ -849,11 +831,10 @@ class Sizer {
   // The angle polish's `settled` marks (angle_polish()) as the last final_polish() left them,
   // cleared where the mesh has changed since (polished_): at the vertices that moved or were
   // added (or whose normal or projector hint changed), at those sharing a face with one, and at
-  // the corners of faces made or removed. A
-  // vertex whose ring is as it was would find no move again, so the polish that follows is the
-  // same as one that searches every vertex, at the cost of the changes only (the sliver passes
-  // polish the whole mesh after a few local edits). A step rolled back counts as a change from
-  // the state it left, so the marks stay right.
+  // the corners of faces made or removed. A vertex whose ring is as it was would find no move
+  // again, so the polish that follows is the same as one that searches every vertex, at the cost
+  // of the changes only (the sliver passes polish the whole mesh after a few local edits). A step
+  // rolled back counts as a change from the state it left, so the marks stay right.
   std::vector<char>& settled_since_last_polish() {
     const int nv = mesh_.num_vertices();
     if (polished_.V.rows() == 0) {

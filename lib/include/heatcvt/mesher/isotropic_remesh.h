@@ -71,10 +71,6 @@ struct IsotropicRemeshOptions {
   /// Split, collapse, flip and relax rounds; the target edge length is corrected after each
   /// round by the ratio of the vertex count to the target. Default 8.
   int rounds = 8;
-  /// The edge length is corrected by the count reached after a round only where at most this
-  /// fraction of the edges is still longer than long_factor times it (the mesh has come to the
-  /// length; before, the count lags behind it). Default 0.05.
-  double settled_long_edge_fraction = 0.05;
   /// An edge is split when longer than this times the target length. Default 4/3.
   double long_factor = 4.0 / 3.0;
   /// An edge is collapsed when shorter than this times the target length (and no edge of the
