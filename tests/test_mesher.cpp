@@ -782,6 +782,42 @@ TEST(Polish, AnglePolishPassesOverSettledVerticesWithoutChangingTheResult) {
   EXPECT_EQ((fresh.V - carried.V).cwiseAbs().maxCoeff(), 0.0);
 }
 
+TEST(Polish, MarksClearedWhereTheMeshChangedGiveTheSamePolishAsSearchingEveryVertex) {
+  // A polish to convergence, then edits between two polishes: a few vertices moved along the
+  // surface, three edges flipped (faces made and removed). The marks of the
+  // first polish, cleared by unsettle_changes_since(), must give the same second polish as fresh
+  // marks; and they must pass over most vertices (asserted), or the test would show nothing.
+  const TriangleMesh fine = test::icosphere(5);
+  const MeshSurfaceProjector surface(fine.V, fine.F);
+  WorkingMesh w = jittered_sphere(test::icosphere(3), 0.04);
+  const std::vector<char> frozen(w.num_vertices(), 0);
+  std::vector<char> settled;
+  angle_polish(w, surface, 50, frozen, {}, 2, &settled);
+  const WorkingMesh::Checkpoint polished = w.checkpoint();
+  for (int v : {5, 60, 200}) {
+    const Eigen::Vector3d x = w.V.row(v);
+    const Eigen::Vector3d moved = (x + 0.03 * x.unitOrthogonal()).normalized();
+    w.V.row(v) = moved.transpose();
+    w.N.row(v) = moved.transpose();
+  }
+  for (int f1 : {10, 300, 900}) {  // one edge of each of these faces flipped
+    const int a = w.face(f1)[0], b = w.face(f1)[1];
+    const int f2 = w.half_edge_face(b, a);
+    ASSERT_GE(f2, 0);
+    w.flip(f1, 0, f2);
+  }
+  const std::vector<char> all_frozen(w.num_vertices(), 0);
+  unsettle_changes_since(polished, w, settled);
+  ASSERT_EQ(static_cast<int>(settled.size()), w.num_vertices());
+  ASSERT_GT(std::count(settled.begin(), settled.end(), 1), w.num_vertices() / 2);
+  WorkingMesh fresh = w, carried = w;
+  const int fresh_moves = angle_polish(fresh, surface, 50, all_frozen, {}, 2);
+  ASSERT_GT(fresh_moves, 0);
+  EXPECT_EQ(angle_polish(carried, surface, 50, all_frozen, {}, 2, &settled), fresh_moves);
+  EXPECT_EQ((fresh.V - carried.V).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(fresh.anchor, carried.anchor);
+}
+
 // ---------------------------------------------------------------------------------------------
 
 TEST(SliverCollapse, CollapsesTheShortEdgeOfSlivers) {

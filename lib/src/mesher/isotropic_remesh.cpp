@@ -7,7 +7,6 @@
 #include <cmath>
 #include <limits>
 #include <set>
-#include <unordered_set>
 
 #include "heatcvt/mesher/manifold_extraction.h"
 #include "heatcvt/mesher/mesh_checks.h"
@@ -829,33 +828,13 @@ class Sizer {
   }
 
   // The angle polish's `settled` marks (angle_polish()) as the last final_polish() left them,
-  // cleared where the mesh has changed since (polished_): at the vertices that moved or were
-  // added (or whose normal or projector hint changed), at those sharing a face with one, and at
-  // the corners of faces made or removed. A vertex whose ring is as it was would find no move
-  // again, so the polish that follows is the same as one that searches every vertex, at the cost
-  // of the changes only (the sliver passes polish the whole mesh after a few local edits). A step
-  // rolled back counts as a change from the state it left, so the marks stay right.
+  // cleared where the mesh has changed since (unsettle_changes_since()): the polish that follows
+  // is the same as one that searches every vertex, at the cost of the changes only (the sliver
+  // passes polish the whole mesh after a few local edits). A step rolled back counts as a change
+  // from the state it left, so the marks stay right.
   std::vector<char>& settled_since_last_polish() {
-    const int nv = mesh_.num_vertices();
-    if (polished_.V.rows() == 0) {
-      settled_.assign(nv, 0);
-      return settled_;
-    }
-    settled_.resize(nv, 0);
-    std::vector<char> moved(nv, 0);
-    for (int v = 0; v < nv; ++v)
-      moved[v] = v >= polished_.V.rows() || mesh_.V.row(v) != polished_.V.row(v) ||
-                 mesh_.N.row(v) != polished_.N.row(v) || mesh_.anchor[v] != polished_.anchor[v];
-    const std::unordered_set<MeshFace, MeshFaceHash> then(polished_.faces.begin(), polished_.faces.end());
-    const std::unordered_set<MeshFace, MeshFaceHash> now(mesh_.faces().begin(), mesh_.faces().end());
-    for (const MeshFace& f : mesh_.faces())
-      if (moved[f[0]] || moved[f[1]] || moved[f[2]] || !then.count(f)) settled_[f[0]] = settled_[f[1]] = settled_[f[2]] = 0;
-    for (const MeshFace& f : polished_.faces)
-      if (!now.count(f))
-        for (int v : f)
-          if (v < nv) settled_[v] = 0;
-    for (int v = 0; v < nv; ++v)
-      if (moved[v]) settled_[v] = 0;
+    if (polished_.V.rows() == 0) settled_.assign(mesh_.num_vertices(), 0);
+    else unsettle_changes_since(polished_, mesh_, settled_);
     return settled_;
   }
 

@@ -62,4 +62,11 @@ int angle_polish(WorkingMesh& mesh, const SurfaceProjector& surface, int rounds,
 /// edge flips), old corners and new; clears every mark when the numbers differ.
 void unsettle_changed_faces(const std::vector<MeshFace>& before, const WorkingMesh& mesh, std::vector<char>& settled);
 
+/// Clears the `settled` marks (see angle_polish()), valid for the state `before`, wherever `mesh`
+/// has changed since: at the vertices moved or added, or with another normal or projector hint,
+/// at the vertices sharing a face with one, and at the corners of faces made or removed (any
+/// edit: flips, splits, collapses, removals). The marks are resized to the vertex count. A
+/// polish with the marks so cleared moves the same vertices as one that searches every vertex.
+void unsettle_changes_since(const WorkingMesh::Checkpoint& before, const WorkingMesh& mesh, std::vector<char>& settled);
+
 }  // namespace heatcvt
