@@ -684,7 +684,7 @@ TEST(EdgeFlips, AContinuedCallWithDirtyMarksFlipsWhatAFullScanFlips) {
     bool converged = false;
     flip_edges(start, o, nullptr, nullptr, nullptr, &converged);
     ASSERT_TRUE(converged);
-    const Eigen::MatrixX3d unmoved = start.V;
+    const WorkingMesh::Checkpoint unmoved = start.checkpoint();
     for (int v = 0; v < start.num_vertices(); ++v)
       if (start.V(v, 0) > 0.3 && start.V(v, 0) < 0.6 && start.V(v, 1) > 0.2 && start.V(v, 1) < 0.5)
         start.V.row(v) += Eigen::RowVector3d(2 * jitter(rng), 2 * jitter(rng), 0);

@@ -5,13 +5,12 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
-#include <array>
-#include <cstdint>
 #include <string>
 #include <unordered_set>
 #include <vector>
 
 #include "heatcvt/errors.h"
+#include "heatcvt/grid_cell.h"
 #include "heatcvt/parallel.h"
 #include "heatcvt/point_index.h"
 
@@ -48,27 +47,15 @@ double quadratic_residual(const Eigen::MatrixX3d& P, const std::vector<int>& nb,
   return scale * std::sqrt((A * c - h).squaredNorm() / static_cast<double>(m));
 }
 
-// Grid cell of x for cells of side `cell`.
-using Cell = std::array<std::int64_t, 3>;
-Cell cell_of(const Eigen::Vector3d& x, double cell) {
-  return {static_cast<std::int64_t>(std::floor(x.x() / cell)), static_cast<std::int64_t>(std::floor(x.y() / cell)),
-          static_cast<std::int64_t>(std::floor(x.z() / cell))};
-}
-struct CellHash {
-  std::size_t operator()(const Cell& c) const {
-    return static_cast<std::size_t>(c[0] * 73856093LL ^ c[1] * 19349663LL ^ c[2] * 83492791LL);
-  }
-};
-
 // The rows of P within one cell (of side a little over `radius`) of a cell holding a query row,
 // ascending: every point within `radius` of a query is among them. A sample of millions of points
 // is thus indexed only where the queries look.
 std::vector<int> rows_near_queries(const Eigen::MatrixX3d& P, const std::vector<Eigen::Index>& query_rows,
                                    double radius, int threads) {
   const double cell = radius * (1 + 1e-5);
-  std::unordered_set<Cell, CellHash> near;
+  std::unordered_set<GridCell, GridCellHash> near;
   for (const Eigen::Index row : query_rows) {
-    const Cell c = cell_of(P.row(row).transpose(), cell);
+    const GridCell c = grid_cell(P.row(row).transpose(), cell);
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz) near.insert({c[0] + dx, c[1] + dy, c[2] + dz});
@@ -77,7 +64,7 @@ std::vector<int> rows_near_queries(const Eigen::MatrixX3d& P, const std::vector<
   std::vector<char> keep(static_cast<std::size_t>(n), 0);
 #pragma omp parallel for schedule(static) num_threads(resolve_threads(threads))
   for (Eigen::Index i = 0; i < n; ++i)
-    keep[static_cast<std::size_t>(i)] = near.count(cell_of(P.row(i).transpose(), cell)) > 0;
+    keep[static_cast<std::size_t>(i)] = near.count(grid_cell(P.row(i).transpose(), cell)) > 0;
   std::vector<int> rows;
   for (Eigen::Index i = 0; i < n; ++i)
     if (keep[static_cast<std::size_t>(i)]) rows.push_back(static_cast<int>(i));

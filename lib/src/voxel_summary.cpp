@@ -12,23 +12,15 @@
 #include <unordered_set>
 
 #include "heatcvt/errors.h"
+#include "heatcvt/grid_cell.h"
 #include "heatcvt/parallel.h"
 
 namespace heatcvt {
 
 namespace {
 
-using Cell = std::array<std::int64_t, 3>;
-
-struct CellHash {
-  std::size_t operator()(const Cell& c) const {
-    // Multiplicative mixing of the three integers (large odd constants, then xor-shift).
-    std::uint64_t h = static_cast<std::uint64_t>(c[0]) * 0x9E3779B97F4A7C15ULL;
-    h ^= static_cast<std::uint64_t>(c[1]) * 0xC2B2AE3D27D4EB4FULL + (h >> 29);
-    h ^= static_cast<std::uint64_t>(c[2]) * 0x165667B19E3779F9ULL + (h >> 32);
-    return static_cast<std::size_t>(h ^ (h >> 31));
-  }
-};
+using Cell = GridCell;
+using CellHash = GridCellHash;
 
 // Voxel slots by cell: open addressing with linear probing in a power-of-two table kept at most
 // half full. A lookup touches one or two neighbouring entries where a node-based map follows a

@@ -7,7 +7,6 @@
 #include <iterator>
 #include <cmath>
 #include <limits>
-#include <unordered_set>
 #include <utility>
 
 #include "heatcvt/parallel.h"
@@ -293,22 +292,20 @@ void unsettle_changed_faces(const std::vector<MeshFace>& before, const WorkingMe
 }
 
 void unsettle_changes_since(const WorkingMesh::Checkpoint& before, const WorkingMesh& mesh, std::vector<char>& settled) {
+  const MeshChanges changes = changes_since(before, mesh);
   const int nv = mesh.num_vertices();
   settled.resize(nv, 0);
-  std::vector<char> moved(nv, 0);
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const MeshFace& t = mesh.face(f);
+    bool changed = changes.new_face[f];
+    for (int v : t) changed = changed || changes.moved[v] || changes.rehinted[v];
+    if (changed) settled[t[0]] = settled[t[1]] = settled[t[2]] = 0;
+  }
+  for (const MeshFace& f : changes.removed)
+    for (int v : f)
+      if (v < nv) settled[v] = 0;
   for (int v = 0; v < nv; ++v)
-    moved[v] = v >= before.V.rows() || mesh.V.row(v) != before.V.row(v) || mesh.N.row(v) != before.N.row(v) ||
-               mesh.anchor[v] != before.anchor[v];
-  const std::unordered_set<MeshFace, MeshFaceHash> then(before.faces.begin(), before.faces.end());
-  const std::unordered_set<MeshFace, MeshFaceHash> now(mesh.faces().begin(), mesh.faces().end());
-  for (const MeshFace& f : mesh.faces())
-    if (moved[f[0]] || moved[f[1]] || moved[f[2]] || !then.count(f)) settled[f[0]] = settled[f[1]] = settled[f[2]] = 0;
-  for (const MeshFace& f : before.faces)
-    if (!now.count(f))
-      for (int v : f)
-        if (v < nv) settled[v] = 0;
-  for (int v = 0; v < nv; ++v)
-    if (moved[v]) settled[v] = 0;
+    if (changes.moved[v] || changes.rehinted[v]) settled[v] = 0;
 }
 
 }  // namespace heatcvt

@@ -77,10 +77,10 @@ class FlipRule {
 
 }  // namespace
 
-std::vector<char> moved_vertex_rings(const WorkingMesh& mesh, const Eigen::MatrixX3d& before) {
+std::vector<char> moved_vertex_rings(const WorkingMesh& mesh, const WorkingMesh::Checkpoint& before) {
   const int nv = mesh.num_vertices();
-  std::vector<char> moved(nv, 0), dirty(nv, 0);
-  for (int v = 0; v < nv; ++v) moved[v] = v >= before.rows() || mesh.V.row(v) != before.row(v);
+  const std::vector<char> moved = changes_since(before, mesh).moved;
+  std::vector<char> dirty(nv, 0);
   for (const MeshFace& f : mesh.faces())
     if (moved[f[0]] || moved[f[1]] || moved[f[2]]) dirty[f[0]] = dirty[f[1]] = dirty[f[2]] = 1;
   for (int v = 0; v < nv; ++v) dirty[v] = dirty[v] || moved[v];

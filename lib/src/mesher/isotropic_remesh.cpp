@@ -813,7 +813,7 @@ class Sizer {
     const std::vector<char> fixed = held_and_corners();
     std::vector<char>& settled = settled_since_last_polish();
     for (int cycle = 0; cycle < o_.polish_cycles; ++cycle) {
-      const Eigen::MatrixX3d unpolished = mesh_.V;
+      const WorkingMesh::Checkpoint unpolished = mesh_.checkpoint();
       moves += angle_polish(mesh_, surface_, 2, fixed, o_.angle, o_.threads, &settled);
       const std::vector<MeshFace> unflipped = mesh_.faces();
       // After a converged call, only the edges near the vertices the polish moved can flip.

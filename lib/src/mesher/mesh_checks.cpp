@@ -1,6 +1,7 @@
 // Self-intersections of the working mesh (CGAL box intersection and exact predicates).
 #include "heatcvt/mesher/mesh_checks.h"
 
+#include "heatcvt/grid_cell.h"
 #include "heatcvt/mesh.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -9,7 +10,6 @@
 #include <CGAL/squared_distance_3.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
 #include <unordered_map>
@@ -147,27 +147,23 @@ std::vector<std::pair<int, int>> intersecting_pairs_at(const WorkingMesh& mesh, 
   }
   std::vector<std::pair<int, int>> pairs;
   if (marked.empty() || !(cell > 0)) return pairs;
-  using Key = std::array<long long, 3>;
-  struct KeyHash {
-    std::size_t operator()(const Key& k) const {
-      return static_cast<std::size_t>(k[0] * 73856093LL ^ k[1] * 19349663LL ^ k[2] * 83492791LL);
-    }
-  };
-  auto lo = [&](const CGAL::Bbox_3& b, int d) { return static_cast<long long>(std::floor(b.min(d) / cell)); };
-  auto hi = [&](const CGAL::Bbox_3& b, int d) { return static_cast<long long>(std::floor(b.max(d) / cell)); };
-  std::unordered_map<Key, std::vector<int>, KeyHash> grid;
+  auto lo = [&](const CGAL::Bbox_3& b) { return grid_cell({b.xmin(), b.ymin(), b.zmin()}, cell); };
+  auto hi = [&](const CGAL::Bbox_3& b) { return grid_cell({b.xmax(), b.ymax(), b.zmax()}, cell); };
+  std::unordered_map<GridCell, std::vector<int>, GridCellHash> grid;
   for (int i = 0; i < static_cast<int>(marked.size()); ++i) {
     const CGAL::Bbox_3& b = marked[static_cast<std::size_t>(i)].second;
-    for (long long x = lo(b, 0); x <= hi(b, 0); ++x)
-      for (long long y = lo(b, 1); y <= hi(b, 1); ++y)
-        for (long long z = lo(b, 2); z <= hi(b, 2); ++z) grid[{x, y, z}].push_back(i);
+    const GridCell c0 = lo(b), c1 = hi(b);
+    for (auto x = c0[0]; x <= c1[0]; ++x)
+      for (auto y = c0[1]; y <= c1[1]; ++y)
+        for (auto z = c0[2]; z <= c1[2]; ++z) grid[{x, y, z}].push_back(i);
   }
   std::vector<int> seen(marked.size(), -1);
   for (int g = 0; g < mesh.num_faces(); ++g) {
     CGAL::Bbox_3 b;
     if (!face_box(mesh, g, eps, b)) continue;
     // A face wider than many cells is compared with every marked face instead.
-    const long long cells = (hi(b, 0) - lo(b, 0) + 1) * (hi(b, 1) - lo(b, 1) + 1) * (hi(b, 2) - lo(b, 2) + 1);
+    const GridCell c0 = lo(b), c1 = hi(b);
+    const auto cells = (c1[0] - c0[0] + 1) * (c1[1] - c0[1] + 1) * (c1[2] - c0[2] + 1);
     auto consider = [&](int i) {
       if (seen[static_cast<std::size_t>(i)] == g) return;
       seen[static_cast<std::size_t>(i)] = g;
@@ -176,13 +172,13 @@ std::vector<std::pair<int, int>> intersecting_pairs_at(const WorkingMesh& mesh, 
       const int a = std::min(f, g), c = std::max(f, g);
       if (faces_intersect(mesh, mesh.face(a), mesh.face(c), eps)) pairs.emplace_back(a, c);
     };
-    if (cells > static_cast<long long>(marked.size())) {
+    if (cells > static_cast<std::int64_t>(marked.size())) {
       for (int i = 0; i < static_cast<int>(marked.size()); ++i) consider(i);
       continue;
     }
-    for (long long x = lo(b, 0); x <= hi(b, 0); ++x)
-      for (long long y = lo(b, 1); y <= hi(b, 1); ++y)
-        for (long long z = lo(b, 2); z <= hi(b, 2); ++z) {
+    for (auto x = c0[0]; x <= c1[0]; ++x)
+      for (auto y = c0[1]; y <= c1[1]; ++y)
+        for (auto z = c0[2]; z <= c1[2]; ++z) {
           const auto it = grid.find({x, y, z});
           if (it != grid.end())
             for (int i : it->second) consider(i);
@@ -238,15 +234,13 @@ std::vector<FacePair> crossing_face_pairs(const WorkingMesh& mesh) { return by_c
 
 std::vector<FacePair> crossing_face_pairs_after(const WorkingMesh& mesh, const WorkingMesh::Checkpoint& before,
                                                 const std::vector<FacePair>& pairs_before, double max_changed_fraction) {
-  const int nv = mesh.num_vertices();
-  std::vector<char> moved(nv, 0);
-  for (int v = 0; v < nv; ++v) moved[v] = v >= before.V.rows() || mesh.V.row(v) != before.V.row(v);
-  const std::unordered_set<MeshFace, MeshFaceHash> then(before.faces.begin(), before.faces.end());
+  const MeshChanges changes = changes_since(before, mesh);
+  const std::vector<char>& moved = changes.moved;
   std::vector<char> changed(mesh.num_faces(), 0);
   long count = 0;
   for (int f = 0; f < mesh.num_faces(); ++f) {
     const MeshFace& t = mesh.face(f);
-    changed[f] = moved[t[0]] || moved[t[1]] || moved[t[2]] || !then.count(t);
+    changed[f] = moved[t[0]] || moved[t[1]] || moved[t[2]] || changes.new_face[f];
     count += changed[f];
   }
   if (count > max_changed_fraction * mesh.num_faces()) return crossing_face_pairs(mesh);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <unordered_set>
 #include <utility>
 
 namespace heatcvt {
@@ -177,6 +178,25 @@ void WorkingMesh::rollback(const Checkpoint& c, bool keep_anchors) {
   V = c.V;
   N = c.N;
   set_faces(c.faces);
+}
+
+MeshChanges changes_since(const WorkingMesh::Checkpoint& before, const WorkingMesh& mesh) {
+  const int nv = mesh.num_vertices();
+  MeshChanges c;
+  c.moved.assign(nv, 0);
+  c.rehinted.assign(nv, 0);
+  for (int v = 0; v < nv; ++v) {
+    c.moved[v] = v >= before.V.rows() || mesh.V.row(v) != before.V.row(v);
+    c.rehinted[v] = !c.moved[v] && (mesh.N.row(v) != before.N.row(v) || mesh.anchor[v] != before.anchor[v]);
+  }
+  c.new_face.assign(mesh.num_faces(), 0);
+  if (mesh.faces() == before.faces) return c;
+  const std::unordered_set<MeshFace, MeshFaceHash> then(before.faces.begin(), before.faces.end());
+  const std::unordered_set<MeshFace, MeshFaceHash> now(mesh.faces().begin(), mesh.faces().end());
+  for (int f = 0; f < mesh.num_faces(); ++f) c.new_face[f] = !then.count(mesh.face(f));
+  for (const MeshFace& f : before.faces)
+    if (!now.count(f)) c.removed.push_back(f);
+  return c;
 }
 
 double triangle_min_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {

@@ -33,9 +33,9 @@ struct FlipOptions {
 /// `dirty` marks every vertex that has moved or changed its faces since, and every vertex that
 /// shares a face with one (moved_vertex_rings()). Edges with neither end dirty are not looked at
 /// again until a flip reaches them; the flips are the same as without it.
-/// The vertices whose position differs from `before` (rows beyond it count as moved) and those
-/// sharing a face with one: the `dirty` marks of flip_edges() after a smoothing step.
-std::vector<char> moved_vertex_rings(const WorkingMesh& mesh, const Eigen::MatrixX3d& before);
+/// The vertices moved since `before` (changes_since()) and those sharing a face with one: the
+/// `dirty` marks of flip_edges() after a smoothing step.
+std::vector<char> moved_vertex_rings(const WorkingMesh& mesh, const WorkingMesh::Checkpoint& before);
 
 int flip_edges(WorkingMesh& mesh, const FlipOptions& options = {}, const std::vector<char>* only_at = nullptr,
                const std::vector<int>* target_valence = nullptr, const std::vector<char>* dirty = nullptr,

@@ -121,6 +121,17 @@ class WorkingMesh {
 /// Number of vertices referenced by the mesh's faces.
 int vertices_in_faces(const WorkingMesh& mesh);
 
+/// What an edit changed in a mesh since the state `before` (a checkpoint of it).
+struct MeshChanges {
+  std::vector<char> moved;        ///< #V: moved or added
+  std::vector<char> rehinted;     ///< #V: in place, with another normal or projector hint
+  std::vector<char> new_face;     ///< #F: a face (corners in order) that `before` did not have
+  std::vector<MeshFace> removed;  ///< faces of `before` that the mesh no longer has
+};
+/// The changes of `mesh` since `before` (faces compared by their corners, so that renumbered
+/// faces are not changes; no face search where the face list is as it was).
+MeshChanges changes_since(const WorkingMesh::Checkpoint& before, const WorkingMesh& mesh);
+
 /// Smallest interior angle (radians) of the triangle (a, b, c): the one opposite its shortest
 /// edge; 0 for a degenerate triangle.
 double triangle_min_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c);
