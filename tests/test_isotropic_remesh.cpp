@@ -15,6 +15,7 @@
 #include "heatcvt/mesher/isotropic_remesh.h"
 #include "heatcvt/mesher/mesh_checks.h"
 #include "heatcvt/mesher/projector.h"
+#include "heatcvt/remesh.h"
 #include "heatcvt/shapes.h"
 #include "heatcvt/validate.h"
 #include "test_support.h"
@@ -113,6 +114,36 @@ TEST(IsotropicRemesh, TorusIsCoarsenedToTheCountAndKeepsItsHandle) {
   EXPECT_EQ(v.boundary_loops, 0);
   EXPECT_NEAR(m.V.rows(), 500, 5);
   EXPECT_GE(triangle_quality(m.V, m.F).mean_min_angle_deg, 52.0);
+}
+
+// Coarsening a sphere with a thin spike: the spike's end (a tip, tips.h) stays a vertex at its
+// place (at remesh_cvt()'s threshold); without tips held the collapses and the polish take it (so the test can fail).
+TEST(IsotropicRemesh, TheEndOfAThinSpikeSurvivesTheCoarsening) {
+  const TriangleMesh spiked = test::spiked_sphere(3, 1.3);  // 642 vertices
+  const MeshSurfaceProjector surface(spiked.V, spiked.F);
+  const Eigen::Vector3d end = spiked.V.row(0).transpose();
+  const auto coarsened = [&](double min_defect_deg) {
+    WorkingMesh w = working(spiked, surface);
+    IsotropicRemeshOptions o = sized_to(300);
+    o.tips.min_defect_deg = min_defect_deg;
+    MesherStats stats;
+    EXPECT_TRUE(size_to_target(w, surface, o, stats));
+    return w;
+  };
+  const WorkingMesh held = coarsened(kRemeshTipDefectDeg);
+  TipOptions on;
+  on.min_defect_deg = kRemeshTipDefectDeg;
+  ASSERT_EQ(tip_vertices(working(spiked, surface), on)[0], 1);
+  EXPECT_GT(held.valence(0), 0);
+  EXPECT_LT((held.V.row(0).transpose() - end).norm(), 1e-12);
+  const TriangleMesh m = compact_mesh(held);
+  const ValidationReport v = validate_open(m);
+  EXPECT_TRUE(v.ok()) << v.summary();
+  EXPECT_EQ(v.genus, 0);
+  EXPECT_NEAR(m.V.rows(), 300, 6);  // the 2 % tolerance
+  const WorkingMesh free = coarsened(0);
+  EXPECT_TRUE(free.valence(0) == 0 || (free.V.row(0).transpose() - end).norm() > 0.05)
+      << "without the tips held, the sizing must cut the spike short for this test to mean anything";
 }
 
 TEST(IsotropicRemesh, RaggedBorderIsResampledAndKeepsItsLoop) {

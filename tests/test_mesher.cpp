@@ -24,14 +24,17 @@
 #include "heatcvt/mesher/manifold_extraction.h"
 #include "heatcvt/mesher/mesh_checks.h"
 #include "heatcvt/mesher/orientation.h"
+#include "heatcvt/mesher/polish.h"
 #include "heatcvt/mesher/projector.h"
 #include "heatcvt/mesher/sliver_collapse.h"
 #include "heatcvt/mesher/sliver_repair.h"
 #include "heatcvt/mesher/surface_mesher.h"
 #include "heatcvt/mesher/tangential_relaxation.h"
+#include "heatcvt/mesher/tips.h"
 #include "heatcvt/mesher/untangle.h"
 #include "heatcvt/mesher/valence3_removal.h"
 #include "heatcvt/mesher/working_mesh.h"
+#include "heatcvt/remesh.h"
 #include "heatcvt/normals.h"
 #include "heatcvt/reconstruct.h"
 #include "heatcvt/errors.h"
@@ -563,6 +566,63 @@ TEST(Valence3Removal, RemovesAVertexInsertedInAFace) {
   EXPECT_EQ(w.edge_face_count(f[0], f[1]), 2);
   EXPECT_TRUE(validate(w, true).ok());
   EXPECT_EQ(remove_valence3(w), 0);  // an icosphere has none
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(TipVertices, TheEndOfASpikeIsATipAndASmoothSphereHasNone) {
+  const auto count = [](const std::vector<char>& t) { return std::count(t.begin(), t.end(), 1); };
+  TipOptions on;
+  on.min_defect_deg = kRemeshTipDefectDeg;
+  EXPECT_EQ(count(tip_vertices(test::working_mesh(test::icosphere(3)), on)), 0);
+  const WorkingMesh spiked = test::working_mesh(test::spiked_sphere(2, 2.5));
+  const std::vector<char> spike = tip_vertices(spiked, on);
+  EXPECT_EQ(count(spike), 1);
+  EXPECT_EQ(spike[0], 1);
+  EXPECT_EQ(count(tip_vertices(spiked)), 0);  // off by default
+  // A tetrahedron: each corner has three 60° angles, a defect of 180°.
+  Eigen::MatrixX3d V(4, 3);
+  V << 1, 1, 1, 1, -1, -1, -1, 1, -1, -1, -1, 1;
+  WorkingMesh tet(V, V.rowwise().normalized(), {});
+  for (const MeshFace& f : std::vector<MeshFace>{{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}}) tet.add_face(f);
+  EXPECT_EQ(count(tip_vertices(tet, on)), 4);
+  TipOptions higher;
+  higher.min_defect_deg = 185;
+  EXPECT_EQ(count(tip_vertices(tet, higher)), 0);
+  // Border vertices are no tips, however sharp the border turns.
+  EXPECT_EQ(count(tip_vertices(test::working_mesh(test::grid(3)), on)), 0);
+}
+
+// The polish stages on a sphere with a thin spike whose end has valence 3 (a vertex above the
+// middle of a face), the spiked sphere itself the surface: the end stays where it is with the
+// tips held, and valence-3 removal takes it without (so the test can fail).
+TEST(Polish, AValence3TipIsNotRemoved) {
+  TriangleMesh spiked = test::icosphere(2);
+  const Eigen::Vector3i f = spiked.F.row(0);
+  const Eigen::Vector3d c = (spiked.V.row(f[0]) + spiked.V.row(f[1]) + spiked.V.row(f[2])).transpose() / 3.0;
+  const int tip = static_cast<int>(spiked.V.rows());
+  spiked.V.conservativeResize(tip + 1, 3);
+  spiked.V.row(tip) = 2.5 * c.normalized().transpose();
+  spiked.F.conservativeResize(spiked.F.rows() + 2, 3);
+  spiked.F.row(0) << f[0], f[1], tip;
+  spiked.F.row(spiked.F.rows() - 2) << f[1], f[2], tip;
+  spiked.F.row(spiked.F.rows() - 1) << f[2], f[0], tip;
+  const MeshSurfaceProjector surface(spiked.V, spiked.F);
+  const auto polished = [&](double min_defect_deg) {
+    WorkingMesh w = test::working_mesh(spiked);
+    PolishOptions o;
+    o.tips.min_defect_deg = min_defect_deg;
+    MesherStats stats;
+    relaxation_polish(w, surface, o, {}, {}, {}, stats);
+    angle_polish_stage(w, surface, o, stats);
+    return w;
+  };
+  const Eigen::Vector3d end = spiked.V.row(tip).transpose();
+  const WorkingMesh held = polished(kRemeshTipDefectDeg);
+  EXPECT_EQ(held.valence(tip), 3);
+  EXPECT_EQ((held.V.row(tip).transpose() - end).norm(), 0.0);
+  EXPECT_TRUE(validate(held, true).ok());
+  EXPECT_EQ(polished(0).valence(tip), 0) << "without the tips held, valence-3 removal takes the end";
 }
 
 // ---------------------------------------------------------------------------------------------

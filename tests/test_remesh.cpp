@@ -10,7 +10,9 @@
 #include <limits>
 #include <random>
 
+#include "heatcvt/closest_point.h"
 #include "heatcvt/errors.h"
+#include "heatcvt/mesh.h"
 #include "heatcvt/mesh_io.h"
 #include "heatcvt/remesh.h"
 #include "heatcvt/shapes.h"
@@ -244,6 +246,7 @@ TEST(RemeshCvt, ARefusedPostCvtResultGetsHeatIterationsAndASecondRun) {
   no_fallback.fallback_phi_min_deg = 0;
   // the stages' extraction rebuilds the dual's faces, so that their first result is refused
   no_fallback.mesher.keep_manifold_dual = false;
+  no_fallback.tip_defect_deg = 0;  // nor does a second run with the tips held replace it
   const RemeshResult first = remesh_cvt(input, no_fallback);
   ASSERT_FALSE(first.post_cvt_kept) << "the first result must be refused for the test";
   ASSERT_LT(first.quality.min_angle_deg, 25.0);
@@ -288,6 +291,7 @@ TEST(RemeshCvt, ADualFarOffTheCountGivesWayToTheStagesResultAtTheCount) {
   const TriangleMesh input = read_mesh(test::data_path("meshes/armadillo_remeshed_14k.obj"));
   RemeshOptions compared = remesh_options(300);
   compared.far_count_error = std::numeric_limits<double>::infinity();
+  compared.tip_defect_deg = 0;  // no second run with the tips held, whose result covers the tips
   const RemeshResult dual = remesh_cvt(input, compared);
   ASSERT_FALSE(dual.post_cvt_kept);
   ASSERT_GT(std::abs(static_cast<double>(dual.mesh.V.rows()) - 300.0), 0.25 * 300);
@@ -417,4 +421,29 @@ TEST(RemeshCvt, ANonManifoldInputGetsAManifoldRemesh) {
   EXPECT_TRUE(r.checks.ok()) << r.checks.summary();
   EXPECT_EQ(r.checks.find("boundary_loops"), nullptr);
   EXPECT_NEAR(static_cast<double>(r.mesh.V.rows()), 3000, 0.02 * 3000);
+}
+
+// armadillo_cgal at 1,000 sites: the stages' first result rounds the claws and toes off and is
+// refused for coverage (the output is then the dual or the fallback's, short of φmin 30° and
+// φm 52°). The second run with the tips held (tip_defect_deg) keeps them and meets every target:
+// every check, the count within 2 %, φmin ≥ 30°, φm ≥ 52°, every input vertex within one spacing.
+TEST(RemeshCvt, ASecondRunWithTheTipsHeldKeepsTheClawsOfTheArmadillo) {
+  const TriangleMesh input = read_mesh(test::data_path("meshes/armadillo_cgal.off"));
+  RemeshOptions without = remesh_options(1000);
+  without.tip_defect_deg = 0;
+  const RemeshResult before = remesh_cvt(input, without);
+  ASSERT_TRUE(before.quality.min_angle_deg < 30.0 || before.quality.mean_min_angle_deg < 52.0)
+      << "without the second run the output must miss a target for the test to mean anything";
+
+  RemeshOptions o = without;
+  o.tip_defect_deg = RemeshOptions{}.tip_defect_deg;
+  ASSERT_GT(o.tip_defect_deg, 0);
+  const RemeshResult r = remesh_cvt(input, o);
+  EXPECT_TRUE(r.post_cvt_kept) << r.post_cvt_refusal;
+  expect_valid_at_count(r, 1000, 30.0);
+  EXPECT_GE(r.quality.mean_min_angle_deg, 52.0);
+  const double spacing = std::sqrt(surface_area(input.V, input.F) / 1000);
+  const std::vector<SurfacePoint> nearest = closest_surface_points(r.mesh.V, r.mesh.F, input.V);
+  for (Eigen::Index v = 0; v < input.V.rows(); ++v)
+    ASSERT_LE((position(r.mesh.V, r.mesh.F, nearest[v]) - input.V.row(v).transpose()).norm(), spacing) << v;
 }

@@ -566,6 +566,30 @@ bool improves_on(const RemeshResult& after, const RemeshResult& before, int site
          triangle_quality(before.mesh.V, before.mesh.F).min_angle_deg;
 }
 
+// The post-CVT stages (run_post_cvt_stages()); where their result is refused or misses a target,
+// once more on the same dual with the tips of thin parts held (RemeshOptions::tip_defect_deg).
+// The second result replaces the first (or the dual) where it is kept, improves_on() it and
+// reaches every input vertex within RemeshOptions::max_tip_run_gap site spacings.
+// Returns whether a result of the stages is the output.
+bool run_stages(const TriangleMesh& input, const RemeshOptions& options, RemeshResult& out) {
+  RemeshResult held = out;  // before the stages: the dual
+  const bool kept = run_post_cvt_stages(input, options, out);
+  if (!(options.tip_defect_deg > 0) || (kept && targets_met(out, options.cvt.sites, options.mesher.sizing).all()))
+    return kept;
+  RemeshOptions with_tips = options;
+  with_tips.mesher.polish.tips.min_defect_deg = options.tip_defect_deg;
+  with_tips.mesher.sizing.tips.min_defect_deg = options.tip_defect_deg;
+  held.stage_seconds = out.stage_seconds;
+  const double spacing = site_spacing(input, options.cvt.sites);
+  if (!run_post_cvt_stages(input, with_tips, held) || !improves_on(held, out, options.cvt.sites, options.mesher.sizing) ||
+      farthest_input_vertex(face_vertices(input), held.mesh) > options.max_tip_run_gap * spacing) {
+    out.stage_seconds = std::move(held.stage_seconds);
+    return kept;
+  }
+  out = std::move(held);
+  return true;
+}
+
 // Where the result fails its no_self_intersections check, whether the input crosses itself too:
 // out.input_self_intersections gets the input's intersecting face pairs and the check's detail
 // names them, so that the report says why no valid remesh was written.
@@ -645,7 +669,7 @@ RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions&
   if (options.post_cvt_stages && options.cvt.build_dual && out.mesh.F.rows() > 0 && !out.input.non_orientable) {
     if (dual_meets_targets(out, options)) {
       out.post_cvt_refusal = "not run: the dual of the closed input passes every check and meets the targets";
-    } else if (!run_post_cvt_stages(mesh, options, out) && options.fallback_phi_min_deg > options.cvt.target_phi_min_deg) {
+    } else if (!run_stages(mesh, options, out) && options.fallback_phi_min_deg > options.cvt.target_phi_min_deg) {
       // Their result refused: the dual is the output, so heat iterations until its own φmin
       // reaches the fallback target, then the stages again on the new dual; the second result
       // replaces the first where it is better (improves_on()).
@@ -656,7 +680,7 @@ RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions&
       if (dual_meets_targets(out, again))
         out.post_cvt_refusal = "not run again: after heat iterations the dual passes every check and meets the targets";
       else if (out.mesh.F.rows() > 0)
-        run_post_cvt_stages(mesh, again, out);
+        run_stages(mesh, again, out);
       if (!improves_on(out, first, sites, options.mesher.sizing)) {
         first.stage_seconds = std::move(out.stage_seconds);
         out = std::move(first);

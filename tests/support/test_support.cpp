@@ -63,6 +63,12 @@ TriangleMesh icosphere(int subdivisions) {
   return m;
 }
 
+TriangleMesh spiked_sphere(int subdivisions, double tip_radius) {
+  TriangleMesh m = icosphere(subdivisions);
+  m.V.row(0) *= tip_radius;
+  return m;
+}
+
 TriangleMesh grid(int n, double x0, double x1, double y0, double y1, bool alternate) {
   TriangleMesh m;
   m.V.resize((n + 1) * (n + 1), 3);

@@ -21,6 +21,10 @@ std::string data_path(const std::string& relative);
 /// Icosphere with `subdivisions` Loop-style midpoint subdivisions of an icosahedron, radius 1.
 TriangleMesh icosphere(int subdivisions);
 
+/// icosphere(subdivisions) with its vertex 0 moved out to `tip_radius` along its own direction:
+/// a thin cone on the sphere whose end (vertex 0) is the tip of a thin part.
+TriangleMesh spiked_sphere(int subdivisions, double tip_radius);
+
 /// Regular grid triangulation of [x0,x1]×[y0,y1] in the z = 0 plane with n×n quads, each split
 /// into two triangles (alternating diagonals when `alternate` is set).
 TriangleMesh grid(int n, double x0 = 0, double x1 = 1, double y0 = 0, double y1 = 1, bool alternate = true);

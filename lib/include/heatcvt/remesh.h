@@ -47,6 +47,13 @@ struct SurfaceDescription {
 /// orientation check. Only inputs with inconsistently oriented edges need that (costlier) test.
 SurfaceDescription describe_surface(const TriangleMesh& mesh);
 
+/// The angle defect above which a vertex of the dual of an input mesh is the tip of a thin part
+/// (TipOptions::min_defect_deg) in remesh_cvt()'s second run of the post-CVT stages: 120°. On a smooth
+/// surface at the site spacing a vertex's defect is a few degrees; the caps of parts about one
+/// spacing thick put 120–250° into one vertex; the corners of a box put 90° each, and holding
+/// those keeps a crease vertex off its line.
+constexpr double kRemeshTipDefectDeg = 120;
+
 /// Options of remesh_cvt(). Defaults are `meshcvt`'s (see its --help).
 struct RemeshOptions {
   /// Options of the CVT; `cvt.sites` is the number of output vertices (any count ≥ 1: more than the
@@ -119,6 +126,15 @@ struct RemeshOptions {
   /// φm ≥ mean_angle_deg), and then one more, or the same ones with a larger φmin.
   /// 0 = off. Default 25.
   double fallback_phi_min_deg = 25.0;
+  /// Where the post-CVT stages' result is refused or misses a target of mesher.sizing, they run
+  /// once more with the tips of thin parts held (vertices of the dual whose angle defect is above
+  /// this, mesher/tips.h: not relaxed, polished, valence-3-removed or collapsed), and that result
+  /// replaces the first where it is kept and better (the same rule as the fallback's). 0 = no
+  /// second run. Default kRemeshTipDefectDeg (120°).
+  double tip_defect_deg = kRemeshTipDefectDeg;
+  /// ... and only where every input vertex is within this many site spacings of it (its purpose
+  /// is to keep the tips). Default 1.
+  double max_tip_run_gap = 1.0;
   /// Run the shared post-CVT stages (mesh_dual_surface(), mesher/surface_mesher.h) on the dual with
   /// the input mesh as the projector: the vertices are then projected onto the input and may be
   /// fewer or more than the sites (unused sites dropped, slivers collapsed, long edges split).

@@ -488,7 +488,8 @@ void border_gaps(const WorkingMesh& mesh, const SurfaceProjector& surface, const
 class Sizer {
  public:
   Sizer(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o, MesherStats& stats)
-      : mesh_(mesh), surface_(surface), o_(o), stats_(stats), frozen_(mesh.num_vertices(), 0) {
+      : mesh_(mesh), surface_(surface), o_(o), stats_(stats), frozen_(mesh.num_vertices(), 0),
+        tips_(tip_vertices(mesh, o.tips)) {
     crossing_pairs_ = crossing_face_pairs(mesh);
     crossings_ = faces_in_pairs(mesh, crossing_pairs_);  // faces crossing already are left alone
     freeze_around(crossings_);
@@ -506,7 +507,7 @@ class Sizer {
         attempt([&] {
           const int splits = split_edges(mesh_, surface_, o_, frozen(), o_.long_factor * length, -1);
           const int collapses =
-              Collapser(mesh_, surface_, o_, frozen(), o_.long_factor * length).run(o_.short_factor * length, -1);
+              Collapser(mesh_, surface_, o_, frozen_or_tips(), o_.long_factor * length).run(o_.short_factor * length, -1);
           flip_and_relax();
           return splits + collapses;
         });
@@ -608,7 +609,7 @@ class Sizer {
       int changed = 0;
       if (o_.fill_notches) changed += attempt([&] { return fill_notches(mesh_, o_, frozen()); });
       changed += attempt([&] {
-        return Collapser(mesh_, surface_, o_, frozen(), std::numeric_limits<double>::infinity())
+        return Collapser(mesh_, surface_, o_, frozen_or_tips(), std::numeric_limits<double>::infinity())
             .run_spikes(surface_angles(mesh_));
       });
       changed += attempt([&] { return cut_ears(mesh_, o_, frozen()); });
@@ -641,10 +642,18 @@ class Sizer {
     return h;
   }
 
-  // The held vertices and the corners of the surface's known border (known_border_corners()):
-  // the vertices the relaxation and the angle polish leave in place.
+  // The frozen vertices and the tips the sizing started with: no edge at them collapses.
+  std::vector<char> frozen_or_tips() {
+    std::vector<char> h = frozen();
+    for (std::size_t v = 0; v < tips_.size(); ++v) h[v] = h[v] || tips_[v];
+    return h;
+  }
+
+  // The held vertices, the tips and the corners of the surface's known border
+  // (known_border_corners()): the vertices the relaxation and the angle polish leave in place.
   std::vector<char> held_and_corners() {
     std::vector<char> h = held();
+    for (std::size_t v = 0; v < tips_.size(); ++v) h[v] = h[v] || tips_[v];
     const std::vector<char> corners = known_border_corners(mesh_, surface_, border_links(mesh_), o_, length_);
     for (int v = 0; v < mesh_.num_vertices(); ++v) h[v] = h[v] || corners[v];
     return h;
@@ -786,7 +795,7 @@ class Sizer {
       const int changed = attempt([&] {
         const int first = mesh_.num_vertices();
         const int n = diff > 0 ? split_edges(mesh_, surface_, o_, frozen(), 0.0, diff)
-                               : Collapser(mesh_, surface_, o_, frozen(), long_limit)
+                               : Collapser(mesh_, surface_, o_, frozen_or_tips(), long_limit)
                                      .run(std::numeric_limits<double>::infinity(), -diff);
         if (diff > 0) activate_from(first);
         else local_ = false;  // a collapse leaves no new vertex to mark: polish everywhere
@@ -843,6 +852,7 @@ class Sizer {
   const IsotropicRemeshOptions& o_;
   MesherStats& stats_;
   std::vector<char> frozen_;
+  const std::vector<char> tips_;  // tip_vertices() of the mesh the sizing started from
   std::vector<int> crossings_;
   std::vector<FacePair> crossing_pairs_;  // the pairs of crossings_, by their corners
   double length_ = 0;          // the target edge length, corrected by the count each round

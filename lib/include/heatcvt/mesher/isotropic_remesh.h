@@ -14,6 +14,7 @@
 #include "heatcvt/mesher/projector.h"
 #include "heatcvt/mesher/sliver_collapse.h"
 #include "heatcvt/mesher/sliver_repair.h"
+#include "heatcvt/mesher/tips.h"
 #include "heatcvt/mesher/working_mesh.h"
 
 #include <cmath>
@@ -138,6 +139,11 @@ struct IsotropicRemeshOptions {
   /// Rounds of max-min-angle flips + angle polish after the sizing. Default 6.
   int polish_cycles = 6;
   AnglePolishOptions angle;  ///< the angle polish of the last step
+  /// Tips of thin parts in the mesh the sizing starts from (tip_vertices()) stay in place: not
+  /// relaxed, not polished, no edge at them collapsed to reach the count or the edge length.
+  /// The sliver passes below may still collapse an edge at a tip whose own triangles are
+  /// slivers (a part thinner than the spacing can have no better ones).
+  TipOptions tips;
   /// Slivers left after the polish: flipped over creases and folds, flat ones along the border
   /// and ears trimmed, the others collapsed; then the count is restored and the polish repeated.
   SliverFlipOptions sliver_flips;

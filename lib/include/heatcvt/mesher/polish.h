@@ -6,6 +6,7 @@
 #include "heatcvt/mesher/angle_polish.h"
 #include "heatcvt/mesher/edge_flips.h"
 #include "heatcvt/mesher/mesher_stats.h"
+#include "heatcvt/mesher/tips.h"
 #include "heatcvt/mesher/untangle.h"
 #include "heatcvt/mesher/valence3_removal.h"
 
@@ -34,9 +35,13 @@ struct PolishOptions {
   int angle_rounds = 2;        ///< angle_polish() rounds per cycle. Default 2.
   AnglePolishOptions angle;
   Valence3Options valence3;
+  /// Tips of thin parts (tip_vertices(), found once at the start of each stage) stay where they
+  /// are: not moved by the relaxation or the angle polish, not removed as valence-3 vertices.
+  TipOptions tips;
   int threads = 0;  ///< 0 = all cores; results do not depend on it. Default 0.
 };
 
+/// Tips (PolishOptions::tips) are held in every step below.
 /// Removes valence-3 vertices, flips to max-min-angle, then polishes: tangential relaxation +
 /// flips. If the result self-intersects it is untangled; if it still does, the polish is redone
 /// from the unpolished mesh with max-min-angle flips only (stats.polish_fallback) and untangled.
