@@ -338,22 +338,11 @@ class Collapser {
   const std::vector<char> known_corners_;  // known_border_corners()
 };
 
-// Sum of the face angles at each vertex (2π inside a flat region, π on a straight border).
-std::vector<double> surface_angles(const WorkingMesh& mesh) {
-  std::vector<double> angle(mesh.num_vertices(), 0);
-  for (const MeshFace& f : mesh.faces())
-    for (int k = 0; k < 3; ++k) {
-      const Eigen::Vector3d e1 = mesh.V.row(f[(k + 1) % 3]) - mesh.V.row(f[k]), e2 = mesh.V.row(f[(k + 2) % 3]) - mesh.V.row(f[k]);
-      if (e1.norm() > 0 && e2.norm() > 0) angle[f[k]] += std::acos(std::clamp(e1.normalized().dot(e2.normalized()), -1.0, 1.0));
-    }
-  return angle;
-}
-
 // Valence each vertex should have: 6 inside; on a simple border 1 + the number of 60° sectors of
 // the surface's angle there (4 on a straight border); pinched vertices keep theirs.
 std::vector<int> target_valences(const WorkingMesh& mesh) {
   const BorderLinks border = border_links(mesh);
-  const std::vector<double> angle = surface_angles(mesh);
+  const std::vector<double> angle = vertex_angle_sums(mesh);
   std::vector<int> target(mesh.num_vertices(), 6);
   for (int v = 0; v < mesh.num_vertices(); ++v) {
     if (!border.on(v)) continue;
@@ -425,7 +414,7 @@ int cut_ears(WorkingMesh& mesh, const IsotropicRemeshOptions& o, const std::vect
 // above π), gets the face (v, prev, next) when it faces like v's normal. Returns the faces added.
 int fill_notches(WorkingMesh& mesh, const IsotropicRemeshOptions& o, const std::vector<char>& frozen) {
   const BorderLinks border = border_links(mesh);
-  const std::vector<double> angle = surface_angles(mesh);
+  const std::vector<double> angle = vertex_angle_sums(mesh);
   std::vector<char> touched = frozen;
   int added = 0;
   for (int v = 0; v < mesh.num_vertices(); ++v) {
@@ -610,7 +599,7 @@ class Sizer {
       if (o_.fill_notches) changed += attempt([&] { return fill_notches(mesh_, o_, frozen()); });
       changed += attempt([&] {
         return Collapser(mesh_, surface_, o_, frozen_or_tips(), std::numeric_limits<double>::infinity())
-            .run_spikes(surface_angles(mesh_));
+            .run_spikes(vertex_angle_sums(mesh_));
       });
       changed += attempt([&] { return cut_ears(mesh_, o_, frozen()); });
       changed += attempt([&] { return cut_corner_faces(mesh_, surface_, o_, frozen(), length_); });

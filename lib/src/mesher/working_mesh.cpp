@@ -225,6 +225,13 @@ double corner_angle(const WorkingMesh& mesh, const MeshFace& f, int k) {
   return std::acos(std::clamp(e1.normalized().dot(e2.normalized()), -1.0, 1.0));
 }
 
+std::vector<double> vertex_angle_sums(const WorkingMesh& mesh) {
+  std::vector<double> sum(mesh.num_vertices(), 0.0);
+  for (const MeshFace& f : mesh.faces())
+    for (int k = 0; k < 3; ++k) sum[f[k]] += corner_angle(mesh, f, k);
+  return sum;
+}
+
 int vertices_in_faces(const WorkingMesh& mesh) {
   std::vector<char> used(mesh.num_vertices(), 0);
   for (const MeshFace& f : mesh.faces())

@@ -139,6 +139,8 @@ double triangle_min_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, co
 double face_min_angle(const WorkingMesh& mesh, const MeshFace& f);
 /// Angle (radians) of face f at its corner k; 0 where an edge there has zero length.
 double corner_angle(const WorkingMesh& mesh, const MeshFace& f, int k);
+/// Sum of the corner angles (radians) at each vertex, over its faces; 0 for an unused vertex.
+std::vector<double> vertex_angle_sums(const WorkingMesh& mesh);
 
 /// The border of a mesh: along each border half-edge a→b (one without its opposite b→a),
 /// next[a] = b and prev[b] = a. −1 where a vertex has no such half-edge, −2 where it has several
