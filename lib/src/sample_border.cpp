@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "heatcvt/closest_point.h"
+#include "heatcvt/disjoint_sets.h"
 #include "heatcvt/errors.h"
 #include "heatcvt/parallel.h"
 #include "heatcvt/point_index.h"
@@ -65,6 +66,24 @@ std::vector<char> sample_border_points(const Eigen::MatrixX3d& P, const Eigen::M
     }
   }
   return border;
+}
+
+std::vector<char> border_chains(const std::vector<char>& on_border, const Eigen::MatrixXi& knn, int neighbors,
+                                int min_points) {
+  const int n = static_cast<int>(on_border.size());
+  if (knn.rows() != n) throw InvalidInputError("border_chains: border flags and neighbour table differ in length");
+  const int k = std::clamp(neighbors, 0, static_cast<int>(knn.cols()));
+  DisjointSets chains(n);
+  for (int i = 0; i < n; ++i)
+    if (on_border[i])
+      for (int q = 0; q < k; ++q)
+        if (on_border[knn(i, q)]) chains.unite(i, knn(i, q));
+  std::vector<int> size(n, 0);
+  for (int i = 0; i < n; ++i)
+    if (on_border[i]) ++size[chains.find(i)];
+  std::vector<char> kept(n, 0);
+  for (int i = 0; i < n; ++i) kept[i] = on_border[i] && size[chains.find(i)] >= min_points;
+  return kept;
 }
 
 BorderFit border_fit(const Eigen::MatrixX3d& border, const TriangleMesh& mesh, double length, double quantile) {

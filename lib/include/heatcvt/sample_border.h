@@ -31,6 +31,16 @@ struct SampleBorderOptions {
 std::vector<char> sample_border_points(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N, const Eigen::MatrixXi& knn,
                                        const SampleBorderOptions& options = {});
 
+/// The border points (`on_border`, as sample_border_points() gives them) that belong to a chain
+/// of at least `min_points`: points with a gap linked through their first `neighbors` nearest
+/// neighbours (`knn`, the table sample_border_points() read). The edge of a scan is a chain as
+/// long as the edge, while chance leaves gaps round the voids of a random sampling (the rate of
+/// SampleBorderOptions::max_gap_deg, per point) in clusters of a few points: on a closed cloud of
+/// 10⁶ points a few hundred of them, spread all over the surface.
+/// \throw InvalidInputError when the lengths differ.
+std::vector<char> border_chains(const std::vector<char>& on_border, const Eigen::MatrixXi& knn, int neighbors,
+                                int min_points);
+
 /// How closely a mesh made from a cloud follows the border of the samples, in units of a length
 /// (the mesh's site spacing): for each border point of the cloud, its distance to the mesh (an
 /// inset or ragged mesh border leaves the scan's edge uncovered); for each border vertex of the

@@ -80,12 +80,12 @@ bool is_sampled_hole(const WorkingMesh& mesh, const SurfaceProjector& surface, c
   return true;
 }
 
-// Whether every vertex of the loop is farther than sample_border_clearance·h from the border of
-// the samples (a cloud's scan edge), i.e. the loop is a hole in sampled surface.
+// Whether every vertex of the loop is farther than sample_border_clearance·h from the edge of
+// the scan (SurfaceProjector::distance_to_scan_edge()), i.e. the loop is a hole in sampled surface.
 bool is_away_from_sample_border(const WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<int>& loop,
                                 double h, const HoleFillingOptions& o) {
   for (int v : loop)
-    if (!(surface.distance_to_sample_border(mesh.V.row(v).transpose()) > o.sample_border_clearance * h)) return false;
+    if (!(surface.distance_to_scan_edge(mesh.V.row(v).transpose()) > o.sample_border_clearance * h)) return false;
   return true;
 }
 

@@ -149,13 +149,24 @@ const PointIndex& CloudSurfaceProjector::border_index() const {
     SampleBorderOptions o = options_.border;
     o.threads = options_.threads;
     const std::vector<char> on_border = sample_border_points(P_, N_, knn_, o);
-    std::vector<int> rows;
-    for (int i = 0; i < static_cast<int>(on_border.size()); ++i)
+    const std::vector<char> on_edge = border_chains(on_border, knn_, o.neighbors, options_.scan_edge_chain);
+    std::vector<int> rows, edge_rows;
+    for (int i = 0; i < static_cast<int>(on_border.size()); ++i) {
       if (on_border[i]) rows.push_back(i);
+      if (on_edge[i]) edge_rows.push_back(i);
+    }
     border_points_ = P_(rows, Eigen::all);
     border_ = std::make_unique<PointIndex>(border_points_);
+    scan_edge_ = std::make_unique<PointIndex>(P_(edge_rows, Eigen::all));
   });
   return *border_;
+}
+
+double CloudSurfaceProjector::distance_to_scan_edge(const Eigen::Vector3d& x) const {
+  border_index();
+  double d = 0;
+  scan_edge_->nearest(x, d);
+  return d;
 }
 
 const Eigen::MatrixX3d& CloudSurfaceProjector::sample_border() const {

@@ -32,8 +32,8 @@ struct HoleFillingOptions {
   /// border (every loop, on a closed surface) is a hole inside the surface, not one of its
   /// boundaries: filled under every policy (the surface is there). Default 1.
   double interior_hole_clearance = 1.0;
-  /// Where the border of the samples is known instead (SurfaceProjector::
-  /// distance_to_sample_border(): a cloud's points at the edge of what was scanned), a loop of at
+  /// Where the border of the samples is known instead (SurfaceProjector::distance_to_scan_edge():
+  /// a cloud's points at the edge of what was scanned, in chains), a loop of at
   /// most max_fill_edges edges whose every vertex is farther than this·h from that border, and
   /// which is not the outer border of a piece seen from its sites' normals (LoopShape::
   /// outer_border: a fragment), is a hole the extraction left in sampled surface, not the edge
