@@ -430,6 +430,36 @@ TEST(Cloud2MeshScans, BadPosesGiveOneErrorLineAndNoOutput) {
 
 // A cloud with more points than --stream-above (default StreamOptions::max_raw_points, 200,000)
 // is streamed into a voxel summary by cloud2mesh; the mesh meets the same checks.
+// A cloud far below --stream-above but with more points per site than --stream-per-site is
+// streamed into a voxel summary; without the per-site limit it is reconstructed from its raw
+// points. raw_point_limit() is the smaller of the two limits.
+TEST(Cloud2MeshScans, ACloudWithManyPointsPerSiteIsStreamedWhenAskedPerSite) {
+  StreamOptions limits;
+  limits.max_raw_points = 200000;
+  EXPECT_EQ(raw_point_limit(limits, 300), 200000);
+  limits.max_raw_points_per_site = 40;
+  EXPECT_EQ(raw_point_limit(limits, 300), 12000);
+  EXPECT_EQ(raw_point_limit(limits, 10000), 200000);
+  test::ScratchDir dir("c2m_per_site");
+  const TriangleMesh sphere = test::icosphere(4);
+  const std::string cloud = dir.path("mid.xyz");
+  write_points_xyz(cloud, sample_surface(sphere.V, sphere.F, 30000, 5, 0.001));
+  for (const bool per_site : {false, true}) {
+    SCOPED_TRACE(per_site);
+    const std::string out = dir.path(per_site ? "s.ply" : "r.ply"), rep = dir.path(per_site ? "s.json" : "r.json");
+    const auto r = test::run_tool("cloud2mesh", cloud + " -n 300 -q -o " + out + " --report " + rep +
+                                                    (per_site ? " --stream-per-site 40" : ""));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const std::string json = test::read_file(rep);
+    EXPECT_NE(json.find(per_site ? "\"streamed\": true" : "\"streamed\": false"), std::string::npos) << json;
+    const TriangleMesh m = read_mesh(out);
+    const ValidationReport v = validate_triangle_mesh(m.V, m.F, ValidationOptions{});
+    EXPECT_TRUE(v.ok()) << v.summary();
+    EXPECT_EQ(v.genus, 0);
+    EXPECT_NEAR(m.V.rows(), 300, 6);
+  }
+}
+
 TEST(Cloud2MeshScans, ALargeCloudIsStreamedIntoAVoxelSummary) {
   test::ScratchDir dir("c2m_stream");
   const TriangleMesh sphere = test::icosphere(5);

@@ -179,22 +179,22 @@ ReconstructionCallback stage_progress(cli::Progress& bar) {
 // to stream it: "x y z" with about 7 significant digits per coordinate.
 constexpr double kTextBytesPerPoint = 30.0;
 
-// Whether one input file has more than `stream_above` points: then it is streamed into a voxel
-// summary (reconstruct_stream.h) instead of being held whole (about 2.1 KB per point).
-bool should_stream(const std::vector<ScanInput>& scans, const ReconstructionOptions& opt, long long stream_above) {
+// Whether one input file has more points than raw_point_limit() allows (--stream-above, and
+// --stream-per-site per site): then it is streamed into a voxel summary (reconstruct_stream.h)
+// instead of being held whole (about 2.1 KB per point).
+bool should_stream(const std::vector<ScanInput>& scans, const ReconstructionOptions& opt, const StreamOptions& limits) {
   if (scans.size() != 1 || !scans[0].pose.isApprox(Eigen::Isometry3d::Identity()) || opt.denoise || opt.voxel_size > 0)
     return false;
   const CloudChunkReader probe(scans[0].path);
   const double points = probe.points_in_file() >= 0 ? static_cast<double>(probe.points_in_file())
                                                     : static_cast<double>(probe.bytes_total()) / kTextBytesPerPoint;
-  return points > static_cast<double>(stream_above);
+  return points > static_cast<double>(raw_point_limit(limits, opt.sites));
 }
 
 // The streamed reconstruction of one large file, with reading progress (bytes) per pass.
 StreamedReconstruction reconstruct_streamed(const std::string& path, const ReconstructionOptions& opt,
-                                            const FlyingPixelOptions& flying, long long stream_above, bool quiet) {
-  StreamOptions stream;
-  stream.max_raw_points = stream_above;
+                                            const FlyingPixelOptions& flying, const StreamOptions& limits, bool quiet) {
+  StreamOptions stream = limits;
   stream.flying_pixels = flying;
   // --points-per-site sizes the summary: the voxel points the CVT runs on, per site.
   if (opt.cvt_points_per_site > 0) stream.voxel.points_per_site = opt.cvt_points_per_site;
@@ -240,7 +240,7 @@ struct Settings {
   std::vector<std::string> cloud_paths, pose_paths;
   std::string conf_path, out_path, report_path;
   bool quiet = false, write_normals = false;
-  long long stream_above = StreamOptions{}.max_raw_points;
+  StreamOptions stream_limits;  ///< max_raw_points and max_raw_points_per_site (--stream-above, --stream-per-site)
   CloudReadOptions read_options;
 };
 
@@ -272,9 +272,13 @@ void add_input_options(CLI::App& app, Settings& s) {
                                                                             {"keep", HolePolicy::keep}},
                                           CLI::ignore_case))
       ->default_str("auto");
-  app.add_option("--stream-above", s.stream_above,
+  app.add_option("--stream-above", s.stream_limits.max_raw_points,
                  "a single cloud file with more points than this is streamed into a voxel summary sized for -n "
                  "(memory bounded by the output size) instead of being held whole (about 2.1 KB per point)")
+      ->capture_default_str();
+  app.add_option("--stream-per-site", s.stream_limits.max_raw_points_per_site,
+                 "... and so is one with more than this many points per site (-n): the output's resolution needs "
+                 "only the voxel summary, which averages the noise down; 0 = no limit per site")
       ->capture_default_str();
   app.add_option("--flying-pixels", s.read_options.flying_pixels.neighbour_distance_ratio,
                  "organised PCD clouds (depth-camera frames): a pixel with fewer than 2 of its 8 grid neighbours "
@@ -406,10 +410,11 @@ void reconstruct_whole(const Settings& s, const std::vector<ScanInput>& scans, c
 // The reconstruction of the scans: streamed when one large file allows it, else from the whole cloud.
 Reconstruction reconstruct(const Settings& s, const std::vector<ScanInput>& scans, const std::string& cloud_path) {
   Reconstruction rec;
-  if (s.stream_above < 0) throw InvalidInputError("--stream-above must be >= 0");
-  rec.stream = should_stream(scans, s.opt, s.stream_above);
+  if (s.stream_limits.max_raw_points < 0) throw InvalidInputError("--stream-above must be >= 0");
+  if (!(s.stream_limits.max_raw_points_per_site >= 0)) throw InvalidInputError("--stream-per-site must be >= 0");
+  rec.stream = should_stream(scans, s.opt, s.stream_limits);
   if (rec.stream) {
-    rec.streamed = reconstruct_streamed(scans[0].path, s.opt, s.read_options.flying_pixels, s.stream_above, s.quiet);
+    rec.streamed = reconstruct_streamed(scans[0].path, s.opt, s.read_options.flying_pixels, s.stream_limits, s.quiet);
     rec.res = std::move(rec.streamed.result);
     rec.cloud = std::move(rec.streamed.cloud);
     rec.rr.format = CloudChunkReader(scans[0].path).format();

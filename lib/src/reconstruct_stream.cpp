@@ -81,6 +81,8 @@ class Reservoir {
 
 void check_stream_options(const StreamOptions& s) {
   if (s.max_raw_points < 0) throw InvalidInputError("reconstruct_surface_streamed: max_raw_points must be >= 0");
+  if (!(s.max_raw_points_per_site >= 0 && std::isfinite(s.max_raw_points_per_site)))
+    throw InvalidInputError("reconstruct_surface_streamed: max_raw_points_per_site must be finite and >= 0");
   if (!(s.voxel_size >= 0 && std::isfinite(s.voxel_size)))
     throw InvalidInputError("reconstruct_surface_streamed: voxel_size must be finite and >= 0");
   if (!(s.fine_voxel_factor >= 1 && std::isfinite(s.fine_voxel_factor)))
@@ -176,6 +178,12 @@ ReconstructionOptions noise_limited_options(const Eigen::MatrixX3d& sample, cons
 
 }  // namespace
 
+std::int64_t raw_point_limit(const StreamOptions& stream, int sites) {
+  if (!(stream.max_raw_points_per_site > 0) || sites <= 0) return stream.max_raw_points;
+  const double per_site = std::floor(stream.max_raw_points_per_site * static_cast<double>(sites));
+  return std::min<std::int64_t>(stream.max_raw_points, static_cast<std::int64_t>(std::min(per_site, 9e18)));
+}
+
 StreamedReconstruction reconstruct_surface_streamed(CloudChunkSource& source, const ReconstructionOptions& options,
                                                     const StreamOptions& stream, const ReconstructionCallback& progress) {
   check_stream_options(stream);
@@ -191,11 +199,12 @@ StreamedReconstruction reconstruct_surface_streamed(CloudChunkSource& source, co
   std::unique_ptr<VoxelSummary> summary;
   if (stream.voxel_size > 0) summary = std::make_unique<VoxelSummary>(stream.voxel_size, options.threads);
   std::int64_t points = 0;
+  const std::int64_t raw_limit = raw_point_limit(stream, options.sites);
   CloudChunk chunk;
   // Pass 1: raw points while they fit, the reservoir sample, and the summary when its size is given.
   while (source.next(chunk)) {
     points += chunk.rows();
-    if (raw.kept && points <= stream.max_raw_points) raw.add(chunk);
+    if (raw.kept && points <= raw_limit) raw.add(chunk);
     else if (raw.kept) raw.drop();
     if (summary) {
       summary->add(chunk);

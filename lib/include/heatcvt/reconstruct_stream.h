@@ -24,6 +24,12 @@ struct StreamOptions {
   /// mesh as the whole-cloud path. reconstruct_surface needs about 2.1 KB per point, so the
   /// default 200,000 keeps that path under ~0.5 GB. 0 = always summarise. Default 200000.
   std::int64_t max_raw_points = 200000;
+  /// ... and, where set, of at most this many points per requested site (ReconstructionOptions::
+  /// sites): beyond it the output's resolution needs only a summary of the cloud, which the voxel
+  /// means give in less time and memory, with the noise averaged down. Off by default: at 40 the
+  /// shared scans at 500 sites gained in φm and coverage, but two room scans lost φmin
+  /// (docs/benchmarks.md). 0 = no limit per site. Default 0.
+  double max_raw_points_per_site = 0;
   /// Points per chunk read from a file. Default 65536.
   std::int64_t chunk_points = 65536;
   /// Voxel size of the summary (input units); 0 = chosen by choose_voxel_size() from a
@@ -100,10 +106,14 @@ struct StreamedReconstruction {
   int cvt_sites = 0;
 };
 
+/// The most points a cloud may have to be reconstructed from its raw points for a request of
+/// `sites`: max_raw_points, and max_raw_points_per_site × sites where that is set and smaller.
+std::int64_t raw_point_limit(const StreamOptions& stream, int sites);
+
 /// Streams `source` and reconstructs its surface:
-///  1. pass 1 keeps the raw points while there are at most `max_raw_points` (then drops them) and
-///     a uniform reservoir sample of `sample_points` finite points; if the source ends within
-///     `max_raw_points`, the raw points are cleaned as read_cloud does and reconstructed exactly;
+///  1. pass 1 keeps the raw points while there are at most raw_point_limit() (then drops them)
+///     and a uniform reservoir sample of `sample_points` finite points; if the source ends within
+///     that limit, the raw points are cleaned as read_cloud does and reconstructed exactly;
 ///  2. otherwise the noise limit is applied (StreamOptions::max_noise_spacings), pass 2 (after
 ///     rewind()) bins every point into a VoxelSummary of `voxel_size` (or choose_voxel_size(sample,
 ///     CVT sites, voxel)) and reconstruct_surface runs on the voxel means with
