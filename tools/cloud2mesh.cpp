@@ -411,7 +411,8 @@ void reconstruct_whole(const Settings& s, const std::vector<ScanInput>& scans, c
 Reconstruction reconstruct(const Settings& s, const std::vector<ScanInput>& scans, const std::string& cloud_path) {
   Reconstruction rec;
   if (s.stream_limits.max_raw_points < 0) throw InvalidInputError("--stream-above must be >= 0");
-  if (!(s.stream_limits.max_raw_points_per_site >= 0)) throw InvalidInputError("--stream-per-site must be >= 0");
+  if (!(s.stream_limits.max_raw_points_per_site >= 0 && std::isfinite(s.stream_limits.max_raw_points_per_site)))
+    throw InvalidInputError("--stream-per-site must be a finite number >= 0");
   rec.stream = should_stream(scans, s.opt, s.stream_limits);
   if (rec.stream) {
     rec.streamed = reconstruct_streamed(scans[0].path, s.opt, s.read_options.flying_pixels, s.stream_limits, s.quiet);

@@ -572,6 +572,14 @@ class Sizer {
       thaw();
       const int floor = static_cast<int>(std::ceil((1 - o_.count_tolerance) * o_.target_vertices));
       attempt([&] { return repair_slivers(mesh_, surface_, o_.repair, frozen(), floor); });
+      // Where an edit of that repair made faces cross, the whole repair was undone and its region
+      // frozen: the slivers left there get the best edit that makes none cross, one at a time.
+      if (o_.repair_without_crossings && figures_below_target()) {
+        thaw();
+        attempt([&] {
+          return repair_slivers_without_crossings(mesh_, surface_, o_.repair, frozen(), floor, crossing_pairs_);
+        });
+      }
     }
   }
 

@@ -1,6 +1,7 @@
 // The last repair of slivers: the best of several local edits per sliver.
 #include "heatcvt/mesher/sliver_repair.h"
 
+#include "heatcvt/mesher/mesh_checks.h"
 #include "heatcvt/mesher/sliver_collapse.h"
 
 #include <Eigen/Geometry>
@@ -44,17 +45,7 @@ class SliverRepair {
 
   // One pass; returns the edits made. `vertices`: the vertices in faces, kept at least `floor`.
   int pass(int& vertices, int floor) {
-    vf_ = mesh_.vertex_faces();
-    links_ = border_links(mesh_);
-    touched_ = frozen_;
-    dead_.assign(mesh_.num_faces(), 0);
-    const double thr = o_.sliver_angle_deg * M_PI / 180.0;
-    std::vector<std::pair<double, int>> slivers;
-    for (int id = 0; id < mesh_.num_faces(); ++id) {
-      const double m = face_min_angle(mesh_, mesh_.face(id));
-      if (m < thr) slivers.emplace_back(m, id);
-    }
-    std::sort(slivers.begin(), slivers.end());
+    const std::vector<std::pair<double, int>> slivers = start_pass();
     int done = 0;
     for (const auto& [angle, id] : slivers) {
       const MeshFace f = mesh_.face(id);
@@ -77,6 +68,42 @@ class SliverRepair {
     return done;
   }
 
+  // One edit that makes no faces cross: for the slivers smallest first, the edits that raise the
+  // smallest angle around the sliver, best first, each made and checked against `pairs` (the
+  // crossing pairs now, crossing_face_pairs_after()) and undone where it adds a pair. Returns
+  // whether an edit was kept (`pairs` then updated).
+  bool edit_without_crossing(int& vertices, int floor, std::vector<FacePair>& pairs) {
+    for (const auto& [angle, id] : start_pass()) {
+      const MeshFace f = mesh_.face(id);
+      if (touched_[f[0]] || touched_[f[1]] || touched_[f[2]]) continue;
+      const std::vector<int> region = faces_at(f);
+      const double before = min_angle(region, nullptr);
+      std::vector<std::pair<double, Edit>> ranked;
+      for (Edit& e : candidates(id)) {
+        if (vertices - e.lost_vertices < floor) continue;
+        const double m = min_angle(region, &e);
+        if (m > before + 1e-9) ranked.emplace_back(m, std::move(e));
+      }
+      std::stable_sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+      const std::vector<char> touched = touched_;
+      for (const auto& [m, e] : ranked) {
+        const WorkingMesh::Checkpoint undo = mesh_.checkpoint();
+        apply(e, region);
+        mesh_.remove_faces(dead_);
+        std::vector<FacePair> after = crossing_face_pairs_after(mesh_, undo, pairs);
+        if (after.size() <= pairs.size()) {
+          pairs = std::move(after);
+          vertices -= e.lost_vertices;
+          return true;
+        }
+        mesh_.rollback(undo);
+        dead_.assign(mesh_.num_faces(), 0);
+        touched_ = touched;
+      }
+    }
+    return false;
+  }
+
  private:
   WorkingMesh& mesh_;
   const SurfaceProjector& surface_;
@@ -87,6 +114,23 @@ class SliverRepair {
   std::vector<std::vector<int>> vf_;
   BorderLinks links_;
   std::vector<char> touched_, dead_;
+
+  // The adjacency of the mesh as it is, no face touched or removed yet, and its slivers (faces
+  // with a smallest angle below sliver_angle_deg), smallest first.
+  std::vector<std::pair<double, int>> start_pass() {
+    vf_ = mesh_.vertex_faces();
+    links_ = border_links(mesh_);
+    touched_ = frozen_;
+    dead_.assign(mesh_.num_faces(), 0);
+    const double thr = o_.sliver_angle_deg * M_PI / 180.0;
+    std::vector<std::pair<double, int>> slivers;
+    for (int id = 0; id < mesh_.num_faces(); ++id) {
+      const double m = face_min_angle(mesh_, mesh_.face(id));
+      if (m < thr) slivers.emplace_back(m, id);
+    }
+    std::sort(slivers.begin(), slivers.end());
+    return slivers;
+  }
 
   // The faces at the corners of f (each once, ascending).
   std::vector<int> faces_at(const MeshFace& f) const {
@@ -335,6 +379,18 @@ int repair_slivers(WorkingMesh& mesh, const SurfaceProjector& surface, const Sli
     if (done == 0) break;
     edits += done;
   }
+  return edits;
+}
+
+int repair_slivers_without_crossings(WorkingMesh& mesh, const SurfaceProjector& surface,
+                                     const SliverRepairOptions& options, const std::vector<char>& frozen,
+                                     int min_vertices, std::vector<FacePair> pairs) {
+  SliverRepair repair(mesh, surface, options, frozen);
+  int vertices = vertices_in_faces(mesh), edits = 0;
+  int slivers = 0;
+  for (const MeshFace& f : mesh.faces()) slivers += face_min_angle(mesh, f) < options.sliver_angle_deg * M_PI / 180.0;
+  const int max_edits = options.passes * slivers;
+  while (edits < max_edits && repair.edit_without_crossing(vertices, min_vertices, pairs)) ++edits;
   return edits;
 }
 

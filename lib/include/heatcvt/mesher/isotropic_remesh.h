@@ -152,6 +152,11 @@ struct IsotropicRemeshOptions {
   /// The best local edit per sliver still left after the sliver passes, on the pass kept
   /// (repair_slivers()); its collapses may take the count down to the count tolerance.
   SliverRepairOptions repair;
+  /// Slivers that repair leaves are then given, one at a time, the best edit that makes no faces
+  /// cross (repair_slivers_without_crossings()): where an edit of the repair made faces cross,
+  /// the whole repair is undone and its region frozen, so a sliver on the rim of a thin part
+  /// (its two sides within an edge length) would otherwise stay as it is. Default true.
+  bool repair_without_crossings = true;
   /// Times the trim, collapse, count restoration and polish are repeated while slivers are left
   /// (each polish can expose new flat border triangles or ears). Default 8.
   int sliver_passes = 8;

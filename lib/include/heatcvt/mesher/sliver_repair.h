@@ -3,6 +3,7 @@
 /// The last repair of the slivers the other stages leave: for each face whose smallest angle is
 /// below a threshold, every local edit that could remove it is scored on the faces around it and
 /// the best one is applied if it raises their smallest angle.
+#include "heatcvt/mesher/mesh_checks.h"
 #include "heatcvt/mesher/projector.h"
 #include "heatcvt/mesher/working_mesh.h"
 
@@ -63,5 +64,17 @@ struct SliverRepairOptions {
 /// Returns the edits applied.
 int repair_slivers(WorkingMesh& mesh, const SurfaceProjector& surface, const SliverRepairOptions& options,
                    const std::vector<char>& frozen, int min_vertices);
+
+/// The same edits one at a time, each checked for crossings: for the slivers smallest first, the
+/// candidate edits that raise the smallest angle around the sliver are made best first, and the
+/// first that adds no intersecting face pair to `pairs` (the mesh's pairs now,
+/// crossing_face_pairs(); crossing_face_pairs_after() checks only the faces the edit made or
+/// moved) is kept; then the slivers are looked for again. Where the best edit makes faces cross
+/// (the two sides of a thin part within an edge length), the next best is kept instead, so the
+/// sliver is not left as it was. At most options.passes edits per sliver found at the start.
+/// Returns the edits kept.
+int repair_slivers_without_crossings(WorkingMesh& mesh, const SurfaceProjector& surface,
+                                     const SliverRepairOptions& options, const std::vector<char>& frozen,
+                                     int min_vertices, std::vector<FacePair> pairs);
 
 }  // namespace heatcvt
