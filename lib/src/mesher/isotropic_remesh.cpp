@@ -639,18 +639,19 @@ class Sizer {
     return h;
   }
 
-  // The frozen vertices and the tips the sizing started with: no edge at them collapses.
-  std::vector<char> frozen_or_tips() {
-    std::vector<char> h = frozen();
-    for (std::size_t v = 0; v < tips_.size(); ++v) h[v] = h[v] || tips_[v];
-    return h;
+  // `marks` with the tips the sizing started with marked too.
+  std::vector<char> with_tips(std::vector<char> marks) const {
+    for (std::size_t v = 0; v < tips_.size() && v < marks.size(); ++v) marks[v] = marks[v] || tips_[v];
+    return marks;
   }
+
+  // The frozen vertices and the tips: no edge at them collapses.
+  std::vector<char> frozen_or_tips() { return with_tips(frozen()); }
 
   // The held vertices, the tips and the corners of the surface's known border
   // (known_border_corners()): the vertices the relaxation and the angle polish leave in place.
   std::vector<char> held_and_corners() {
-    std::vector<char> h = held();
-    for (std::size_t v = 0; v < tips_.size(); ++v) h[v] = h[v] || tips_[v];
+    std::vector<char> h = with_tips(held());
     const std::vector<char> corners = known_border_corners(mesh_, surface_, border_links(mesh_), o_, length_);
     for (int v = 0; v < mesh_.num_vertices(); ++v) h[v] = h[v] || corners[v];
     return h;

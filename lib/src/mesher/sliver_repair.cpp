@@ -28,6 +28,18 @@ struct Edit {
   int lost_vertices = 0;
 };
 
+// The faces with a smallest angle below sliver_angle_deg, with that angle, smallest first.
+std::vector<std::pair<double, int>> slivers_of(const WorkingMesh& mesh, const SliverRepairOptions& o) {
+  const double thr = o.sliver_angle_deg * M_PI / 180.0;
+  std::vector<std::pair<double, int>> slivers;
+  for (int id = 0; id < mesh.num_faces(); ++id) {
+    const double m = face_min_angle(mesh, mesh.face(id));
+    if (m < thr) slivers.emplace_back(m, id);
+  }
+  std::sort(slivers.begin(), slivers.end());
+  return slivers;
+}
+
 class SliverRepair {
  public:
   SliverRepair(WorkingMesh& mesh, const SurfaceProjector& surface, const SliverRepairOptions& o,
@@ -51,15 +63,12 @@ class SliverRepair {
       const MeshFace f = mesh_.face(id);
       if (dead_[id] || touched_[f[0]] || touched_[f[1]] || touched_[f[2]]) continue;
       const std::vector<int> region = faces_at(f);
-      double best = min_angle(region, nullptr);
-      Edit chosen;
-      bool found = false;
-      for (Edit& e : candidates(id)) {
-        if (vertices - e.lost_vertices < floor) continue;
-        const double m = min_angle(region, &e);
-        if (m > best + 1e-9) best = m, chosen = std::move(e), found = true;
-      }
-      if (!found) continue;
+      std::vector<std::pair<double, Edit>> edits = improving_edits(id, region, vertices, floor);
+      if (edits.empty()) continue;
+      std::size_t pick = 0;  // the first best: a later edit only where it scores more than 1e-9 higher
+      for (std::size_t i = 1; i < edits.size(); ++i)
+        if (edits[i].first > edits[pick].first + 1e-9) pick = i;
+      const Edit chosen = std::move(edits[pick].second);
       apply(chosen, region);
       vertices -= chosen.lost_vertices;
       ++done;
@@ -77,13 +86,7 @@ class SliverRepair {
       const MeshFace f = mesh_.face(id);
       if (touched_[f[0]] || touched_[f[1]] || touched_[f[2]]) continue;
       const std::vector<int> region = faces_at(f);
-      const double before = min_angle(region, nullptr);
-      std::vector<std::pair<double, Edit>> ranked;
-      for (Edit& e : candidates(id)) {
-        if (vertices - e.lost_vertices < floor) continue;
-        const double m = min_angle(region, &e);
-        if (m > before + 1e-9) ranked.emplace_back(m, std::move(e));
-      }
+      std::vector<std::pair<double, Edit>> ranked = improving_edits(id, region, vertices, floor);
       std::stable_sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
       const std::vector<char> touched = touched_;
       for (const auto& [m, e] : ranked) {
@@ -115,21 +118,27 @@ class SliverRepair {
   BorderLinks links_;
   std::vector<char> touched_, dead_;
 
-  // The adjacency of the mesh as it is, no face touched or removed yet, and its slivers (faces
-  // with a smallest angle below sliver_angle_deg), smallest first.
+  // The adjacency of the mesh as it is, no face touched or removed yet, and its slivers.
   std::vector<std::pair<double, int>> start_pass() {
     vf_ = mesh_.vertex_faces();
     links_ = border_links(mesh_);
     touched_ = frozen_;
     dead_.assign(mesh_.num_faces(), 0);
-    const double thr = o_.sliver_angle_deg * M_PI / 180.0;
-    std::vector<std::pair<double, int>> slivers;
-    for (int id = 0; id < mesh_.num_faces(); ++id) {
-      const double m = face_min_angle(mesh_, mesh_.face(id));
-      if (m < thr) slivers.emplace_back(m, id);
+    return slivers_of(mesh_, o_);
+  }
+
+  // The candidate edits of sliver `id` that raise the smallest angle of `region` (the faces at
+  // its corners) by more than 1e-9 and keep at least `floor` vertices, with that angle after
+  // each, in candidate order.
+  std::vector<std::pair<double, Edit>> improving_edits(int id, const std::vector<int>& region, int vertices, int floor) {
+    const double before = min_angle(region, nullptr);
+    std::vector<std::pair<double, Edit>> out;
+    for (Edit& e : candidates(id)) {
+      if (vertices - e.lost_vertices < floor) continue;
+      const double m = min_angle(region, &e);
+      if (m > before + 1e-9) out.emplace_back(m, std::move(e));
     }
-    std::sort(slivers.begin(), slivers.end());
-    return slivers;
+    return out;
   }
 
   // The faces at the corners of f (each once, ascending).
@@ -387,9 +396,7 @@ int repair_slivers_without_crossings(WorkingMesh& mesh, const SurfaceProjector& 
                                      int min_vertices, std::vector<FacePair> pairs) {
   SliverRepair repair(mesh, surface, options, frozen);
   int vertices = vertices_in_faces(mesh), edits = 0;
-  int slivers = 0;
-  for (const MeshFace& f : mesh.faces()) slivers += face_min_angle(mesh, f) < options.sliver_angle_deg * M_PI / 180.0;
-  const int max_edits = options.passes * slivers;
+  const int max_edits = options.passes * static_cast<int>(slivers_of(mesh, options).size());
   while (edits < max_edits && repair.edit_without_crossing(vertices, min_vertices, pairs)) ++edits;
   return edits;
 }
