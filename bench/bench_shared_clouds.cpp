@@ -5,6 +5,9 @@
 // downsampled to about the same number of vertices.
 //
 // Usage: bench_shared_clouds [N = 2000] [--no-peer] [--no-border-follow] [--threads T] [--mean-tolerance T]
+//                            [--stream-per-site P]
+// --stream-per-site P: StreamOptions::max_raw_points_per_site = P (a cloud with more than P points
+// per site is reconstructed from its voxel summary), for a comparison in the same build.
 // --no-border-follow: border vertices move like interior ones in the relaxations (PolishOptions and
 // IsotropicRemeshOptions::follow_sample_border off), for a comparison in the same build.
 #include <algorithm>
@@ -89,15 +92,19 @@ int main(int argc, char** argv) {
   bool peer = true, follow = true;
   ReconstructionOptions defaults;
   double mean_tolerance = defaults.lloyd_mean_tolerance;
+  StreamOptions stream;
   for (int a = 1; a < argc; ++a) {
     const std::string s = argv[a];
     if (s == "--no-peer") peer = false;
     else if (s == "--no-border-follow") follow = false;
     else if (s == "--threads" && a + 1 < argc) threads = std::atoi(argv[++a]);
     else if (s == "--mean-tolerance" && a + 1 < argc) mean_tolerance = std::atof(argv[++a]);
+    else if (s == "--stream-per-site" && a + 1 < argc) stream.max_raw_points_per_site = std::atof(argv[++a]);
     else if (!s.empty() && std::isdigit(static_cast<unsigned char>(s[0]))) n = std::atoi(s.c_str());
     else {
-      std::fprintf(stderr, "usage: bench_shared_clouds [N = 2000] [--no-peer] [--no-border-follow] [--threads T] [--mean-tolerance T]\n");
+      std::fprintf(stderr,
+                   "usage: bench_shared_clouds [N = 2000] [--no-peer] [--no-border-follow] [--threads T] [--mean-tolerance T] "
+                   "[--stream-per-site P]\n");
       return 2;
     }
   }
@@ -141,7 +148,7 @@ int main(int argc, char** argv) {
     try {
       // As cloud2mesh runs it: a file of more than StreamOptions::max_raw_points points is
       // streamed into a voxel summary, a smaller one reconstructed from its raw points.
-      const StreamedReconstruction r = reconstruct_surface_streamed(f.string(), o, StreamOptions{});
+      const StreamedReconstruction r = reconstruct_surface_streamed(f.string(), o, stream);
       Row row = describe(r.result.mesh, bench::now_seconds() - t0, cloud.P, on_border);
       row.flying_pixels = static_cast<long>(r.flying_pixels_removed);
       print("heatcvt", row, n);

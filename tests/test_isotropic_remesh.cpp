@@ -370,6 +370,48 @@ TEST(IsotropicRemesh, FlyingFacesAcrossADepthJumpAreRemoved) {
 }
 
 
+// Smallest angle over the faces of `mesh` whose vertices are all in [first, last).
+double smallest_angle_of(const WorkingMesh& mesh, int first, int last) {
+  double m = 180;
+  for (const MeshFace& f : mesh.faces())
+    if (f[0] >= first && f[0] < last) m = std::min(m, face_min_angle(mesh, f) * 180 / M_PI);
+  return m;
+}
+
+TEST(IsotropicRemesh, SliversOfOpenPiecesAreCutAndClosedPiecesKeepEveryFace) {
+  // An open sheet (a 10 × 10 grid) and a closed sphere far from it, each with one vertex pushed
+  // almost onto an edge of its ring: slivers in both pieces.
+  TriangleMesh sheet = test::grid(10, 0, 1, 0, 1), ball = test::icosphere(2);
+  sheet.V.row(11 * 5 + 5) += Eigen::RowVector3d(0.095, 0.0, 0.0);
+  ball.V.row(ball.F(0, 0)) = 0.2 * ball.V.row(ball.F(0, 0)) + 0.8 * ball.V.row(ball.F(0, 1));
+  ball.V.rowwise() += Eigen::RowVector3d(5, 0, 0);
+  const int ns = static_cast<int>(sheet.V.rows()), nb = static_cast<int>(ball.V.rows());
+  Eigen::MatrixX3d V(ns + nb, 3);
+  V << sheet.V, ball.V;
+  WorkingMesh w(V, Eigen::MatrixX3d::Zero(ns + nb, 3), std::vector<int>(ns + nb, -1));
+  std::vector<MeshFace> faces;
+  for (Eigen::Index f = 0; f < sheet.F.rows(); ++f) faces.push_back({sheet.F(f, 0), sheet.F(f, 1), sheet.F(f, 2)});
+  for (Eigen::Index f = 0; f < ball.F.rows(); ++f) faces.push_back({ball.F(f, 0) + ns, ball.F(f, 1) + ns, ball.F(f, 2) + ns});
+  w.set_faces(faces);
+  const IsotropicRemeshOptions o;
+  ASSERT_LT(smallest_angle_of(w, 0, ns), o.min_angle_deg);        // precondition: slivers in the sheet
+  ASSERT_LT(smallest_angle_of(w, ns, ns + nb), o.min_angle_deg);  // ... and in the ball
+  int ball_faces = 0;
+  for (const MeshFace& f : w.faces()) ball_faces += f[0] >= ns;
+
+  const int cut = cut_unrepairable_slivers(w, o);
+  EXPECT_GT(cut, 0);
+  EXPECT_GE(smallest_angle_of(w, 0, ns), o.min_angle_deg);
+  int ball_left = 0;
+  for (const MeshFace& f : w.faces()) ball_left += f[0] >= ns;
+  EXPECT_EQ(ball_left, ball_faces);
+  EXPECT_EQ(w.num_faces() + cut, static_cast<int>(faces.size()));
+  const TriangleMesh m = compact_mesh(w);
+  const ValidationReport v = validate_open(m);
+  EXPECT_TRUE(v.ok()) << v.summary();
+  EXPECT_EQ(v.components, 2);
+}
+
 TEST(IsotropicRemesh, MeshesMeetingTheTargetsAreLeftAlone) {
   const TriangleMesh fine = test::icosphere(5);
   const MeshSurfaceProjector surface(fine.V, fine.F);

@@ -13,6 +13,7 @@
 
 #include "heatcvt/errors.h"
 #include "heatcvt/parallel.h"
+#include "heatcvt/spatial_order.h"
 
 namespace heatcvt {
 namespace {
@@ -41,8 +42,15 @@ std::vector<double> row_major(const Eigen::MatrixX3d& P) {
 // (checks = unlimited, eps = 0), squared L2 distances in double precision, for every row of Q.
 // Each row of results is then re-sorted by (distance, index) so that ties are ordered
 // deterministically. Returns #Q × kq indices, row-major.
+// The queries are searched in Morton order (spatial_order.h): consecutive queries then walk the
+// same branches of the tree, which stay in cache. The results are exact, so the order does not
+// change them; they are returned in the rows' own order.
 std::vector<int> flann_knn(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& Q, int kq, int threads) {
-  std::vector<double> data = row_major(P), query = row_major(Q);
+  std::vector<double> data = row_major(P);
+  const std::vector<int> order = morton_order(Q);
+  std::vector<double> query(static_cast<size_t>(Q.rows()) * 3);
+  for (size_t r = 0; r < order.size(); ++r)
+    for (int c = 0; c < 3; ++c) query[r * 3 + c] = Q(order[r], c);
   const flann::Matrix<double> dataset(data.data(), static_cast<size_t>(P.rows()), 3);
   const flann::Matrix<double> queries(query.data(), static_cast<size_t>(Q.rows()), 3);
   flann::Index<flann::L2<double>> index(dataset, flann::KDTreeSingleIndexParams(10));
@@ -55,15 +63,17 @@ std::vector<int> flann_knn(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& Q,
   flann::SearchParams params(flann::FLANN_CHECKS_UNLIMITED, 0.0f, true);
   params.cores = resolve_threads(threads);
   if (n > 0) index.knnSearch(queries, indices, dists, static_cast<size_t>(kq), params);
+  std::vector<int> out(idx.size(), -1);
 #pragma omp parallel for num_threads(resolve_threads(threads)) schedule(static)
-  for (int i = 0; i < n; ++i) {
+  for (int r = 0; r < n; ++r) {
     std::vector<std::pair<double, int>> row(kq);
     for (int q = 0; q < kq; ++q)
-      row[q] = {dist[static_cast<size_t>(i) * kq + q], idx[static_cast<size_t>(i) * kq + q]};
+      row[q] = {dist[static_cast<size_t>(r) * kq + q], idx[static_cast<size_t>(r) * kq + q]};
     std::sort(row.begin(), row.end());
-    for (int q = 0; q < kq; ++q) idx[static_cast<size_t>(i) * kq + q] = row[q].second;
+    const size_t i = static_cast<size_t>(order[r]);
+    for (int q = 0; q < kq; ++q) out[i * kq + q] = row[q].second;
   }
-  return idx;
+  return out;
 }
 
 }  // namespace

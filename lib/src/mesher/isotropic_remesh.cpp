@@ -580,7 +580,40 @@ class Sizer {
           return repair_slivers_without_crossings(mesh_, surface_, o_.repair, frozen(), floor, crossing_pairs_);
         });
       }
+      // An input mesh (its border known) is whole where the mesh is cut: only a sampling's
+      // surface may lose its slivers.
+      if (o_.cut_unrepairable && !o_.keep_topology.enabled() && !surface_.border_known() && figures_below_target())
+        cut_slivers_left(floor);
     }
+  }
+
+  // The slivers that no edit could raise are cut out (cut_unrepairable_slivers()) with the pieces
+  // that leaves too small; where the count falls below `floor`, it is restored by splits whose
+  // two rings alone are polished. Undone where the count stays below `floor`, fewer faces are
+  // not left below the target angle, or the smallest angle falls.
+  void cut_slivers_left(int floor) {
+    const WorkingMesh::Checkpoint before = mesh_.checkpoint();
+    const MesherStats stats_before = stats_;
+    const double angle_before = smallest_angle();
+    const int slivers_before = faces_below_target();
+    const int cut = cut_unrepairable_slivers(mesh_, o_);
+    if (cut == 0) return;
+    stats_.trimmed_faces += cut;
+    stats_.removed_triangles +=
+        remove_small_pieces(mesh_, o_.min_piece_faces, o_.min_piece_vertex_fraction, &stats_.pieces_removed);
+    crossings_ = faces_in_pairs(mesh_, crossing_pairs_ = crossing_face_pairs(mesh_));
+    if (vertices_in_faces(mesh_) < floor) {
+      thaw();
+      local_ = true;
+      adjust_count(o_.long_factor * length_);
+      attempt([&] { return final_polish(); });
+      local_ = false;
+    }
+    if (vertices_in_faces(mesh_) >= floor && faces_below_target() < slivers_before && smallest_angle() >= angle_before)
+      return;
+    mesh_.rollback(before);
+    stats_ = stats_before;
+    crossings_ = faces_in_pairs(mesh_, crossing_pairs_ = crossing_face_pairs(mesh_));
   }
 
   double smallest_angle() const {
@@ -594,10 +627,12 @@ class Sizer {
     return std::abs(vertices_in_faces(mesh_) - o_.target_vertices) <= slack;
   }
 
-  bool figures_below_target() const {
-    for (const MeshFace& f : mesh_.faces())
-      if (face_min_angle(mesh_, f) < o_.min_angle_deg * kDegree) return true;
-    return false;
+  bool figures_below_target() const { return faces_below_target() > 0; }
+
+  int faces_below_target() const {
+    int n = 0;
+    for (const MeshFace& f : mesh_.faces()) n += face_min_angle(mesh_, f) < o_.min_angle_deg * kDegree;
+    return n;
   }
 
   // Notches closed, spikes collapsed, ears cut: the border's noise at the site spacing.
@@ -876,19 +911,27 @@ bool reshapes(const SizingFigures& q, const IsotropicRemeshOptions& o) {
 
 }  // namespace
 
-int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o) {
-  // Only pieces with a border: a closed piece encloses a volume and spans no depth jump (its
-  // steep faces are caps of thin parts, which stay).
+// Marks (1) the faces of the pieces that have a border.
+std::vector<char> faces_of_open_pieces(const WorkingMesh& mesh) {
   const FaceComponents pieces = face_components(mesh, true);
   const BorderLinks border = border_links(mesh);
   std::vector<char> open(pieces.size.size(), 0);
   for (int id = 0; id < mesh.num_faces(); ++id)
     for (int v : mesh.face(id))
       if (border.on(v)) open[pieces.of_face[id]] = 1;
+  std::vector<char> out(mesh.num_faces(), 0);
+  for (int id = 0; id < mesh.num_faces(); ++id) out[id] = open[pieces.of_face[id]];
+  return out;
+}
+
+int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o) {
+  // Only pieces with a border: a closed piece encloses a volume and spans no depth jump (its
+  // steep faces are caps of thin parts, which stay).
+  const std::vector<char> open = faces_of_open_pieces(mesh);
   std::vector<char> flying(mesh.num_faces(), 0);
   for (int id = 0; id < mesh.num_faces(); ++id) {
     const MeshFace& f = mesh.face(id);
-    if (!open[pieces.of_face[id]]) continue;
+    if (!open[id]) continue;
     const Eigen::Vector3d a = mesh.V.row(f[0]), b = mesh.V.row(f[1]), c = mesh.V.row(f[2]);
     const double longest = std::max({(a - b).norm(), (b - c).norm(), (c - a).norm()});
     Eigen::Vector3d pos, nrm;
@@ -905,6 +948,24 @@ int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, cons
   }
   // Vertices left with several fans keep their largest (make_vertices_manifold()).
   const int removed = mesh.remove_faces(flying);
+  return removed > 0 ? removed + make_vertices_manifold(mesh) : 0;
+}
+
+int cut_unrepairable_slivers(WorkingMesh& mesh, const IsotropicRemeshOptions& o) {
+  std::vector<char> open = faces_of_open_pieces(mesh);
+  // Closed pieces with less than max_cut_closed_fraction of the vertices are cut too.
+  const FaceComponents pieces = face_components(mesh, true);
+  std::vector<int> piece_vertices(pieces.size.size(), 0);
+  std::vector<char> seen(mesh.num_vertices(), 0);
+  for (int id = 0; id < mesh.num_faces(); ++id)
+    for (int v : mesh.face(id))
+      if (!seen[v]) seen[v] = 1, ++piece_vertices[pieces.of_face[id]];
+  const double small = o.max_cut_closed_fraction * vertices_in_faces(mesh);
+  for (int id = 0; id < mesh.num_faces(); ++id) open[id] = open[id] || piece_vertices[pieces.of_face[id]] < small;
+  std::vector<char> cut(mesh.num_faces(), 0);
+  for (int id = 0; id < mesh.num_faces(); ++id)
+    cut[id] = open[id] && face_min_angle(mesh, mesh.face(id)) < o.min_angle_deg * kDegree;
+  const int removed = mesh.remove_faces(cut);
   return removed > 0 ? removed + make_vertices_manifold(mesh) : 0;
 }
 

@@ -151,7 +151,7 @@ bool size_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, const Surface
   sizing.min_piece_vertex_fraction = options.min_piece_vertex_fraction;
   // The hole policy decides what the sizing may open or close: no flying face is removed where a
   // watertight mesh is asked for, no notch closed where no surface may be invented.
-  if (options.holes.policy == HolePolicy::fill) sizing.remove_flying = false;
+  if (options.holes.policy == HolePolicy::fill) sizing.remove_flying = sizing.cut_unrepairable = false;
   if (options.holes.policy == HolePolicy::keep) sizing.fill_notches = false;
   if (!needs_sizing(mesh, surface, sizing)) return false;
   const WorkingMesh::Checkpoint unsized = mesh.checkpoint();

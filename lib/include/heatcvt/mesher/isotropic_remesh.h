@@ -157,6 +157,20 @@ struct IsotropicRemeshOptions {
   /// the whole repair is undone and its region frozen, so a sliver on the rim of a thin part
   /// (its two sides within an edge length) would otherwise stay as it is. Default true.
   bool repair_without_crossings = true;
+  /// The faces of open pieces still below min_angle_deg after every repair are cut out
+  /// (cut_unrepairable_slivers()): a part thinner than the spacing crumpled into faces whose
+  /// every edit makes faces cross, or a strip bridging a gap between two surfaces, leaves a
+  /// small hole instead of slivers. Where the count falls below count_tolerance, it is restored
+  /// by splits polished locally; the cut is kept only where the count is then within
+  /// count_tolerance and φmin is raised. Never on a closed piece (but see
+  /// max_cut_closed_fraction), nor on a surface whose border is known (an input mesh, which has no hole
+  /// there), nor where a topology is kept or every hole is to be filled (hole policy fill: the
+  /// surface mesher turns it off). Default true.
+  bool cut_unrepairable = true;
+  /// ... and a closed piece with fewer than this fraction of the mesh's vertices is cut like an
+  /// open one: a part thinner than the spacing wrapped into a closed blob whose faces no edit
+  /// can shape (a closed object of a scan carries more of the count). Default 0.05.
+  double max_cut_closed_fraction = 0.05;
   /// Times the trim, collapse, count restoration and polish are repeated while slivers are left
   /// (each polish can expose new flat border triangles or ears). Default 8.
   int sliver_passes = 8;
@@ -206,6 +220,13 @@ bool needs_sizing(const WorkingMesh& mesh, const SurfaceProjector& surface, cons
 /// fans of the vertices left pinched and the edge-connected pieces of at most 4 faces. Returns
 /// the faces removed.
 int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options);
+
+/// Removes the faces of open pieces (pieces with a border) and of closed pieces with fewer than
+/// options.max_cut_closed_fraction of the vertices whose smallest angle is below
+/// options.min_angle_deg, then, as make_vertices_manifold() does, the smaller fans of the vertices
+/// left pinched. Larger closed pieces keep every face. The faces left keep their angles, so no
+/// face of the pieces cut is then below min_angle_deg. Returns the faces removed.
+int cut_unrepairable_slivers(WorkingMesh& mesh, const IsotropicRemeshOptions& options);
 
 /// Whether size_to_target() remeshes `mesh` (the shape targets are missed, or the count is off by
 /// more than reshape_count_error) rather than only adjusting its count. The flying faces are
