@@ -10,17 +10,21 @@
 // whole cloud in memory (normals by PCA + MST), runs the same way on clouds up to --peer-max
 // points. Prints a markdown table: time, the time spent reading, peak memory, the points the
 // reconstruction ran on, vertices, the mesh checks (closed, genus, φmin, φm) and the distances to
-// armadillo.obj.
+// armadillo.obj. Below the table: heatcvt's time over the peer's for each row the peer ran, and
+// heatcvt's milliseconds per site on the fixed-density rows with their spread (± % around the
+// midpoint of their range; the issue asks for ±30 %).
 //
 // Usage: bench_scale [--sizes 100000,1000000,10000000] [--huge] [--density-max 1000000]
 //                    [--peer-max 1000000] [--sites 3000] [--keep-dir DIR] [--fine F] [--plain-means]
-//                    [--plain-fit] [--glibc-allocator] [--noise F]
+//                    [--plain-fit] [--glibc-allocator] [--noise F] [--stream-per-site P]
 // (--fine: StreamOptions::fine_voxel_factor; --plain-means: project_to_surface = false;
 //  --plain-fit: the 3×3×3 voxel plane fit only, VoxelSurfaceFit max_levels = shift_steps = 0;
+//  --stream-per-site P: StreamOptions::max_raw_points_per_site = P, 0 = no limit per site;
 //  --glibc-allocator: both children keep glibc's allocator defaults instead of the tools' setting)
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -92,13 +96,14 @@ std::string distance_keys(const TriangleMesh& m) {
 }
 
 // Child: reconstruct one file, print one line "key=value ...".
-int run_child(const std::string& path, int sites, double fine_factor, bool project, bool plain_fit) {
+int run_child(const std::string& path, int sites, double fine_factor, bool project, bool plain_fit, double per_site) {
   ReconstructionOptions options;
   options.sites = sites;
   StreamOptions stream;
   stream.fine_voxel_factor = fine_factor;
   stream.project_to_surface = project;
   if (plain_fit) stream.surface_fit.max_levels = stream.surface_fit.shift_steps = 0;
+  stream.max_raw_points_per_site = per_site;
   const double t0 = bench::now_seconds();
   double t_stream = -1;
   const auto progress = [&](const std::string&, double) {
@@ -169,15 +174,18 @@ std::string run_command(const std::string& command) {
   return status != 0 || line.empty() ? "failed: " + all : line;
 }
 
-void print_row(std::int64_t points, int n, const char* method, const std::string& line) {
+// Prints one table row; returns the run's time in seconds (-1 where it failed).
+double print_row(std::int64_t points, int n, const char* method, const std::string& line) {
   if (line.rfind("failed", 0) == 0) {
     std::printf("| %lld | %d | %s | %s |\n", static_cast<long long>(points), n, method, line.c_str());
-    return;
+    return -1;
   }
+  const double seconds = std::stod(value_of(line, "time"));
   const long vertices = std::stol(value_of(line, "vertices"));
   const bool closed = value_of(line, "boundary") == "0";
-  std::printf("| %lld | %d | %s | %s | %s | %s | %s | %.0f | %s%s | %s | %ld | %+.1f %% | %s | %s | %s | %s | %s | %s |\n",
-              static_cast<long long>(points), n, method, value_of(line, "time").c_str(), value_of(line, "stream").c_str(),
+  std::printf("| %lld | %d | %s | %s | %.2f | %s | %s | %s | %.0f | %s%s | %s | %ld | %+.1f %% | %s | %s | %s | %s | %s | %s |\n",
+              static_cast<long long>(points), n, method, value_of(line, "time").c_str(), 1000.0 * seconds / n,
+              value_of(line, "stream").c_str(),
               value_of(line, "peak_mb").c_str(), value_of(line, "sys").c_str(),
               std::stod(value_of(line, "faults")) / 1000.0, value_of(line, "used").c_str(),
               value_of(line, "summarised") == "1" ? " means" : " raw", value_of(line, "voxel").c_str(), vertices,
@@ -185,6 +193,7 @@ void print_row(std::int64_t points, int n, const char* method, const std::string
               value_of(line, "phimin").c_str(), value_of(line, "phim").c_str(), value_of(line, "mean").c_str(),
               value_of(line, "hausdorff").c_str());
   std::fflush(stdout);
+  return seconds;
 }
 
 }  // namespace
@@ -199,12 +208,14 @@ int main(int argc, char** argv) {
   if (argc >= 2 && (std::string(argv[1]) == "--child" || std::string(argv[1]) == "--peer-child") &&
       !std::getenv(kGlibcAllocatorEnv))
     heatcvt::cli::keep_freed_memory();
-  if (argc == 7 && std::string(argv[1]) == "--child")
-    return run_child(argv[2], std::atoi(argv[3]), std::atof(argv[4]), std::atoi(argv[5]) != 0, std::atoi(argv[6]) != 0);
+  if (argc == 8 && std::string(argv[1]) == "--child")
+    return run_child(argv[2], std::atoi(argv[3]), std::atof(argv[4]), std::atoi(argv[5]) != 0, std::atoi(argv[6]) != 0,
+                     std::atof(argv[7]));
   if (argc == 4 && std::string(argv[1]) == "--peer-child") return run_peer_child(argv[2], std::atoi(argv[3]));
   const StreamOptions defaults;
   double fine_factor = defaults.fine_voxel_factor;
   bool project = defaults.project_to_surface, plain_fit = false;
+  double raw_per_site = defaults.max_raw_points_per_site;
   std::vector<std::int64_t> sizes = {100000, 1000000, 10000000};
   std::int64_t density_max = 1000000;
   std::int64_t peer_max = 1000000;
@@ -223,6 +234,7 @@ int main(int argc, char** argv) {
       else if (a == "--fine" && i + 1 < argc) fine_factor = std::stod(argv[++i]);
       else if (a == "--plain-means") project = false;
       else if (a == "--plain-fit") plain_fit = true;
+      else if (a == "--stream-per-site" && i + 1 < argc) raw_per_site = std::stod(argv[++i]);
       else if (a == "--glibc-allocator") setenv(kGlibcAllocatorEnv, "1", 1);
       else if (a == "--noise" && i + 1 < argc) noise = std::stod(argv[++i]);
       else {
@@ -246,10 +258,17 @@ int main(int argc, char** argv) {
   const double diag = (mesh.V.colwise().maxCoeff() - mesh.V.colwise().minCoeff()).norm();
   const fs::path dir = keep_dir.empty() ? fs::temp_directory_path() / ("heatcvt_bench_scale_" + std::to_string(::getpid())) : fs::path(keep_dir);
   fs::create_directories(dir);
-  std::printf("| points | -n | method | time s | read s | peak MB | sys s | page faults k | points reconstructed | voxel | V | "
+  std::printf("| points | -n | method | time s | ms per site | read s | peak MB | sys s | page faults k | points reconstructed | voxel | V | "
               "V vs -n | closed | genus | phi_min | phi_m | mean dist ‰ | Hausdorff ‰ |\n"
-              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   std::fflush(stdout);
+  struct Figure {
+    std::int64_t points;
+    int sites;
+    double value;
+  };
+  std::vector<Figure> per_site;  // heatcvt's ms per site on the fixed-density rows
+  std::vector<Figure> ratios;    // heatcvt's time over the peer's, same cloud and count
   // popen runs through the shell: /proc/self/exe would be the shell, so name this binary.
   const std::string self = fs::read_symlink("/proc/self/exe").string();
   for (const std::int64_t points : sizes) {
@@ -262,19 +281,39 @@ int main(int argc, char** argv) {
     }
     std::vector<int> runs = {sites};
     if (points <= density_max) runs.push_back(static_cast<int>(std::min<std::int64_t>(points / 50, 200000)));
-    for (const int n : runs)
+    for (std::size_t r = 0; r < runs.size(); ++r) {
+      const int n = runs[r];
+      double ours = -1;
       for (const bool peer : {false, true}) {
         if (peer && points > peer_max) continue;
         const std::string command =
             "'" + self + "' " +
             (peer ? "--peer-child '" + file.string() + "' " + std::to_string(n)
                   : "--child '" + file.string() + "' " + std::to_string(n) + " " + std::to_string(fine_factor) + " " +
-                        (project ? "1" : "0") + (plain_fit ? " 1" : " 0")) +
+                        (project ? "1" : "0") + (plain_fit ? " 1 " : " 0 ") + std::to_string(raw_per_site)) +
             " 2>&1";
-        print_row(points, n, peer ? "PCL Poisson + CGAL remesh" : "heatcvt", run_command(command));
+        const double t = print_row(points, n, peer ? "PCL Poisson + CGAL remesh" : "heatcvt", run_command(command));
+        if (!peer) ours = t;
+        if (peer && ours > 0 && t > 0) ratios.push_back({points, n, ours / t});
       }
+      if (r == 1 && ours > 0) per_site.push_back({points, n, 1000.0 * ours / n});
+    }
   }
   if (keep_dir.empty()) fs::remove_all(dir);
+  for (const Figure& f : ratios)
+    std::printf("\n%lld points -> %d vertices: heatcvt's time is %.3f x the peer's", static_cast<long long>(f.points),
+                f.sites, f.value);
+  if (!per_site.empty()) {
+    double lo = per_site[0].value, hi = lo;
+    std::printf("\nfixed density (points / 50 sites):");
+    for (const Figure& f : per_site) {
+      std::printf(" %d sites %.2f ms per site;", f.sites, f.value);
+      lo = std::min(lo, f.value), hi = std::max(hi, f.value);
+    }
+    // Constant within ±x % means every figure within x % of one value: the midpoint of the range.
+    std::printf(" spread +/-%.0f %% around %.2f ms", 100.0 * (hi - lo) / (hi + lo), 0.5 * (hi + lo));
+  }
+  std::printf("\n");
   std::printf("\nArmadillo (genus 0), noise σ = %.2f %% of the bbox diagonal, float binary PLY written in chunks of %lld "
               "points; time = wall time of the child process's work (heatcvt: reconstruct_surface_streamed, both read passes "
               "included; peer: read_cloud, PCA/MST normals, PCL Poisson depth 8, CGAL isotropic remeshing to -n), read = "

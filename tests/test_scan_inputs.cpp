@@ -430,16 +430,16 @@ TEST(Cloud2MeshScans, BadPosesGiveOneErrorLineAndNoOutput) {
 
 // A cloud with more points than --stream-above (default StreamOptions::max_raw_points, 200,000)
 // is streamed into a voxel summary by cloud2mesh; the mesh meets the same checks.
-// A cloud far below --stream-above but with more points per site than --stream-per-site is
-// streamed into a voxel summary; without the per-site limit it is reconstructed from its raw
-// points. raw_point_limit() is the smaller of the two limits.
-TEST(Cloud2MeshScans, ACloudWithManyPointsPerSiteIsStreamedWhenAskedPerSite) {
+// A cloud far below --stream-above but with more points per site than --stream-per-site (default
+// 40) is streamed into a voxel summary; with the per-site limit off (0) it is reconstructed from
+// its raw points. raw_point_limit() is the smaller of the two limits.
+TEST(Cloud2MeshScans, ACloudWithManyPointsPerSiteIsStreamedUnlessThatLimitIsOff) {
   StreamOptions limits;
   limits.max_raw_points = 200000;
-  EXPECT_EQ(raw_point_limit(limits, 300), 200000);
-  limits.max_raw_points_per_site = 40;
-  EXPECT_EQ(raw_point_limit(limits, 300), 12000);
+  EXPECT_EQ(raw_point_limit(limits, 300), 12000);  // the default 40 per site
   EXPECT_EQ(raw_point_limit(limits, 10000), 200000);
+  limits.max_raw_points_per_site = 0;
+  EXPECT_EQ(raw_point_limit(limits, 300), 200000);
   test::ScratchDir dir("c2m_per_site");
   const TriangleMesh sphere = test::icosphere(4);
   const std::string cloud = dir.path("mid.xyz");
@@ -448,7 +448,7 @@ TEST(Cloud2MeshScans, ACloudWithManyPointsPerSiteIsStreamedWhenAskedPerSite) {
     SCOPED_TRACE(per_site);
     const std::string out = dir.path(per_site ? "s.ply" : "r.ply"), rep = dir.path(per_site ? "s.json" : "r.json");
     const auto r = test::run_tool("cloud2mesh", cloud + " -n 300 -q -o " + out + " --report " + rep +
-                                                    (per_site ? " --stream-per-site 40" : ""));
+                                                    (per_site ? "" : " --stream-per-site 0"));
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const std::string json = test::read_file(rep);
     EXPECT_NE(json.find(per_site ? "\"streamed\": true" : "\"streamed\": false"), std::string::npos) << json;
@@ -528,8 +528,10 @@ TEST(Cloud2MeshScans, SliversWhoseBestRepairCrossesGetTheBestThatDoesNot) {
     o.threads = 2;
     o.mesher.sizing.repair_without_crossings = careful;
     o.mesher.sizing.cut_unrepairable = false;  // the repair alone: no sliver is cut out
+    StreamOptions raw;
+    raw.max_raw_points_per_site = 0;  // the raw points (56 per site), where the repair is needed
     const StreamedReconstruction r =
-        reconstruct_surface_streamed(test::data_path("clouds/pcldata_room_scan2.pcd"), o, StreamOptions{});
+        reconstruct_surface_streamed(test::data_path("clouds/pcldata_room_scan2.pcd"), o, raw);
     EXPECT_TRUE(r.result.validation.ok()) << r.result.validation.summary();
     EXPECT_EQ(r.result.validation.self_intersecting_pairs, 0);
     phi_min[careful] = r.result.min_angle_deg;

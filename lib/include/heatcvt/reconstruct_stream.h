@@ -26,10 +26,9 @@ struct StreamOptions {
   std::int64_t max_raw_points = 200000;
   /// ... and, where set, of at most this many points per requested site (ReconstructionOptions::
   /// sites): beyond it the output's resolution needs only a summary of the cloud, which the voxel
-  /// means give in less time and memory, with the noise averaged down. Off by default: at 40 the
-  /// shared scans at 500 sites gained in φm and coverage, but two room scans lost φmin
-  /// (docs/benchmarks.md). 0 = no limit per site. Default 0.
-  double max_raw_points_per_site = 0;
+  /// means give in less time and memory, with the noise averaged down, and the time per site
+  /// no longer grows with the points per site. 0 = no limit per site. Default 40.
+  double max_raw_points_per_site = 40;
   /// Points per chunk read from a file. Default 65536.
   std::int64_t chunk_points = 65536;
   /// Voxel size of the summary (input units); 0 = chosen by choose_voxel_size() from a

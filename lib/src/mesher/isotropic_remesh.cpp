@@ -568,9 +568,11 @@ class Sizer {
       crossings_ = best.crossings;
       crossing_pairs_ = best.crossing_pairs;
     }
-    if (figures_below_target()) {
+    // The repairs, then the cut of what they leave; the count the cut restores can leave new
+    // slivers, which get the repairs and the cut again (at most cut_rounds times).
+    const int floor = static_cast<int>(std::ceil((1 - o_.count_tolerance) * o_.target_vertices));
+    for (int round = 0; round <= o_.cut_rounds && figures_below_target(); ++round) {
       thaw();
-      const int floor = static_cast<int>(std::ceil((1 - o_.count_tolerance) * o_.target_vertices));
       attempt([&] { return repair_slivers(mesh_, surface_, o_.repair, frozen(), floor); });
       // Where an edit of that repair made faces cross, the whole repair was undone and its region
       // frozen: the slivers left there get the best edit that makes none cross, one at a time.
@@ -582,22 +584,23 @@ class Sizer {
       }
       // An input mesh (its border known) is whole where the mesh is cut: only a sampling's
       // surface may lose its slivers.
-      if (o_.cut_unrepairable && !o_.keep_topology.enabled() && !surface_.border_known() && figures_below_target())
-        cut_slivers_left(floor);
+      if (round == o_.cut_rounds || !o_.cut_unrepairable || o_.keep_topology.enabled() || surface_.border_known() ||
+          !figures_below_target() || !cut_slivers_left(floor))
+        break;
     }
   }
 
   // The slivers that no edit could raise are cut out (cut_unrepairable_slivers()) with the pieces
   // that leaves too small; where the count falls below `floor`, it is restored by splits whose
   // two rings alone are polished. Undone where the count stays below `floor`, fewer faces are
-  // not left below the target angle, or the smallest angle falls.
-  void cut_slivers_left(int floor) {
+  // not left below the target angle, or the smallest angle falls. Returns whether it was kept.
+  bool cut_slivers_left(int floor) {
     const WorkingMesh::Checkpoint before = mesh_.checkpoint();
     const MesherStats stats_before = stats_;
     const double angle_before = smallest_angle();
     const int slivers_before = faces_below_target();
     const int cut = cut_unrepairable_slivers(mesh_, o_);
-    if (cut == 0) return;
+    if (cut == 0) return false;
     stats_.trimmed_faces += cut;
     stats_.removed_triangles +=
         remove_small_pieces(mesh_, o_.min_piece_faces, o_.min_piece_vertex_fraction, &stats_.pieces_removed);
@@ -610,10 +613,11 @@ class Sizer {
       local_ = false;
     }
     if (vertices_in_faces(mesh_) >= floor && faces_below_target() < slivers_before && smallest_angle() >= angle_before)
-      return;
+      return true;
     mesh_.rollback(before);
     stats_ = stats_before;
     crossings_ = faces_in_pairs(mesh_, crossing_pairs_ = crossing_face_pairs(mesh_));
+    return false;
   }
 
   double smallest_angle() const {
@@ -911,6 +915,8 @@ bool reshapes(const SizingFigures& q, const IsotropicRemeshOptions& o) {
 
 }  // namespace
 
+namespace {
+
 // Marks (1) the faces of the pieces that have a border.
 std::vector<char> faces_of_open_pieces(const WorkingMesh& mesh) {
   const FaceComponents pieces = face_components(mesh, true);
@@ -923,6 +929,8 @@ std::vector<char> faces_of_open_pieces(const WorkingMesh& mesh) {
   for (int id = 0; id < mesh.num_faces(); ++id) out[id] = open[pieces.of_face[id]];
   return out;
 }
+
+}  // namespace
 
 int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o) {
   // Only pieces with a border: a closed piece encloses a volume and spans no depth jump (its

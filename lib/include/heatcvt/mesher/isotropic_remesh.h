@@ -162,15 +162,18 @@ struct IsotropicRemeshOptions {
   /// every edit makes faces cross, or a strip bridging a gap between two surfaces, leaves a
   /// small hole instead of slivers. Where the count falls below count_tolerance, it is restored
   /// by splits polished locally; the cut is kept only where the count is then within
-  /// count_tolerance and φmin is raised. Never on a closed piece (but see
-  /// max_cut_closed_fraction), nor on a surface whose border is known (an input mesh, which has no hole
-  /// there), nor where a topology is kept or every hole is to be filled (hole policy fill: the
-  /// surface mesher turns it off). Default true.
+  /// count_tolerance, fewer faces are below min_angle_deg and φmin has not fallen. Never on a
+  /// closed piece (but see max_cut_closed_fraction), nor on a surface whose border is known (an
+  /// input mesh, which has no hole there), nor where a topology is kept or every hole is to be
+  /// filled (hole policy fill: the surface mesher turns it off). Default true.
   bool cut_unrepairable = true;
   /// ... and a closed piece with fewer than this fraction of the mesh's vertices is cut like an
   /// open one: a part thinner than the spacing wrapped into a closed blob whose faces no edit
   /// can shape (a closed object of a scan carries more of the count). Default 0.05.
   double max_cut_closed_fraction = 0.05;
+  /// Where the splits that restore the count after a cut leave slivers, the repairs and the cut
+  /// run again, up to this many times. Default 2.
+  int cut_rounds = 2;
   /// Times the trim, collapse, count restoration and polish are repeated while slivers are left
   /// (each polish can expose new flat border triangles or ears). Default 8.
   int sliver_passes = 8;
