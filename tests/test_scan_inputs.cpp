@@ -515,6 +515,16 @@ TEST(Cloud2MeshScans, ACoarseCountOnARoomScanIsStillMet) {
   EXPECT_GE(r.min_angle_deg, 20.0);  // IsotropicRemeshOptions::traded_min_angle_deg
 }
 
+// φmin of `cloud` reconstructed with `o` from `stream`, after checking the mesh valid, crossing
+// nothing and within 2 % of the count.
+double valid_phi_min(const char* cloud, const ReconstructionOptions& o, const StreamOptions& stream) {
+  const StreamedReconstruction r = reconstruct_surface_streamed(test::data_path(cloud), o, stream);
+  EXPECT_TRUE(r.result.validation.ok()) << r.result.validation.summary();
+  EXPECT_EQ(r.result.validation.self_intersecting_pairs, 0);
+  EXPECT_NEAR(static_cast<double>(r.result.mesh.V.rows()), o.sites, 0.02 * o.sites);
+  return r.result.min_angle_deg;
+}
+
 // A room scan at 2,000 sites: the sizing's last sliver repair is undone where one of its edits
 // makes faces cross, and its region frozen. Without the repair that takes, one sliver at a time,
 // the best edit crossing nothing, a sliver below 25° stays; with it, every triangle reaches 25°
@@ -530,11 +540,7 @@ TEST(Cloud2MeshScans, SliversWhoseBestRepairCrossesGetTheBestThatDoesNot) {
     o.mesher.sizing.cut_unrepairable = false;  // the repair alone: no sliver is cut out
     StreamOptions raw;
     raw.max_raw_points_per_site = 0;  // the raw points (56 per site), where the repair is needed
-    const StreamedReconstruction r =
-        reconstruct_surface_streamed(test::data_path("clouds/pcldata_room_scan2.pcd"), o, raw);
-    EXPECT_TRUE(r.result.validation.ok()) << r.result.validation.summary();
-    EXPECT_EQ(r.result.validation.self_intersecting_pairs, 0);
-    phi_min[careful] = r.result.min_angle_deg;
+    phi_min[careful] = valid_phi_min("clouds/pcldata_room_scan2.pcd", o, raw);
   }
   ASSERT_LT(phi_min[0], 25.0);  // precondition: a sliver is left without it
   EXPECT_GE(phi_min[1], 25.0);
@@ -551,12 +557,7 @@ TEST(Cloud2MeshScans, SliversNoEditCanRaiseAreCutFromOpenPieces) {
     o.sites = 1000;
     o.threads = 2;
     o.mesher.sizing.cut_unrepairable = cut;
-    const StreamedReconstruction r = reconstruct_surface_streamed(
-        test::data_path("clouds/pcl_table_scene_mug_stereo_textured.pcd"), o, StreamOptions{});
-    EXPECT_TRUE(r.result.validation.ok()) << r.result.validation.summary();
-    EXPECT_EQ(r.result.validation.self_intersecting_pairs, 0);
-    EXPECT_NEAR(static_cast<double>(r.result.mesh.V.rows()), o.sites, 0.02 * o.sites);
-    phi_min[cut] = r.result.min_angle_deg;
+    phi_min[cut] = valid_phi_min("clouds/pcl_table_scene_mug_stereo_textured.pcd", o, StreamOptions{});
   }
   ASSERT_LT(phi_min[0], 25.0);  // precondition: slivers are left without the cut
   EXPECT_GE(phi_min[1], 25.0);

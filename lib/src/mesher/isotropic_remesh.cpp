@@ -917,17 +917,14 @@ bool reshapes(const SizingFigures& q, const IsotropicRemeshOptions& o) {
 
 namespace {
 
-// Marks (1) the faces of the pieces that have a border.
-std::vector<char> faces_of_open_pieces(const WorkingMesh& mesh) {
-  const FaceComponents pieces = face_components(mesh, true);
+// Marks (1) the pieces of `pieces` that have a border.
+std::vector<char> open_pieces(const WorkingMesh& mesh, const FaceComponents& pieces) {
   const BorderLinks border = border_links(mesh);
   std::vector<char> open(pieces.size.size(), 0);
   for (int id = 0; id < mesh.num_faces(); ++id)
     for (int v : mesh.face(id))
       if (border.on(v)) open[pieces.of_face[id]] = 1;
-  std::vector<char> out(mesh.num_faces(), 0);
-  for (int id = 0; id < mesh.num_faces(); ++id) out[id] = open[pieces.of_face[id]];
-  return out;
+  return open;
 }
 
 }  // namespace
@@ -935,11 +932,12 @@ std::vector<char> faces_of_open_pieces(const WorkingMesh& mesh) {
 int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o) {
   // Only pieces with a border: a closed piece encloses a volume and spans no depth jump (its
   // steep faces are caps of thin parts, which stay).
-  const std::vector<char> open = faces_of_open_pieces(mesh);
+  const FaceComponents pieces = face_components(mesh, true);
+  const std::vector<char> open = open_pieces(mesh, pieces);
   std::vector<char> flying(mesh.num_faces(), 0);
   for (int id = 0; id < mesh.num_faces(); ++id) {
     const MeshFace& f = mesh.face(id);
-    if (!open[id]) continue;
+    if (!open[pieces.of_face[id]]) continue;
     const Eigen::Vector3d a = mesh.V.row(f[0]), b = mesh.V.row(f[1]), c = mesh.V.row(f[2]);
     const double longest = std::max({(a - b).norm(), (b - c).norm(), (c - a).norm()});
     Eigen::Vector3d pos, nrm;
@@ -960,19 +958,19 @@ int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, cons
 }
 
 int cut_unrepairable_slivers(WorkingMesh& mesh, const IsotropicRemeshOptions& o) {
-  std::vector<char> open = faces_of_open_pieces(mesh);
-  // Closed pieces with less than max_cut_closed_fraction of the vertices are cut too.
+  // Open pieces, and closed ones with less than max_cut_closed_fraction of the vertices.
   const FaceComponents pieces = face_components(mesh, true);
+  std::vector<char> cuttable = open_pieces(mesh, pieces);
   std::vector<int> piece_vertices(pieces.size.size(), 0);
   std::vector<char> seen(mesh.num_vertices(), 0);
   for (int id = 0; id < mesh.num_faces(); ++id)
     for (int v : mesh.face(id))
       if (!seen[v]) seen[v] = 1, ++piece_vertices[pieces.of_face[id]];
   const double small = o.max_cut_closed_fraction * vertices_in_faces(mesh);
-  for (int id = 0; id < mesh.num_faces(); ++id) open[id] = open[id] || piece_vertices[pieces.of_face[id]] < small;
+  for (std::size_t p = 0; p < cuttable.size(); ++p) cuttable[p] = cuttable[p] || piece_vertices[p] < small;
   std::vector<char> cut(mesh.num_faces(), 0);
   for (int id = 0; id < mesh.num_faces(); ++id)
-    cut[id] = open[id] && face_min_angle(mesh, mesh.face(id)) < o.min_angle_deg * kDegree;
+    cut[id] = cuttable[pieces.of_face[id]] && face_min_angle(mesh, mesh.face(id)) < o.min_angle_deg * kDegree;
   const int removed = mesh.remove_faces(cut);
   return removed > 0 ? removed + make_vertices_manifold(mesh) : 0;
 }
