@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "heatcvt/dual_mesh.h"
+#include "heatcvt/mesh.h"
 #include "heatcvt/mesh_io.h"
 #include "heatcvt/validate.h"
 #include "test_support.h"
@@ -92,13 +93,14 @@ TEST(Cloud2MeshTool, SphereCloudClosedGenus0WithReportAndSameSeedSameOutput) {
 // Every shared cloud at -n 200 (5 iterations, k = 12, and clouds of more than 200,000 points
 // streamed into a voxel summary, to keep the suite short), one rule for all: a mesh that passes
 // every check (manifold edges and vertices, consistent orientation, every vertex used, no
-// self-intersections) and whose vertex count, components, boundary loops, φm and φmin are within
-// the bounds below. The real-scans issue sets the targets (vertex count within 2 % of -n,
-// φm >= 52°, φmin >= 25°, no stray components). With the mesher's sizing stage 40 of the 42 clouds
+// self-intersections), with no stray piece (every component has at least the mesher's smallest
+// piece: 20 faces and 1 % of the vertices), and whose vertex count, φm and φmin are within the
+// bounds below. The real-scans issue sets the targets (vertex count within 2 % of -n,
+// φm >= 52°, φmin >= 25°). With the mesher's sizing stage 40 of the 42 clouds
 // are within 2 % of -n; the other 2 are where the sizing would make the shape worse and is
 // refused, so the bounds are the floor that every shared cloud meets today (the worst cloud of
 // each figure, measured with these options: pcldata_room_scan1.pcd keeps 76 of the 200 sites,
-// pcl_rs1.pcd has 4 components and 4 boundary loops, pcl_five_people.pcd a φm of 30.6° and a
+// pcl_five_people.pcd a φm of 30.6° and a
 // φmin of 0.7°), rounded down: a guard against regressions, not the targets. The vertex count
 // may exceed -n by the issue's 2 %. The bounds were measured on the raw-points front end, which
 // the sweep pins (--stream-above 200000 --stream-per-site 0): at 200 sites every cloud of more
@@ -106,8 +108,6 @@ TEST(Cloud2MeshTool, SphereCloudClosedGenus0WithReportAndSameSeedSameOutput) {
 constexpr int kSweepSites = 200;
 constexpr int kSweepMaxVertices = kSweepSites + kSweepSites / 50;
 constexpr int kSweepMinVertices = 70;
-constexpr int kSweepMaxComponents = 4;
-constexpr int kSweepMaxBoundaryLoops = 4;
 constexpr double kSweepMinPhiMean = 30.0;
 constexpr double kSweepMinPhiMin = 0.5;
 
@@ -145,8 +145,15 @@ TEST(Cloud2MeshTool, EverySharedCloudSmallSiteCount) {
     EXPECT_GE(m.V.rows(), kSweepMinVertices);
     EXPECT_LE(m.V.rows(), kSweepMaxVertices);
     EXPECT_GE(rep.components, 1);
-    EXPECT_LE(rep.components, kSweepMaxComponents);
-    EXPECT_LE(rep.boundary_loops, kSweepMaxBoundaryLoops);
+    Eigen::VectorXi piece;
+    const int pieces = connected_components(static_cast<int>(m.V.rows()), m.F, piece);
+    std::vector<int> piece_vertices(pieces, 0), piece_faces(pieces, 0);
+    for (Eigen::Index v = 0; v < m.V.rows(); ++v) ++piece_vertices[piece[v]];
+    for (Eigen::Index f = 0; f < m.F.rows(); ++f) ++piece_faces[piece[m.F(f, 0)]];
+    for (int c = 0; c < pieces; ++c) {
+      EXPECT_GE(piece_faces[c], 20) << "piece " << c;
+      EXPECT_GE(piece_vertices[c], 0.01 * m.V.rows()) << "piece " << c;
+    }
     EXPECT_GE(q.mean_min_angle_deg, kSweepMinPhiMean);
     EXPECT_GE(q.min_angle_deg, kSweepMinPhiMin);
   }

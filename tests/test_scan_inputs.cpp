@@ -21,6 +21,7 @@
 #include "heatcvt/errors.h"
 #include "heatcvt/mesh_io.h"
 #include "heatcvt/normals.h"
+#include "heatcvt/point_index.h"
 #include "heatcvt/reconstruct.h"
 #include "heatcvt/reconstruct_stream.h"
 #include "heatcvt/scan_merge.h"
@@ -538,6 +539,8 @@ TEST(Cloud2MeshScans, SliversWhoseBestRepairCrossesGetTheBestThatDoesNot) {
     o.threads = 2;
     o.mesher.sizing.repair_without_crossings = careful;
     o.mesher.sizing.cut_unrepairable = false;  // the repair alone: no sliver is cut out
+    o.stray.min_group_points = 0;  // the scan with its small groups of returns, where the sliver is
+    o.stray.sparse_group_fraction = 0;
     StreamOptions raw;
     raw.max_raw_points_per_site = 0;  // the raw points (56 per site), where the repair is needed
     phi_min[careful] = valid_phi_min("clouds/pcldata_room_scan2.pcd", o, raw);
@@ -557,6 +560,8 @@ TEST(Cloud2MeshScans, SliversNoEditCanRaiseAreCutFromOpenPieces) {
     o.sites = 1000;
     o.threads = 2;
     o.mesher.sizing.cut_unrepairable = cut;
+    o.stray.min_group_points = 0;  // the scan with its small groups of returns, where the strip is
+    o.stray.sparse_group_fraction = 0;
     phi_min[cut] = valid_phi_min("clouds/pcl_table_scene_mug_stereo_textured.pcd", o, StreamOptions{});
   }
   ASSERT_LT(phi_min[0], 25.0);  // precondition: slivers are left without the cut
@@ -579,4 +584,40 @@ TEST(Cloud2MeshScans, FacesTheSizingLeavesCrossingAreUntangled) {
   EXPECT_TRUE(r.validation.ok()) << r.validation.summary();
   EXPECT_EQ(r.validation.self_intersecting_pairs, 0);
   EXPECT_NEAR(static_cast<double>(r.mesh.V.rows()), o.sites, 0.02 * o.sites);
+}
+
+// A building scan (CGAL's poste_france.xyz, 9,031 points) with small groups of returns tens of
+// metres from it: two scatters of about 30 points spread over metres and two dense groups of
+// 26 and 28 points. Kept, the scatters get sites in proportion to the area they seem to cover,
+// and the dense groups' 30-point neighbourhoods reach across the gap to the building, so the
+// Laplacian, the dual and the sizing bridge it: vertices land metres off the data. Dropped as
+// stray (StrayPointOptions::min_group_points, sparse_group_fraction), every vertex lies on the
+// building, within one site spacing of a point.
+TEST(Cloud2MeshScans, SmallAndSparseGroupsOfReturnsGetNoSites) {
+  const PointCloud cloud = read_cloud(test::data_path("clouds/poste_france.xyz"));
+  const PointIndex index(cloud.P);
+  double farthest[2] = {0, 0};
+  int stray[2] = {0, 0};
+  Eigen::Index vertices[2] = {0, 0};
+  for (const bool rules : {false, true}) {
+    SCOPED_TRACE(rules);
+    ReconstructionOptions o;
+    o.sites = 500;
+    o.threads = 2;
+    if (!rules) o.stray.min_group_points = 0, o.stray.sparse_group_fraction = 0;
+    const ReconstructionResult r = reconstruct_surface(cloud.P, o);
+    EXPECT_TRUE(r.validation.ok()) << r.validation.summary();
+    const double spacing = mean_edge_length(r.mesh);
+    for (Eigen::Index v = 0; v < r.mesh.V.rows(); ++v) {
+      double d = 0;
+      index.nearest(r.mesh.V.row(v).transpose(), d);
+      farthest[rules] = std::max(farthest[rules], d / spacing);
+    }
+    stray[rules] = r.points_stray;
+    vertices[rules] = r.mesh.V.rows();
+  }
+  ASSERT_GT(farthest[0], 5.0);  // precondition: kept, the groups pull vertices off the data
+  EXPECT_LT(farthest[1], 1.0);
+  EXPECT_GE(stray[1] - stray[0], 26 + 28 + 2 * 29);  // the four groups, at least
+  EXPECT_NEAR(static_cast<double>(vertices[1]), 500, 0.02 * 500);
 }

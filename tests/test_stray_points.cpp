@@ -61,6 +61,8 @@ TEST(StrayPoints, TheMaskDoesNotDependOnTheThreadCountAndTheRuleCanBeTurnedOff) 
   EXPECT_EQ(stray_point_mask(P, {}, 1), stray_point_mask(P, {}, 2));
   StrayPointOptions off;
   off.ratio = 0;
+  off.sparse_group_fraction = 0;
+  off.min_group_points = 0;
   const std::vector<char> none = stray_point_mask(P, off);
   EXPECT_EQ(std::count(none.begin(), none.end(), 1), 0);
   StrayPointOptions bad;
@@ -69,6 +71,82 @@ TEST(StrayPoints, TheMaskDoesNotDependOnTheThreadCountAndTheRuleCanBeTurnedOff) 
   bad = {};
   bad.neighbours = 1;
   EXPECT_THROW(stray_point_mask(P, bad), InvalidInputError);
+  bad = {};
+  bad.sparse_group_fraction = 1.5;
+  EXPECT_THROW(stray_point_mask(P, bad), InvalidInputError);
+  bad = {};
+  bad.sparse_density_ratio = -0.1;
+  EXPECT_THROW(stray_point_mask(P, bad), InvalidInputError);
+  bad = {};
+  bad.min_group_points = -1;
+  EXPECT_THROW(stray_point_mask(P, bad), InvalidInputError);
+}
+
+namespace {
+
+// Samples of the square [x0, x0 + side] × [y0, y0 + side] at height z with the given spacing.
+void add_patch(std::vector<Eigen::RowVector3d>& out, double x0, double y0, double z, double side, double spacing,
+               std::mt19937& rng) {
+  std::uniform_real_distribution<double> jitter(-0.3 * spacing, 0.3 * spacing);
+  for (double x = spacing / 2; x < side; x += spacing)
+    for (double y = spacing / 2; y < side; y += spacing) out.emplace_back(x0 + x + jitter(rng), y0 + y + jitter(rng), z);
+}
+
+// Which of the groups [begin[g], begin[g + 1]) of `stray` are wholly marked (1), wholly kept
+// (0) or split (-1).
+std::vector<int> group_marks(const std::vector<char>& stray, const std::vector<int>& begin) {
+  std::vector<int> out;
+  for (size_t g = 0; g + 1 < begin.size(); ++g) {
+    const auto first = stray.begin() + begin[g], last = stray.begin() + begin[g + 1];
+    const auto marked = std::count(first, last, 1);
+    out.push_back(marked == last - first ? 1 : (marked == 0 ? 0 : -1));
+  }
+  return out;
+}
+
+}  // namespace
+
+// The group rules on a scene built in code: a unit square at spacing 0.01 (10,000 points) and,
+// far from it and from each other: a dense group of 20 points (fewer than a Laplacian
+// neighbourhood), a scatter of 64 points over 2 × 2 (0.6 % of the points, 25× sparser), a small
+// dense object of 64 points (0.6 %, as dense as the square), and a distant wall sampled 3×
+// more sparsely (4 % of the points). The first two go; the object and the wall stay. Alone, the
+// dense group is the largest and stays.
+TEST(StrayPoints, SmallAndSparseGroupsGoASmallObjectAndASparserWallStay) {
+  std::vector<Eigen::RowVector3d> rows;
+  std::mt19937 rng(11);
+  std::vector<int> begin{0};
+  add_patch(rows, 0, 0, 0, 1.0, 0.01, rng);  // the square
+  begin.push_back(static_cast<int>(rows.size()));
+  add_patch(rows, 5, 5, 5, 0.05, 0.01, rng);  // 5 × 5 = 25 ... keep 20 of them
+  rows.resize(begin.back() + 20);
+  begin.push_back(static_cast<int>(rows.size()));
+  add_patch(rows, -6, 0, 2, 2.0, 0.25, rng);  // the scatter: 8 × 8
+  begin.push_back(static_cast<int>(rows.size()));
+  add_patch(rows, 0, -4, 1, 0.08, 0.01, rng);  // the small object: 8 × 8
+  begin.push_back(static_cast<int>(rows.size()));
+  add_patch(rows, 4, -6, -3, 0.6, 0.03, rng);  // the wall: 20 × 20
+  begin.push_back(static_cast<int>(rows.size()));
+  const Eigen::MatrixX3d P = to_matrix(rows);
+  ASSERT_EQ(begin[2] - begin[1], 20);
+  ASSERT_EQ(begin[3] - begin[2], 64);
+  ASSERT_EQ(begin[4] - begin[3], 64);
+  ASSERT_EQ(begin[5] - begin[4], 400);
+  EXPECT_EQ(group_marks(stray_point_mask(P, {}, 2), begin), (std::vector<int>{0, 1, 1, 0, 0}));
+  // Each group rule finds its own group, and the single-point rule neither.
+  StrayPointOptions no_size;
+  no_size.min_group_points = 0;
+  EXPECT_EQ(group_marks(stray_point_mask(P, no_size, 2), begin), (std::vector<int>{0, 0, 1, 0, 0}));
+  StrayPointOptions no_sparse;
+  no_sparse.sparse_group_fraction = 0;
+  EXPECT_EQ(group_marks(stray_point_mask(P, no_sparse, 2), begin), (std::vector<int>{0, 1, 0, 0, 0}));
+  StrayPointOptions single = no_size;
+  single.sparse_group_fraction = 0;
+  EXPECT_EQ(group_marks(stray_point_mask(P, single, 2), begin), (std::vector<int>{0, 0, 0, 0, 0}));
+  EXPECT_EQ(stray_point_mask(P, {}, 1), stray_point_mask(P, {}, 2));
+  // The largest group is the rest the others are far from: alone, the small group is kept.
+  const std::vector<char> alone = stray_point_mask(P.middleRows(begin[1], 20));
+  EXPECT_EQ(std::count(alone.begin(), alone.end(), 1), 0);
 }
 
 TEST(StrayPoints, AReturnFarOffDoesNotPullTheMeshOutOfTheScannedSquare) {

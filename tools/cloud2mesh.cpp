@@ -286,9 +286,15 @@ void add_input_options(CLI::App& app, Settings& s) {
                  "from two depths at an edge, and is dropped; 0 keeps every pixel")
       ->capture_default_str();
   app.add_flag("--normals", s.write_normals, "write per-vertex normals (outward on closed pieces) with the mesh");
-  app.add_flag("--keep-small", [&](std::int64_t) { s.opt.mesher.min_piece_faces = 0, s.opt.mesher.min_piece_vertex_fraction = 0; },
+  app.add_flag("--keep-small",
+               [&](std::int64_t) {
+                 s.opt.mesher.min_piece_faces = 0, s.opt.mesher.min_piece_vertex_fraction = 0;
+                 s.opt.stray.sparse_group_fraction = 0;
+               },
                "keep every piece of the mesh; by default pieces of fewer than 20 triangles or fewer than 1 % of the "
-               "vertices (stray bits of clutter) are dropped and counted in the report");
+               "vertices (stray bits of clutter) are dropped and counted in the report, and so are groups of the "
+               "cloud with under 1 % of its points spread 4 times more sparsely than the rest (stray points; groups "
+               "of fewer points than -k are always dropped: their neighbourhoods would bridge the gap)");
 }
 
 // Declares the output and reconstruction options: -o, -n, the cleaning, the CVT, the mesher, -q.

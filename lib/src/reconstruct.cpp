@@ -169,7 +169,10 @@ PreparedCloud prepare_cloud(const Eigen::MatrixX3d& P_in, const ReconstructionOp
   clean_cloud(cloud, &clean_report);
   res.points_merged = static_cast<int>(clean_report.duplicates_merged);
   if (options.stray.enabled()) {  // before the frame, which they would stretch
-    const std::vector<char> stray = stray_point_mask(cloud.P, options.stray, options.threads);
+    StrayPointOptions stray_options = options.stray;
+    if (stray_options.min_group_points > 0)  // a smaller group's neighbourhoods would bridge the gap
+      stray_options.min_group_points = std::max(stray_options.min_group_points, options.neighbors);
+    const std::vector<char> stray = stray_point_mask(cloud.P, stray_options, options.threads);
     res.points_stray = static_cast<int>(std::count(stray.begin(), stray.end(), 1));
     if (res.points_stray > 0) cloud.P = rows_where(cloud.P, stray, 0);
   }
