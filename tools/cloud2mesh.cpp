@@ -147,6 +147,9 @@ cli::Json make_report(const std::string& cloud_path, const std::vector<std::stri
   j["border_vertices"] = res.border.mesh_border_vertices;
   j["border_on_scan_edge"] = res.border.mesh_border_on_edge;
   j["border_p90_spacings"] = res.border.mesh_border_distance;
+  j["tip_moves"] = res.coverage.moves;
+  j["tip_uncovered_before"] = res.coverage.uncovered_before;
+  j["tip_uncovered_after"] = res.coverage.uncovered_after;
   j["blas"] = heatcvt::blas_description();
   j["laplacian_s"] = res.laplacian_seconds;
   j["factor_s"] = res.factor_seconds;
@@ -494,6 +497,10 @@ void print_summary(const Settings& s, const std::string& cloud_path, const Recon
                 "within %.2f), %.1f %% of the scan's %d edge points within one spacing of the mesh\n",
                 100.0 * res.border.mesh_border_on_edge, res.border.mesh_border_vertices,
                 res.border.mesh_border_distance, 100.0 * res.border.edge_covered, res.border.edge_points);
+  if (res.coverage.moves > 0)
+    std::printf("  tips: %d vertices moved onto the fitted surface the mesh had cut off (%d CVT points farther than "
+                "half a spacing from it before, %d after)\n",
+                res.coverage.moves, res.coverage.uncovered_before, res.coverage.uncovered_after);
   // The point Laplacian resolves a heat cell from about 10 points (ReconstructionOptions::
   // cvt_points_per_site); far fewer leave holes and slivers the mesher can only patch.
   const double points_per_site = static_cast<double>(res.points_used) / opt.sites;

@@ -31,6 +31,8 @@
 #include "heatcvt/normals.h"
 #include "heatcvt/parallel.h"
 #include "heatcvt/point_laplacian.h"
+#include "heatcvt/mesher/compaction.h"
+#include "heatcvt/mesher/mesh_checks.h"
 #include "heatcvt/mesher/surface_mesher.h"
 
 namespace heatcvt {
@@ -212,6 +214,38 @@ PreparedCloud prepare_cloud(const Eigen::MatrixX3d& P_in, const ReconstructionOp
   }
   out.P = std::move(P);
   return out;
+}
+
+// The coverage repair of the tips of closed pieces (ReconstructionOptions::coverage) on the
+// mesher's result `mesh` against the CVT points `samples`; undone where it makes faces cross.
+// Returns whether vertices moved.
+bool cover_tips(WorkingMesh& mesh, const SurfaceProjector& fit, const Eigen::MatrixX3d& samples,
+                const CoverageRepairOptions& options, CoverageRepairStats& stats) {
+  stats = {};
+  if (options.rounds <= 0 || mesh.empty()) return false;
+  // Vertices of open pieces stay (with the border vertices repair_coverage() locks itself).
+  const FaceComponents pieces = face_components(mesh, true);
+  std::vector<char> open(pieces.size.size(), 0), fixed(mesh.num_vertices(), 0);
+  const std::vector<char> border = mesh.boundary_vertices();
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int v : mesh.face(f))
+      if (border[v]) open[pieces.of_face[f]] = 1;
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    if (open[pieces.of_face[f]])
+      for (int v : mesh.face(f)) fixed[v] = 1;
+  if (std::all_of(open.begin(), open.end(), [](char o) { return o != 0; })) return false;
+  double length = 0;
+  int edges = 0;
+  for (const MeshFace& f : mesh.faces())
+    for (int k = 0; k < 3; ++k, ++edges) length += (mesh.V.row(f[k]) - mesh.V.row(f[(k + 1) % 3])).norm();
+  const WorkingMesh::Checkpoint before = mesh.checkpoint();
+  stats = repair_coverage(mesh, fit, samples, length / edges, options, &fixed);
+  // Only the faces around moved vertices can cross anything new.
+  if (stats.moves > 0 && !crossing_face_pairs_after(mesh, before, {}).empty()) {
+    mesh.rollback(before);
+    stats = {};
+  }
+  return stats.moves > 0;
 }
 
 // The CVT's points: every point, or a spatially uniform subset (cvt_points_per_site).
@@ -510,6 +544,8 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   res.mesh = finish_mesh(mesh, fit, mopt, stats);
   copy_stats(stats, res);
   stage.t = Clock::now();
+  if (cover_tips(mesh, fit, cp.PC, options.coverage, res.coverage)) res.mesh = compact_mesh(mesh);
+  stage.done("tips");
   // Only an open mesh has a border to fit (a closed one leaves the cloud's border unsearched).
   if (!boundary_edges(res.mesh.F).empty())
     res.border = border_fit(fit.sample_border(), res.mesh, mean_edge_length(res.mesh.V, res.mesh.F));

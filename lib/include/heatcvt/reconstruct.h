@@ -13,6 +13,7 @@
 
 #include "heatcvt/cvt.h"
 #include "heatcvt/mesh.h"
+#include "heatcvt/mesher/coverage_repair.h"
 #include "heatcvt/mesher/projector.h"
 #include "heatcvt/mesher/surface_mesher.h"
 #include "heatcvt/sample_border.h"
@@ -139,6 +140,15 @@ struct ReconstructionOptions {
   /// mesher.polish.relaxation_iterations and mesher.threads are set by reconstruct_surface() from
   /// `max_hole_edges`, `relaxation_iterations` and `threads` above.
   SurfaceMesherOptions mesher;
+  /// Tips of thin parts (ears, fingers, claws) of closed pieces: the relaxation and the polish
+  /// pull the vertices there towards the middle of their rings and the mesh caps the tip. After
+  /// the mesher, the CVT points (on the fitted surface) farther than coverage.max_gap mean edge
+  /// lengths from the mesh pull the nearest corner of their nearest face onto them, where its
+  /// triangles keep a smallest angle of min(coverage.min_angle_deg, before) (mesher/coverage_repair.h);
+  /// a repair that makes faces cross is undone. Vertices of open pieces stay: there the samples
+  /// the mesh leaves out lie beyond the scan's edge or where flying faces and slivers were cut.
+  /// coverage.rounds = 0 turns it off. Defaults as CoverageRepairOptions.
+  CoverageRepairOptions coverage;
 };
 
 /// The CVT options reconstruct_surface() runs centroidal_voronoi() with (sites, iterations,
@@ -196,6 +206,10 @@ struct ReconstructionResult {
   /// was fitted to), in site spacings (the mesh's mean edge length); zero counts for a closed
   /// mesh.
   BorderFit border;
+  /// The tips' coverage repair (ReconstructionOptions::coverage): samples farther than its
+  /// max_gap from the mesh before and after, vertex moves kept, largest gaps (in the cloud's
+  /// bounding-box frame, not the input's units). All zero where it was off or undone.
+  CoverageRepairStats coverage;
 };
 
 /// Reconstructs a surface from the points P (#P by 3; NaN-free, duplicates allowed).

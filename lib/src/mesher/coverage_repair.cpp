@@ -4,38 +4,113 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include "heatcvt/closest_point.h"
 #include "heatcvt/mesh.h"
+#include "heatcvt/point_index.h"
 
 namespace heatcvt {
 
 namespace {
 
-// Distance from each sample to the mesh and the face it is nearest.
-struct Gaps {
-  std::vector<double> distance;
-  std::vector<int> face;
-  double largest = 0;
-};
-
-Gaps measure_gaps(const WorkingMesh& mesh, const Eigen::MatrixX3d& samples) {
-  Gaps g;
-  Eigen::MatrixX3i F(mesh.num_faces(), 3);
-  for (int f = 0; f < mesh.num_faces(); ++f)
-    for (int k = 0; k < 3; ++k) F(f, k) = mesh.face(f)[k];
-  const std::vector<SurfacePoint> nearest = closest_surface_points(mesh.V, F, samples);
-  g.distance.resize(static_cast<std::size_t>(samples.rows()));
-  g.face.resize(g.distance.size());
-  for (Eigen::Index i = 0; i < samples.rows(); ++i) {
-    const SurfacePoint& p = nearest[static_cast<std::size_t>(i)];
-    g.face[static_cast<std::size_t>(i)] = p.face;
-    g.distance[static_cast<std::size_t>(i)] = (position(mesh.V, F, p) - samples.row(i).transpose()).norm();
-    g.largest = std::max(g.largest, g.distance[static_cast<std::size_t>(i)]);
+// Distances from the samples to the mesh, kept up to date as vertices move. For each sample, the
+// distance to the faces around its nearest vertex (`bound`) bounds its distance to the mesh, and
+// is it wherever the closest point lies in that fan; only the samples whose bound exceeds the
+// limit (they may be uncovered), or the largest distance found, are searched in the whole mesh.
+// After moves, only the samples a moved vertex's faces can have been nearest (within the limit
+// plus the longest edge of the old or the new position) and the uncovered ones are measured again.
+class Gaps {
+ public:
+  Gaps(const WorkingMesh& mesh, const Eigen::MatrixX3d& samples, double limit)
+      : mesh_(mesh), samples_(samples), limit_(limit), sample_index_(samples),
+        bound_(static_cast<std::size_t>(samples.rows()), 0.0) {
+    std::vector<int> all(bound_.size());
+    std::iota(all.begin(), all.end(), 0);
+    measure(all);
   }
-  return g;
-}
+
+  // Measures again after the vertices `moved` went from their positions in `old` (#V by 3).
+  void update(const std::vector<int>& moved, const Eigen::MatrixX3d& old) {
+    double longest = 0;
+    for (const MeshFace& f : mesh_.faces())
+      for (int k = 0; k < 3; ++k) longest = std::max(longest, (mesh_.V.row(f[k]) - mesh_.V.row(f[(k + 1) % 3])).norm());
+    std::vector<char> again(bound_.size(), 0);
+    for (std::size_t i = 0; i < bound_.size(); ++i) again[i] = distance[i] > limit_;
+    for (int v : moved)
+      for (const Eigen::Vector3d x : {Eigen::Vector3d(old.row(v).transpose()), Eigen::Vector3d(mesh_.V.row(v).transpose())})
+        for (int i : sample_index_.within(x, limit_ + longest)) again[static_cast<std::size_t>(i)] = 1;
+    std::vector<int> which;
+    for (std::size_t i = 0; i < again.size(); ++i)
+      if (again[i]) which.push_back(static_cast<int>(i));
+    measure(which);
+  }
+
+  std::vector<double> distance;  // to the mesh where above the limit, else −1
+  std::vector<int> face;         // the nearest face where above the limit, else −1
+  double largest = 0;            // over every sample
+
+ private:
+  void measure(const std::vector<int>& which) {
+    const Eigen::Index n = samples_.rows();
+    distance.resize(static_cast<std::size_t>(n), -1.0);
+    face.resize(static_cast<std::size_t>(n), -1);
+    Eigen::MatrixX3i F(mesh_.num_faces(), 3);
+    for (int f = 0; f < mesh_.num_faces(); ++f)
+      for (int k = 0; k < 3; ++k) F(f, k) = mesh_.face(f)[k];
+    const std::vector<std::vector<int>> vf = mesh_.vertex_faces();
+    std::vector<int> corner;  // the vertices in faces, as rows of `corners`
+    for (int v = 0; v < mesh_.num_vertices(); ++v)
+      if (!vf[v].empty()) corner.push_back(v);
+    Eigen::MatrixX3d corners(static_cast<Eigen::Index>(corner.size()), 3);
+    for (std::size_t r = 0; r < corner.size(); ++r) corners.row(static_cast<Eigen::Index>(r)) = mesh_.V.row(corner[r]);
+    const PointIndex index(corners);
+#pragma omp parallel for schedule(static)
+    for (std::size_t r = 0; r < which.size(); ++r) {
+      const int i = which[r];
+      const Eigen::Vector3d q = samples_.row(i).transpose();
+      double d = 0, b = std::numeric_limits<double>::infinity();
+      for (int f : vf[corner[static_cast<std::size_t>(index.nearest(q, d))]]) {
+        const Eigen::Vector3d a = mesh_.V.row(F(f, 0)).transpose(), e = mesh_.V.row(F(f, 1)).transpose(),
+                              c = mesh_.V.row(F(f, 2)).transpose();
+        const Eigen::Vector3d w = closest_point_barycentric(q, a, e, c);
+        b = std::min(b, (w[0] * a + w[1] * e + w[2] * c - q).norm());
+      }
+      bound_[static_cast<std::size_t>(i)] = b;
+      distance[static_cast<std::size_t>(i)] = -1;
+      face[static_cast<std::size_t>(i)] = -1;
+    }
+    std::vector<int> order(bound_.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return bound_[a] > bound_[b]; });
+    const ClosestPointTree tree(mesh_.V, F);
+    const auto exact = [&](int i) {
+      const SurfacePoint p = tree.closest(samples_.row(i).transpose());
+      const double d = (position(mesh_.V, F, p) - samples_.row(i).transpose()).norm();
+      distance[static_cast<std::size_t>(i)] = d > limit_ ? d : -1;
+      face[static_cast<std::size_t>(i)] = d > limit_ ? p.face : -1;
+      return d;
+    };
+    // Every sample whose bound is beyond the limit may be uncovered.
+    const int candidates =
+        static_cast<int>(std::count_if(bound_.begin(), bound_.end(), [&](double d) { return d > limit_; }));
+    std::vector<double> found(static_cast<std::size_t>(candidates), 0.0);
+#pragma omp parallel for schedule(dynamic, 64)
+    for (int r = 0; r < candidates; ++r) found[static_cast<std::size_t>(r)] = exact(order[static_cast<std::size_t>(r)]);
+    largest = 0;
+    for (double d : found) largest = std::max(largest, d);
+    // The others only for the largest distance.
+    for (std::size_t r = static_cast<std::size_t>(candidates); r < order.size() && bound_[order[r]] > largest; ++r)
+      largest = std::max(largest, exact(order[r]));
+  }
+
+  const WorkingMesh& mesh_;
+  const Eigen::MatrixX3d& samples_;
+  const double limit_;
+  const PointIndex sample_index_;
+  std::vector<double> bound_;
+};
 
 // Smallest angle of the faces `ring` around v with v at `x`, and whether every one of them faces
 // along `normal` and turns by at most `max_turn` (cosine) from its current normal.
@@ -62,9 +137,9 @@ RingShape ring_shape(const WorkingMesh& mesh, const std::vector<int>& ring, int 
   return r;
 }
 
-// Tries to move a corner of face `face` towards sample q; returns whether a move was kept.
+// Tries to move a corner of face `face` towards sample q; returns the vertex moved, or −1.
 // Vertices in `busy` (moved this round, or next to a moved one) are not tried.
-bool move_towards(WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<std::vector<int>>& vf,
+int move_towards(WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<std::vector<int>>& vf,
                   const std::vector<char>& locked, std::vector<char>& busy, int face, const Eigen::Vector3d& q,
                   const CoverageRepairOptions& o) {
   const MeshFace& f = mesh.face(face);
@@ -78,21 +153,28 @@ bool move_towards(WorkingMesh& mesh, const SurfaceProjector& surface, const std:
     if (locked[v] || busy[v]) continue;
     const Eigen::Vector3d x = mesh.V.row(v).transpose();
     const double before = ring_shape(mesh, vf[v], v, x, mesh.N.row(v).transpose(), -1).min_angle;
+    // The side the ring faces now: a projector's normals need not be oriented like the faces (a
+    // cloud's fit, after the closed pieces were turned outward).
+    Eigen::Vector3d facing = Eigen::Vector3d::Zero();
+    for (int id : vf[v]) {
+      const MeshFace& g = mesh.face(id);
+      facing += (mesh.V.row(g[1]) - mesh.V.row(g[0])).cross(mesh.V.row(g[2]) - mesh.V.row(g[0])).transpose();
+    }
     for (double t : o.fractions) {
       int hint = mesh.anchor[v];
       Eigen::Vector3d p, n;
       surface.project(x + t * (q - x), hint, p, n);
-      const RingShape s = ring_shape(mesh, vf[v], v, p, n, cos_turn);
+      const RingShape s = ring_shape(mesh, vf[v], v, p, n.dot(facing) < 0 ? Eigen::Vector3d(-n) : n, cos_turn);
       if (!s.ok || s.min_angle < std::min(floor, before)) continue;
       mesh.V.row(v) = p.transpose();
       mesh.N.row(v) = n.transpose();
       mesh.anchor[v] = hint;
       for (int id : vf[v])
         for (int w : mesh.face(id)) busy[w] = 1;
-      return true;
+      return v;
     }
   }
-  return false;
+  return -1;
 }
 
 }  // namespace
@@ -107,7 +189,7 @@ CoverageRepairStats repair_coverage(WorkingMesh& mesh, const SurfaceProjector& s
   if (fixed)
     for (std::size_t v = 0; v < locked.size() && v < fixed->size(); ++v) locked[v] |= (*fixed)[v];
   const std::vector<std::vector<int>> vf = mesh.vertex_faces();  // moves keep the faces
-  Gaps gaps = measure_gaps(mesh, samples);
+  Gaps gaps(mesh, samples, limit);
   const auto uncovered = [&](const Gaps& g) {
     return static_cast<int>(std::count_if(g.distance.begin(), g.distance.end(), [&](double d) { return d > limit; }));
   };
@@ -119,12 +201,15 @@ CoverageRepairStats repair_coverage(WorkingMesh& mesh, const SurfaceProjector& s
       if (gaps.distance[i] > limit) order.push_back(i);
     std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return gaps.distance[a] > gaps.distance[b]; });
     std::vector<char> busy(static_cast<std::size_t>(mesh.num_vertices()), 0);
-    int moved = 0;
-    for (int i : order)
-      if (move_towards(mesh, surface, vf, locked, busy, gaps.face[i], samples.row(i).transpose(), options)) ++moved;
-    stats.moves += moved;
-    if (moved == 0) break;
-    gaps = measure_gaps(mesh, samples);
+    const Eigen::MatrixX3d old = mesh.V;
+    std::vector<int> moved;
+    for (int i : order) {
+      const int v = move_towards(mesh, surface, vf, locked, busy, gaps.face[i], samples.row(i).transpose(), options);
+      if (v >= 0) moved.push_back(v);
+    }
+    stats.moves += static_cast<int>(moved.size());
+    if (moved.empty()) break;
+    gaps.update(moved, old);
   }
   stats.gap_after = gaps.largest;
   stats.uncovered_after = uncovered(gaps);
