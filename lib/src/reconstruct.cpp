@@ -57,6 +57,8 @@ void check_options(const ReconstructionOptions& o) {
   if (o.relaxation_iterations < 0) bad("relaxation_iterations must be >= 0");
   if (!(o.lloyd_relaxation >= 1 && o.lloyd_relaxation < 2)) bad("lloyd_relaxation must be in [1, 2)");
   if (!(o.lloyd_tolerance >= 0) || !std::isfinite(o.lloyd_tolerance)) bad("lloyd_tolerance must be a finite number >= 0");
+  if (!(o.tips_max_mean_angle_loss_deg >= 0) || !std::isfinite(o.tips_max_mean_angle_loss_deg))
+    bad("tips_max_mean_angle_loss_deg must be a finite number >= 0");
   if (o.surface_lloyd_iterations < 0) bad("surface_lloyd_iterations must be >= 0");
   if (!(o.cvt_points_per_site == 0 || o.cvt_points_per_site >= 3) || !std::isfinite(o.cvt_points_per_site))
     bad("cvt_points_per_site must be 0 (every point) or at least 3");
@@ -216,11 +218,21 @@ PreparedCloud prepare_cloud(const Eigen::MatrixX3d& P_in, const ReconstructionOp
   return out;
 }
 
+// φm of a working mesh (radians; 0 without faces).
+double mean_min_angle(const WorkingMesh& mesh) {
+  double sum = 0;
+  for (const MeshFace& f : mesh.faces()) sum += face_min_angle(mesh, f);
+  return mesh.num_faces() > 0 ? sum / mesh.num_faces() : 0.0;
+}
+
 // The coverage repair of the tips of closed pieces (ReconstructionOptions::coverage) on the
-// mesher's result `mesh` against the CVT points `samples`; undone where it makes faces cross.
-// Returns whether vertices moved.
+// mesher's result `mesh` against the CVT points `samples`; undone where it makes faces cross,
+// lowers φm by more than `max_loss_deg`, or below `mean_angle_deg` (at all, where it was below):
+// noise wider than half a spacing leaves points off the mesh everywhere, not at tips, and chasing
+// them costs the shape. Returns whether vertices moved.
 bool cover_tips(WorkingMesh& mesh, const SurfaceProjector& fit, const Eigen::MatrixX3d& samples,
-                const CoverageRepairOptions& options, CoverageRepairStats& stats) {
+                const CoverageRepairOptions& options, double mean_angle_deg, double max_loss_deg,
+                CoverageRepairStats& stats) {
   stats = {};
   if (options.rounds <= 0 || mesh.empty()) return false;
   // Vertices of open pieces stay (with the border vertices repair_coverage() locks itself).
@@ -239,11 +251,15 @@ bool cover_tips(WorkingMesh& mesh, const SurfaceProjector& fit, const Eigen::Mat
   for (const MeshFace& f : mesh.faces())
     for (int k = 0; k < 3; ++k, ++edges) length += (mesh.V.row(f[k]) - mesh.V.row(f[(k + 1) % 3])).norm();
   const WorkingMesh::Checkpoint before = mesh.checkpoint();
+  const double phi_m = mean_min_angle(mesh);
+  const double floor = std::max(phi_m - max_loss_deg * M_PI / 180, std::min(phi_m, mean_angle_deg * M_PI / 180));
   stats = repair_coverage(mesh, fit, samples, length / edges, options, &fixed);
   // Only the faces around moved vertices can cross anything new.
-  if (stats.moves > 0 && !crossing_face_pairs_after(mesh, before, {}).empty()) {
+  if (stats.moves > 0 && (mean_min_angle(mesh) < floor || !crossing_face_pairs_after(mesh, before, {}).empty())) {
     mesh.rollback(before);
-    stats = {};
+    stats.moves = 0;
+    stats.uncovered_after = stats.uncovered_before;
+    stats.gap_after = stats.gap_before;
   }
   return stats.moves > 0;
 }
@@ -544,7 +560,9 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   res.mesh = finish_mesh(mesh, fit, mopt, stats);
   copy_stats(stats, res);
   stage.t = Clock::now();
-  if (cover_tips(mesh, fit, cp.PC, options.coverage, res.coverage)) res.mesh = compact_mesh(mesh);
+  if (cover_tips(mesh, fit, cp.PC, options.coverage, mopt.sizing.mean_angle_deg,
+                 options.tips_max_mean_angle_loss_deg, res.coverage))
+    res.mesh = compact_mesh(mesh);
   stage.done("tips");
   // Only an open mesh has a border to fit (a closed one leaves the cloud's border unsearched).
   if (!boundary_edges(res.mesh.F).empty())

@@ -145,10 +145,15 @@ struct ReconstructionOptions {
   /// the mesher, the CVT points (on the fitted surface) farther than coverage.max_gap mean edge
   /// lengths from the mesh pull the nearest corner of their nearest face onto them, where its
   /// triangles keep a smallest angle of min(coverage.min_angle_deg, before) (mesher/coverage_repair.h);
-  /// a repair that makes faces cross is undone. Vertices of open pieces stay: there the samples
-  /// the mesh leaves out lie beyond the scan's edge or where flying faces and slivers were cut.
+  /// a repair that makes faces cross, lowers φm by more than tips_max_mean_angle_loss_deg, or
+  /// lowers it below mesher.sizing.mean_angle_deg (at all, where it was below) is undone: noise
+  /// wider than half a spacing leaves points off the mesh everywhere, not at tips, and chasing
+  /// them costs the shape. Vertices of open pieces stay: there the samples the mesh leaves out
+  /// lie beyond the scan's edge or where flying faces and slivers were cut.
   /// coverage.rounds = 0 turns it off. Defaults as CoverageRepairOptions.
   CoverageRepairOptions coverage;
+  /// See `coverage`. Default 1°.
+  double tips_max_mean_angle_loss_deg = 1.0;
 };
 
 /// The CVT options reconstruct_surface() runs centroidal_voronoi() with (sites, iterations,
