@@ -320,7 +320,9 @@ void add_reconstruction_options(CLI::App& app, Settings& s) {
   app.add_option("--stray-ratio", s.opt.stray.ratio,
                  "a point whose 16th nearest neighbour is more than this times farther than the median of the same "
                  "distance over those neighbours is a stray point (isolated returns, groups of fewer than about 8 "
-                 "points off the surface) and is removed; 0 keeps every point")
+                 "points off the surface) and is removed; 0 turns this rule off (groups of the cloud with fewer "
+                 "points than -k, or with under 1 % of the points spread 4 times more sparsely than the rest, still "
+                 "go: see --keep-small)")
       ->capture_default_str();
   app.add_option("--voxel", s.opt.voxel_size, "voxel-grid downsampling size in input units; 0 = off")
       ->capture_default_str();

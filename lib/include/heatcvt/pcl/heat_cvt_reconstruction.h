@@ -118,8 +118,9 @@ class HeatCVTReconstruction : public pcl::SurfaceReconstruction<PointT> {
   void setDenoise(bool denoise) { options_.denoise = denoise; }
   bool getDenoise() const { return options_.denoise; }
 
-  /// The stray-point rule (stray_points.h, cloud2mesh --stray-ratio). Default on (ratio 8,
-  /// 16 neighbours); a ratio of 0 keeps every point.
+  /// The stray-point rules (stray_points.h, cloud2mesh --stray-ratio and --keep-small). Default
+  /// on (ratio 8, 16 neighbours, groups of fewer than 30 points or sparse ones); ratio 0,
+  /// min_group_points 0 and sparse_group_fraction 0 together keep every point.
   void setStrayPoints(const StrayPointOptions& stray) { options_.stray = stray; }
   const StrayPointOptions& getStrayPoints() const { return options_.stray; }
 
