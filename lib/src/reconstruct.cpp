@@ -237,11 +237,8 @@ bool cover_tips(WorkingMesh& mesh, const SurfaceProjector& fit, const Eigen::Mat
   if (options.rounds <= 0 || mesh.empty()) return false;
   // Vertices of open pieces stay (with the border vertices repair_coverage() locks itself).
   const FaceComponents pieces = face_components(mesh, true);
-  std::vector<char> open(pieces.size.size(), 0), fixed(mesh.num_vertices(), 0);
-  const std::vector<char> border = mesh.boundary_vertices();
-  for (int f = 0; f < mesh.num_faces(); ++f)
-    for (int v : mesh.face(f))
-      if (border[v]) open[pieces.of_face[f]] = 1;
+  const std::vector<char> open = open_pieces(mesh, pieces);
+  std::vector<char> fixed(mesh.num_vertices(), 0);
   for (int f = 0; f < mesh.num_faces(); ++f)
     if (open[pieces.of_face[f]])
       for (int v : mesh.face(f)) fixed[v] = 1;

@@ -915,20 +915,6 @@ bool reshapes(const SizingFigures& q, const IsotropicRemeshOptions& o) {
 
 }  // namespace
 
-namespace {
-
-// Marks (1) the pieces of `pieces` that have a border.
-std::vector<char> open_pieces(const WorkingMesh& mesh, const FaceComponents& pieces) {
-  const BorderLinks border = border_links(mesh);
-  std::vector<char> open(pieces.size.size(), 0);
-  for (int id = 0; id < mesh.num_faces(); ++id)
-    for (int v : mesh.face(id))
-      if (border.on(v)) open[pieces.of_face[id]] = 1;
-  return open;
-}
-
-}  // namespace
-
 int remove_flying_faces(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o) {
   // Only pieces with a border: a closed piece encloses a volume and spans no depth jump (its
   // steep faces are caps of thin parts, which stay).

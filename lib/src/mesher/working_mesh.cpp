@@ -293,4 +293,13 @@ FaceComponents face_components(const WorkingMesh& mesh, bool by_vertex) {
   return out;
 }
 
+std::vector<char> open_pieces(const WorkingMesh& mesh, const FaceComponents& pieces) {
+  const BorderLinks border = border_links(mesh);
+  std::vector<char> open(pieces.size.size(), 0);
+  for (int id = 0; id < mesh.num_faces(); ++id)
+    for (int v : mesh.face(id))
+      if (border.on(v)) open[pieces.of_face[id]] = 1;
+  return open;
+}
+
 }  // namespace heatcvt

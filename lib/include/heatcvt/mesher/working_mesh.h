@@ -167,4 +167,7 @@ struct FaceComponents {
 };
 FaceComponents face_components(const WorkingMesh& mesh, bool by_vertex);
 
+/// 1 for each piece of `pieces` (face_components() of `mesh`) that has a border vertex.
+std::vector<char> open_pieces(const WorkingMesh& mesh, const FaceComponents& pieces);
+
 }  // namespace heatcvt
