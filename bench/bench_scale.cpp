@@ -129,8 +129,13 @@ int run_peer_child(const std::string& path, int sites) {
   const PointCloud cloud = read_cloud(path);
   const double t_read = bench::now_seconds() - t0;
   const Eigen::MatrixX3d N = test::peer_normals(cloud.P);
-  const TriangleMesh m = test::remesh_to(test::pcl_poisson(cloud.P, N, 8), sites);
-  const double total = bench::now_seconds() - t0;
+  const TriangleMesh poisson = test::pcl_poisson(cloud.P, N, 8);
+  // The remeshing counts with its last run alone (remesh_to() searches the edge length that
+  // gives the count; a user who knew it would run once).
+  const double before_remesh = bench::now_seconds() - t0;
+  double last_run = 0;
+  const TriangleMesh m = test::remesh_to(poisson, sites, &last_run);
+  const double total = before_remesh + last_run;
   rusage ru{};
   getrusage(RUSAGE_SELF, &ru);
   ValidationOptions vo;

@@ -16,6 +16,7 @@
 #include <pcl/conversions.h>
 #include <pcl/surface/poisson.h>
 
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <utility>
@@ -116,7 +117,7 @@ TriangleMesh cgal_poisson(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N) 
   return from_cgal(sm);
 }
 
-TriangleMesh remesh_to(const TriangleMesh& m, int target_vertices) {
+TriangleMesh remesh_to(const TriangleMesh& m, int target_vertices, double* last_run_seconds) {
   std::vector<K::Point_3> pts;
   for (Eigen::Index i = 0; i < m.V.rows(); ++i) pts.emplace_back(m.V(i, 0), m.V(i, 1), m.V(i, 2));
   std::vector<std::vector<std::size_t>> polys;
@@ -125,13 +126,23 @@ TriangleMesh remesh_to(const TriangleMesh& m, int target_vertices) {
                      static_cast<std::size_t>(m.F(f, 2))});
   PMP::repair_polygon_soup(pts, polys);
   PMP::orient_polygon_soup(pts, polys);
-  CgalMesh sm;
-  PMP::polygon_soup_to_polygon_mesh(pts, polys, sm);
-  const double area = PMP::area(sm);
-  const double L = std::sqrt(2.0 * area / (std::sqrt(3.0) * target_vertices));
-  PMP::isotropic_remeshing(faces(sm), L, sm, CGAL::parameters::number_of_iterations(5));
-  sm.collect_garbage();
-  return from_cgal(sm);
+  CgalMesh input;
+  PMP::polygon_soup_to_polygon_mesh(pts, polys, input);
+  double L = std::sqrt(2.0 * PMP::area(input) / (std::sqrt(3.0) * target_vertices));
+  TriangleMesh out;
+  for (int run = 0; run < kRemeshLengthRuns; ++run) {
+    CgalMesh sm = input;
+    const auto t0 = std::chrono::steady_clock::now();
+    PMP::isotropic_remeshing(faces(sm), L, sm, CGAL::parameters::number_of_iterations(5));
+    sm.collect_garbage();
+    if (last_run_seconds)
+      *last_run_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    out = from_cgal(sm);
+    const double count = static_cast<double>(out.V.rows());
+    if (std::abs(count - target_vertices) <= kRemeshCountTolerance * target_vertices || !(count > 0)) break;
+    L *= std::sqrt(count / target_vertices);
+  }
+  return out;
 }
 
 std::vector<PeerMesh> two_step_peers(const Eigen::MatrixX3d& P, int target_vertices, int threads) {

@@ -36,9 +36,16 @@ TriangleMesh pcl_poisson(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N, i
 TriangleMesh cgal_poisson(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N);
 
 /// CGAL isotropic remeshing (5 iterations) of a mesh, after repairing and orienting it as a polygon
-/// soup, with the target edge length of an equilateral mesh of `target_vertices` vertices of the
-/// same area.
-TriangleMesh remesh_to(const TriangleMesh& m, int target_vertices);
+/// soup, to `target_vertices` vertices: the first run uses the target edge length of an
+/// equilateral mesh of that many vertices of the same area (CGAL's split and collapse bounds then
+/// give about 15 % more), each next one that length scaled by √(count / target), until the count
+/// is within kRemeshCountTolerance of the target or after kRemeshLengthRuns runs (as
+/// bench_remesh calibrates it): the peers are compared at the vertex count heatcvt is asked for.
+/// `last_run_seconds` (optional) gets the time of the last run alone, what a user who knew the
+/// length would spend.
+constexpr double kRemeshCountTolerance = 0.02;
+constexpr int kRemeshLengthRuns = 4;
+TriangleMesh remesh_to(const TriangleMesh& m, int target_vertices, double* last_run_seconds = nullptr);
 
 /// PCL's GreedyProjectionTriangulation (search radius `radius`, mu 2.5, at most 100 neighbours,
 /// surface angle 45°, triangle angles 10–120°, no normal consistency), compacted.
