@@ -11,6 +11,8 @@
 //            [--iterations N] [--relaxation W] [--tolerance X] [--random-start | --fast-start]
 //            [--surface-lloyd N] [--points-per-site X] [--polish N] [--no-smooth] [--no-tips]
 //            (heatcvt options; --no-tips: no repair of the tips after the mesher, coverage.rounds = 0)
+//            [--save-dir DIR]   (writes each cloud as DIR/<shape>_<clean|noisy>.xyz and heatcvt's mesh
+//            beside it as .ply, to look at where the distances come from)
 // The Poisson and remeshing peers are those of the acceptance test (tests/support/peer_pipelines.h).
 #include <CGAL/Advancing_front_surface_reconstruction.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -103,6 +105,7 @@ struct BenchOptions {
   int polish = -1;              // < 0: the library default (relaxation_iterations)
   bool no_smooth = false;       // smooth_cvt_points = false
   bool no_tips = false;         // coverage.rounds = 0: the tips' repair off
+  std::string save_dir;         // non-empty: clouds and heatcvt meshes written there
 };
 
 // Parses the command line into `o`; false (after a message on stderr) for an unknown option.
@@ -124,6 +127,7 @@ bool parse_arguments(int argc, char** argv, BenchOptions& o) {
     else if (a == "--polish" && i + 1 < argc) o.polish = std::atoi(argv[++i]);
     else if (a == "--no-smooth") o.no_smooth = true;
     else if (a == "--no-tips") o.no_tips = true;
+    else if (a == "--save-dir" && i + 1 < argc) o.save_dir = argv[++i];
     else if (!a.empty() && a[0] == '-') {
       std::fprintf(stderr, "bench_reconstruct: unknown option %s\n", a.c_str());
       return false;
@@ -323,6 +327,11 @@ std::vector<Row> bench_cloud(const Shape& shape, double noise, int points, int s
     return heat.mesh;
   });
   cell.rows.back().heat = true;
+  if (!o.save_dir.empty()) {
+    const std::string stem = o.save_dir + "/" + shape.name + (noise > 0 ? "_noisy" : "_clean");
+    write_points_xyz(stem + ".xyz", P);
+    if (heat.mesh.F.rows() > 0) write_mesh(stem + ".ply", heat.mesh.V, heat.mesh.F);
+  }
   if (!o.only_heat) {
     run_peers(cell, P, o.threads, sites);
     set_ratios(cell.rows);

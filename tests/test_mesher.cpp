@@ -1096,6 +1096,41 @@ TEST(CoverageRepair, PutsAVertexBackOnATipThatTheMeshCutOff) {
   EXPECT_EQ(r.vertices, coarse_sphere.V.rows());
 }
 
+TEST(CoverageRepair, DragsTheRingAlongWhereTheVertexAloneWouldMakeSlivers) {
+  // A spike about one spacing tall, centred on a face: its nearest corner moved alone onto the
+  // tip (or part of the way) would leave its triangles below the angle bound.
+  const TriangleMesh coarse_sphere = test::icosphere(2);
+  const Eigen::RowVector3d c = (coarse_sphere.V.row(coarse_sphere.F(0, 0)) + coarse_sphere.V.row(coarse_sphere.F(0, 1)) +
+                                coarse_sphere.V.row(coarse_sphere.F(0, 2))) / 3.0;
+  const Eigen::Vector3d d = c.transpose().normalized();
+  const TriangleMesh fine = spiked(test::icosphere(5), d, 0.6, 48);
+  const MeshSurfaceProjector surface(fine.V, fine.F);
+  const WorkingMesh start = test::working_mesh(spiked(coarse_sphere, d, 0.6, 48));
+  const double spacing = std::sqrt(surface_area(fine.V, fine.F) / start.num_vertices());
+  const CoverageRepairOptions o;
+  CoverageRepairOptions alone = o;
+  alone.ring_drag = 0;
+  WorkingMesh single = start;
+  const CoverageRepairStats st_alone = repair_coverage(single, surface, fine.V, spacing, alone);
+  ASSERT_GT(st_alone.gap_after, o.max_gap * spacing) << "the tip must be out of reach of one vertex for the test";
+
+  WorkingMesh w = start;
+  const double angle_before = ring_min_angle(w);
+  const CoverageRepairStats st = repair_coverage(w, surface, fine.V, spacing, o);
+  EXPECT_GT(st.moves, 1);
+  EXPECT_LE(st.gap_after, o.max_gap * spacing);
+  EXPECT_NEAR(farthest_from(w, fine), st.gap_after, 1e-12);
+  EXPECT_GE(ring_min_angle(w), std::min(o.min_angle_deg * kDeg, angle_before) - 1e-9);
+  // Every vertex, dragged ones too, on the surface (the fine mesh it was projected to).
+  const std::vector<SurfacePoint> on = closest_surface_points(fine.V, fine.F, w.V);
+  for (int v = 0; v < w.num_vertices(); ++v)
+    EXPECT_LT((position(fine.V, fine.F, on[static_cast<std::size_t>(v)]) - w.V.row(v).transpose()).norm(), 1e-9)
+        << "vertex " << v;
+  const ValidationReport r = validate(w, true);
+  EXPECT_TRUE(r.ok()) << r.summary();
+  EXPECT_EQ(r.vertices, coarse_sphere.V.rows());
+}
+
 // ---------------------------------------------------------------------------------------------
 
 TEST(EdgeSplit, SplitsTheLongEdgesOfSliversAcrossAFilledHole) {

@@ -112,69 +112,120 @@ class Gaps {
   std::vector<double> bound_;
 };
 
-// Smallest angle of the faces `ring` around v with v at `x`, and whether every one of them faces
-// along `normal` and turns by at most `max_turn` (cosine) from its current normal.
+// The shape of faces after a move: their smallest angle and whether the move is allowed
+// (faces_shape()).
 struct RingShape {
   double min_angle = M_PI;
   bool ok = true;
 };
 
-RingShape ring_shape(const WorkingMesh& mesh, const std::vector<int>& ring, int v, const Eigen::Vector3d& x,
-                     const Eigen::Vector3d& normal, double cos_max_turn) {
+// The vertices in faces `faces` with their new positions (`moved`, others where they are): the
+// smallest angle of those faces, and whether every one turns by at most `max_turn` (cosine) from
+// its current normal and, where it has v as a corner, faces along `normal`.
+RingShape faces_shape(const WorkingMesh& mesh, const std::vector<int>& faces,
+                      const std::vector<std::pair<int, Eigen::Vector3d>>& moved, int v, const Eigen::Vector3d& normal,
+                      double cos_max_turn) {
+  const auto at = [&](int w) -> Eigen::Vector3d {
+    for (const auto& m : moved)
+      if (m.first == w) return m.second;
+    return mesh.V.row(w).transpose();
+  };
   RingShape r;
-  for (int id : ring) {
+  for (int id : faces) {
     const MeshFace& f = mesh.face(id);
     Eigen::Vector3d p[3], q[3];
     for (int k = 0; k < 3; ++k) {
       q[k] = mesh.V.row(f[k]).transpose();
-      p[k] = f[k] == v ? x : q[k];
+      p[k] = at(f[k]);
     }
-    const Eigen::Vector3d now = (q[1] - q[0]).cross(q[2] - q[0]), moved = (p[1] - p[0]).cross(p[2] - p[0]);
-    const double ln = now.norm(), lm = moved.norm();
-    if (!(lm > 0) || !(moved.dot(normal) > 0) || (ln > 0 && moved.dot(now) < cos_max_turn * ln * lm)) r.ok = false;
+    const Eigen::Vector3d now = (q[1] - q[0]).cross(q[2] - q[0]), after = (p[1] - p[0]).cross(p[2] - p[0]);
+    const double ln = now.norm(), la = after.norm();
+    const bool at_v = f[0] == v || f[1] == v || f[2] == v;
+    if (!(la > 0) || (at_v && !(after.dot(normal) > 0)) || (ln > 0 && after.dot(now) < cos_max_turn * ln * la))
+      r.ok = false;
     r.min_angle = std::min(r.min_angle, triangle_min_angle(p[0], p[1], p[2]));
   }
   return r;
 }
 
-// Tries to move a corner of face `face` towards sample q; returns the vertex moved, or −1.
-// Vertices in `busy` (moved this round, or next to a moved one) are not tried.
-int move_towards(WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<std::vector<int>>& vf,
+// Position of x moved by d on the surface (hint updated), with its normal.
+void project_moved(const SurfaceProjector& surface, const Eigen::Vector3d& x, const Eigen::Vector3d& d, int& hint,
+                   Eigen::Vector3d& p, Eigen::Vector3d& n) {
+  surface.project(x + d, hint, p, n);
+}
+
+// Tries to move a corner of face `face` towards sample q, alone or (options.ring_drag) with its
+// ring neighbours dragged along; appends the vertices moved to `moved`, returns whether any did.
+// Vertices in `busy` (moved this round, or next to a moved one) are not tried and do not move.
+bool move_towards(WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<std::vector<int>>& vf,
                   const std::vector<char>& locked, std::vector<char>& busy, int face, const Eigen::Vector3d& q,
-                  const CoverageRepairOptions& o) {
+                  const CoverageRepairOptions& o, std::vector<int>& moved) {
   const MeshFace& f = mesh.face(face);
   int order[3] = {0, 1, 2};
   std::sort(order, order + 3, [&](int a, int b) {
     return (mesh.V.row(f[a]).transpose() - q).squaredNorm() < (mesh.V.row(f[b]).transpose() - q).squaredNorm();
   });
   const double floor = o.min_angle_deg * M_PI / 180.0, cos_turn = std::cos(o.max_turn_deg * M_PI / 180.0);
-  for (int k : order) {
-    const int v = f[k];
-    if (locked[v] || busy[v]) continue;
-    const Eigen::Vector3d x = mesh.V.row(v).transpose();
-    const double before = ring_shape(mesh, vf[v], v, x, mesh.N.row(v).transpose(), -1).min_angle;
-    // The side the ring faces now: a projector's normals need not be oriented like the faces (a
-    // cloud's fit, after the closed pieces were turned outward).
-    Eigen::Vector3d facing = Eigen::Vector3d::Zero();
-    for (int id : vf[v]) {
-      const MeshFace& g = mesh.face(id);
-      facing += (mesh.V.row(g[1]) - mesh.V.row(g[0])).cross(mesh.V.row(g[2]) - mesh.V.row(g[0])).transpose();
-    }
-    for (double t : o.fractions) {
-      int hint = mesh.anchor[v];
-      Eigen::Vector3d p, n;
-      surface.project(x + t * (q - x), hint, p, n);
-      const RingShape s = ring_shape(mesh, vf[v], v, p, n.dot(facing) < 0 ? Eigen::Vector3d(-n) : n, cos_turn);
-      if (!s.ok || s.min_angle < std::min(floor, before)) continue;
-      mesh.V.row(v) = p.transpose();
-      mesh.N.row(v) = n.transpose();
-      mesh.anchor[v] = hint;
-      for (int id : vf[v])
-        for (int w : mesh.face(id)) busy[w] = 1;
-      return v;
+  for (const double drag : {0.0, o.ring_drag}) {
+    if (drag == o.ring_drag && !(drag > 0)) break;
+    for (int k : order) {
+      const int v = f[k];
+      if (locked[v] || busy[v]) continue;
+      const Eigen::Vector3d x = mesh.V.row(v).transpose();
+      // The ring's neighbours that move with it, and the faces whose shape the move changes.
+      std::vector<int> ring, faces = vf[v];
+      if (drag > 0) {
+        for (int id : vf[v])
+          for (int w : mesh.face(id))
+            if (w != v && !locked[w] && !busy[w] && std::find(ring.begin(), ring.end(), w) == ring.end()) ring.push_back(w);
+        if (ring.empty()) continue;
+        for (int w : ring) faces.insert(faces.end(), vf[w].begin(), vf[w].end());
+        std::sort(faces.begin(), faces.end());
+        faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+      }
+      const double before = faces_shape(mesh, faces, {}, -1, Eigen::Vector3d::Zero(), -1).min_angle;
+      // The side the ring faces now: a projector's normals need not be oriented like the faces (a
+      // cloud's fit, after the closed pieces were turned outward).
+      Eigen::Vector3d facing = Eigen::Vector3d::Zero();
+      for (int id : vf[v]) {
+        const MeshFace& g = mesh.face(id);
+        facing += (mesh.V.row(g[1]) - mesh.V.row(g[0])).cross(mesh.V.row(g[2]) - mesh.V.row(g[0])).transpose();
+      }
+      for (double t : o.fractions) {
+        const Eigen::Vector3d d = t * (q - x);
+        std::vector<std::pair<int, Eigen::Vector3d>> to;
+        std::vector<std::pair<int, Eigen::Vector3d>> normals;
+        std::vector<int> hints;
+        int hint = mesh.anchor[v];
+        Eigen::Vector3d p, n;
+        project_moved(surface, x, d, hint, p, n);
+        to.emplace_back(v, p);
+        normals.emplace_back(v, n);
+        hints.push_back(hint);
+        for (int w : ring) {
+          int h = mesh.anchor[w];
+          Eigen::Vector3d pw, nw;
+          project_moved(surface, mesh.V.row(w).transpose(), drag * d, h, pw, nw);
+          to.emplace_back(w, pw);
+          normals.emplace_back(w, nw);
+          hints.push_back(h);
+        }
+        const RingShape s = faces_shape(mesh, faces, to, v, n.dot(facing) < 0 ? Eigen::Vector3d(-n) : n, cos_turn);
+        if (!s.ok || s.min_angle < std::min(floor, before)) continue;
+        for (std::size_t i = 0; i < to.size(); ++i) {
+          const int w = to[i].first;
+          mesh.V.row(w) = to[i].second.transpose();
+          mesh.N.row(w) = normals[i].second.transpose();
+          mesh.anchor[w] = hints[i];
+          moved.push_back(w);
+          for (int id : vf[w])
+            for (int u : mesh.face(id)) busy[u] = 1;
+        }
+        return true;
+      }
     }
   }
-  return -1;
+  return false;
 }
 
 }  // namespace
@@ -203,10 +254,7 @@ CoverageRepairStats repair_coverage(WorkingMesh& mesh, const SurfaceProjector& s
     std::vector<char> busy(static_cast<std::size_t>(mesh.num_vertices()), 0);
     const Eigen::MatrixX3d old = mesh.V;
     std::vector<int> moved;
-    for (int i : order) {
-      const int v = move_towards(mesh, surface, vf, locked, busy, gaps.face[i], samples.row(i).transpose(), options);
-      if (v >= 0) moved.push_back(v);
-    }
+    for (int i : order) move_towards(mesh, surface, vf, locked, busy, gaps.face[i], samples.row(i).transpose(), options, moved);
     stats.moves += static_cast<int>(moved.size());
     if (moved.empty()) break;
     gaps.update(moved, old);

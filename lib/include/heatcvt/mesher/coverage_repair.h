@@ -27,6 +27,12 @@ struct CoverageRepairOptions {
   /// Fractions of the way to the sample tried for a vertex, first to last (the first kept wins).
   /// Default {1, 0.75, 0.5}.
   std::vector<double> fractions{1.0, 0.75, 0.5};
+  /// Where no fraction keeps the vertex's triangles within the bounds (a tip sharper than the
+  /// vertex's ring can follow alone), the fractions are tried again with the vertex's ring
+  /// neighbours (those not fixed) moved by this fraction of its displacement, each projected to
+  /// the surface; the bounds then hold for every face of a moved vertex. 0 = the vertex alone.
+  /// Default 0.5.
+  double ring_drag = 0.5;
   /// Rounds (distances measured again after each). Default 4.
   int rounds = 4;
 };
@@ -35,7 +41,7 @@ struct CoverageRepairOptions {
 struct CoverageRepairStats {
   int uncovered_before = 0;  ///< samples farther than max_gap spacings before the repair
   int uncovered_after = 0;   ///< and after it
-  int moves = 0;             ///< vertex moves kept
+  int moves = 0;             ///< vertex moves kept (a dragged ring neighbour counts as one)
   double gap_before = 0;     ///< largest distance from a sample to the mesh, before and after
   double gap_after = 0;
 };
@@ -44,7 +50,8 @@ struct CoverageRepairStats {
 /// (farthest first, each vertex at most once per round): the corner of the sample's nearest face
 /// that is nearest the sample goes onto it (projected through `surface`), or the largest of
 /// options.fractions of the way that keeps the vertex's triangles within the angle and turn
-/// bounds and facing along its normal. Border vertices and vertices with (*fixed)[v] stay.
+/// bounds and facing along its normal; failing that, the same with its ring dragged along
+/// (options.ring_drag). Border vertices and vertices with (*fixed)[v] stay.
 /// `samples` are points on the surface (an input mesh's vertices).
 CoverageRepairStats repair_coverage(WorkingMesh& mesh, const SurfaceProjector& surface,
                                     const Eigen::MatrixX3d& samples, double spacing,
