@@ -119,15 +119,21 @@ struct RingShape {
   bool ok = true;
 };
 
-// The vertices in faces `faces` with their new positions (`moved`, others where they are): the
-// smallest angle of those faces, and whether every one turns by at most `max_turn` (cosine) from
-// its current normal and, where it has v as a corner, faces along `normal`.
-RingShape faces_shape(const WorkingMesh& mesh, const std::vector<int>& faces,
-                      const std::vector<std::pair<int, Eigen::Vector3d>>& moved, int v, const Eigen::Vector3d& normal,
-                      double cos_max_turn) {
+// A vertex's place after a move: position and normal on the surface, and the projector's hint.
+struct Placed {
+  int v = -1;
+  Eigen::Vector3d x, n;
+  int hint = -1;
+};
+
+// The shape of faces `faces` with the vertices of `moved` at their new places: the smallest angle,
+// and whether every face turns by at most `max_turn` (cosine) from its current normal and, where
+// it has v as a corner, faces along `normal`.
+RingShape faces_shape(const WorkingMesh& mesh, const std::vector<int>& faces, const std::vector<Placed>& moved, int v,
+                      const Eigen::Vector3d& normal, double cos_max_turn) {
   const auto at = [&](int w) -> Eigen::Vector3d {
-    for (const auto& m : moved)
-      if (m.first == w) return m.second;
+    for (const Placed& m : moved)
+      if (m.v == w) return m.x;
     return mesh.V.row(w).transpose();
   };
   RingShape r;
@@ -148,15 +154,31 @@ RingShape faces_shape(const WorkingMesh& mesh, const std::vector<int>& faces,
   return r;
 }
 
-// Position of x moved by d on the surface (hint updated), with its normal.
-void project_moved(const SurfaceProjector& surface, const Eigen::Vector3d& x, const Eigen::Vector3d& d, int& hint,
-                   Eigen::Vector3d& p, Eigen::Vector3d& n) {
-  surface.project(x + d, hint, p, n);
+// Vertex w moved by d and projected to the surface.
+Placed place(const WorkingMesh& mesh, const SurfaceProjector& surface, int w, const Eigen::Vector3d& d) {
+  Placed m;
+  m.v = w;
+  m.hint = mesh.anchor[w];
+  surface.project(mesh.V.row(w).transpose() + d, m.hint, m.x, m.n);
+  return m;
 }
 
-// Tries to move a corner of face `face` towards sample q, alone or (options.ring_drag) with its
-// ring neighbours dragged along; appends the vertices moved to `moved`, returns whether any did.
-// Vertices in `busy` (moved this round, or next to a moved one) are not tried and do not move.
+// v's ring neighbours that may move with it (not locked, not busy), and the faces of v and of
+// those neighbours: the faces whose shape a dragged move changes.
+void drag_region(const WorkingMesh& mesh, const std::vector<std::vector<int>>& vf, const std::vector<char>& locked,
+                 const std::vector<char>& busy, int v, std::vector<int>& ring, std::vector<int>& faces) {
+  for (int id : vf[v])
+    for (int w : mesh.face(id))
+      if (w != v && !locked[w] && !busy[w] && std::find(ring.begin(), ring.end(), w) == ring.end()) ring.push_back(w);
+  for (int w : ring) faces.insert(faces.end(), vf[w].begin(), vf[w].end());
+  std::sort(faces.begin(), faces.end());
+  faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+}
+
+// Tries to move a corner of face `face` towards sample q: each corner, nearest first, alone, then
+// (options.ring_drag > 0) with its ring neighbours dragged along by that fraction of its
+// displacement; appends the vertices moved to `moved` and returns whether any did. Vertices in
+// `busy` (moved this round, or next to a moved one) are neither tried nor dragged.
 bool move_towards(WorkingMesh& mesh, const SurfaceProjector& surface, const std::vector<std::vector<int>>& vf,
                   const std::vector<char>& locked, std::vector<char>& busy, int face, const Eigen::Vector3d& q,
                   const CoverageRepairOptions& o, std::vector<int>& moved) {
@@ -166,23 +188,15 @@ bool move_towards(WorkingMesh& mesh, const SurfaceProjector& surface, const std:
     return (mesh.V.row(f[a]).transpose() - q).squaredNorm() < (mesh.V.row(f[b]).transpose() - q).squaredNorm();
   });
   const double floor = o.min_angle_deg * M_PI / 180.0, cos_turn = std::cos(o.max_turn_deg * M_PI / 180.0);
-  for (const double drag : {0.0, o.ring_drag}) {
-    if (drag == o.ring_drag && !(drag > 0)) break;
+  std::vector<double> drags{0.0};
+  if (o.ring_drag > 0) drags.push_back(o.ring_drag);
+  for (const double drag : drags) {
     for (int k : order) {
       const int v = f[k];
       if (locked[v] || busy[v]) continue;
-      const Eigen::Vector3d x = mesh.V.row(v).transpose();
-      // The ring's neighbours that move with it, and the faces whose shape the move changes.
       std::vector<int> ring, faces = vf[v];
-      if (drag > 0) {
-        for (int id : vf[v])
-          for (int w : mesh.face(id))
-            if (w != v && !locked[w] && !busy[w] && std::find(ring.begin(), ring.end(), w) == ring.end()) ring.push_back(w);
-        if (ring.empty()) continue;
-        for (int w : ring) faces.insert(faces.end(), vf[w].begin(), vf[w].end());
-        std::sort(faces.begin(), faces.end());
-        faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
-      }
+      if (drag > 0) drag_region(mesh, vf, locked, busy, v, ring, faces);
+      if (drag > 0 && ring.empty()) continue;
       const double before = faces_shape(mesh, faces, {}, -1, Eigen::Vector3d::Zero(), -1).min_angle;
       // The side the ring faces now: a projector's normals need not be oriented like the faces (a
       // cloud's fit, after the closed pieces were turned outward).
@@ -192,33 +206,18 @@ bool move_towards(WorkingMesh& mesh, const SurfaceProjector& surface, const std:
         facing += (mesh.V.row(g[1]) - mesh.V.row(g[0])).cross(mesh.V.row(g[2]) - mesh.V.row(g[0])).transpose();
       }
       for (double t : o.fractions) {
-        const Eigen::Vector3d d = t * (q - x);
-        std::vector<std::pair<int, Eigen::Vector3d>> to;
-        std::vector<std::pair<int, Eigen::Vector3d>> normals;
-        std::vector<int> hints;
-        int hint = mesh.anchor[v];
-        Eigen::Vector3d p, n;
-        project_moved(surface, x, d, hint, p, n);
-        to.emplace_back(v, p);
-        normals.emplace_back(v, n);
-        hints.push_back(hint);
-        for (int w : ring) {
-          int h = mesh.anchor[w];
-          Eigen::Vector3d pw, nw;
-          project_moved(surface, mesh.V.row(w).transpose(), drag * d, h, pw, nw);
-          to.emplace_back(w, pw);
-          normals.emplace_back(w, nw);
-          hints.push_back(h);
-        }
+        const Eigen::Vector3d d = t * (q - mesh.V.row(v).transpose());
+        std::vector<Placed> to{place(mesh, surface, v, d)};
+        for (int w : ring) to.push_back(place(mesh, surface, w, drag * d));
+        const Eigen::Vector3d& n = to.front().n;
         const RingShape s = faces_shape(mesh, faces, to, v, n.dot(facing) < 0 ? Eigen::Vector3d(-n) : n, cos_turn);
         if (!s.ok || s.min_angle < std::min(floor, before)) continue;
-        for (std::size_t i = 0; i < to.size(); ++i) {
-          const int w = to[i].first;
-          mesh.V.row(w) = to[i].second.transpose();
-          mesh.N.row(w) = normals[i].second.transpose();
-          mesh.anchor[w] = hints[i];
-          moved.push_back(w);
-          for (int id : vf[w])
+        for (const Placed& m : to) {
+          mesh.V.row(m.v) = m.x.transpose();
+          mesh.N.row(m.v) = m.n.transpose();
+          mesh.anchor[m.v] = m.hint;
+          moved.push_back(m.v);
+          for (int id : vf[m.v])
             for (int u : mesh.face(id)) busy[u] = 1;
         }
         return true;
