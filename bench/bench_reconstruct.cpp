@@ -292,6 +292,8 @@ void print_heat_details(const ReconstructionResult& heat, const Row& h) {
                heat.total_seconds,
                heat.holes_filled, heat.rejected_triangles, heat.removed_triangles, heat.unused_sites,
                heat.polish_fallback ? 1 : 0, heat.angle_polish_undone ? 1 : 0, h.ratio, h.accepted ? "ACCEPTED" : "NOT accepted");
+  std::fprintf(stderr, "   heatcvt tips: %d moves kept, CVT points farther than half a spacing %d before, %d after\n",
+               heat.coverage.moves, heat.coverage.uncovered_before, heat.coverage.uncovered_after);
 }
 
 // A source mesh of the benchmark with its bounding-box diagonal and genus.
