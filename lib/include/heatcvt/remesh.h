@@ -174,7 +174,14 @@ struct RemeshOptions {
   /// back onto the input vertices farther than coverage.max_gap site spacings from it (tips and
   /// ridges that the relaxation rounded off). Runs where the stages run; coverage.rounds = 0 turns
   /// it off.
-  CoverageRepairOptions coverage;
+  /// The ring drag (CoverageRepairOptions::ring_drag) is off here: this repair has no φm bound
+  /// (the cloud path undoes its repair where φm falls), and dragged rings can take φm below its
+  /// target. Otherwise the defaults of CoverageRepairOptions.
+  CoverageRepairOptions coverage = [] {
+    CoverageRepairOptions c;
+    c.ring_drag = 0;
+    return c;
+  }();
   /// ... and undone where the input vertex farthest from the result is more than this many times
   /// farther than from the mesh before (snapping a tip's vertex onto a short crease near the tip
   /// of an organic shape cuts the tip off). Default 1.1.
