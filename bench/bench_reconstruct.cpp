@@ -24,6 +24,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <functional>
 #include <limits>
 #include <stdexcept>
@@ -372,6 +373,10 @@ void print_table(const std::vector<Row>& rows, int points, int sites) {
 int main(int argc, char** argv) {
   BenchOptions o;
   if (!parse_arguments(argc, argv, o)) return 2;
+  if (!o.save_dir.empty() && !std::filesystem::is_directory(o.save_dir)) {
+    std::fprintf(stderr, "bench_reconstruct: error: --save-dir %s: not a directory\n", o.save_dir.c_str());
+    return 2;
+  }
   const int points = o.pos.size() > 0 ? std::atoi(o.pos[0].c_str()) : 50000;
   const int sites = o.pos.size() > 1 ? std::atoi(o.pos[1].c_str()) : 3000;
   const std::vector<std::string> shapes = shape_list(o);

@@ -1060,16 +1060,35 @@ double farthest_from(const WorkingMesh& w, const TriangleMesh& fine) {
   return gap;
 }
 
+// A sphere with a spike of `height` (sharpness k) centred on face 0 of icosphere(2), so that no
+// vertex of that coarse mesh is on its tip: `fine` (icosphere(5) spiked) is the surface, `coarse`
+// the mesh to repair, `d` the spike's direction, `spacing` the coarse mesh's on the fine area.
+struct SpikeOnAFace {
+  Eigen::Vector3d d;
+  TriangleMesh fine;
+  WorkingMesh coarse;
+  double spacing = 0;
+};
+
+SpikeOnAFace spike_on_a_face(double height, int k) {
+  const TriangleMesh sphere = test::icosphere(2);
+  SpikeOnAFace s;
+  s.d = ((sphere.V.row(sphere.F(0, 0)) + sphere.V.row(sphere.F(0, 1)) + sphere.V.row(sphere.F(0, 2))) / 3.0)
+            .transpose()
+            .normalized();
+  s.fine = spiked(test::icosphere(5), s.d, height, k);
+  s.coarse = test::working_mesh(spiked(sphere, s.d, height, k));
+  s.spacing = std::sqrt(surface_area(s.fine.V, s.fine.F) / s.coarse.num_vertices());
+  return s;
+}
+
 TEST(CoverageRepair, PutsAVertexBackOnATipThatTheMeshCutOff) {
-  // A spike centred on a face of the coarse mesh: no vertex of the coarse mesh is on its tip.
-  const TriangleMesh coarse_sphere = test::icosphere(2);
-  const Eigen::RowVector3d c = (coarse_sphere.V.row(coarse_sphere.F(0, 0)) + coarse_sphere.V.row(coarse_sphere.F(0, 1)) +
-                                coarse_sphere.V.row(coarse_sphere.F(0, 2))) / 3.0;
-  const Eigen::Vector3d d = c.transpose().normalized();
-  const TriangleMesh fine = spiked(test::icosphere(5), d, 0.35, 48);
+  const SpikeOnAFace spike = spike_on_a_face(0.35, 48);
+  const TriangleMesh& fine = spike.fine;
+  const Eigen::Vector3d& d = spike.d;
+  const double spacing = spike.spacing;
   const MeshSurfaceProjector surface(fine.V, fine.F);
-  WorkingMesh w = test::working_mesh(spiked(coarse_sphere, d, 0.35, 48));
-  const double spacing = std::sqrt(surface_area(fine.V, fine.F) / w.num_vertices());
+  WorkingMesh w = spike.coarse;
   const CoverageRepairOptions o;
   const double before = farthest_from(w, fine);
   ASSERT_GT(before, o.max_gap * spacing) << "the coarse mesh must cut the tip for the test";
@@ -1093,20 +1112,17 @@ TEST(CoverageRepair, PutsAVertexBackOnATipThatTheMeshCutOff) {
   }
   const ValidationReport r = validate(w, true);
   EXPECT_TRUE(r.ok()) << r.summary();
-  EXPECT_EQ(r.vertices, coarse_sphere.V.rows());
+  EXPECT_EQ(r.vertices, spike.coarse.num_vertices());
 }
 
 TEST(CoverageRepair, DragsTheRingAlongWhereTheVertexAloneWouldMakeSlivers) {
-  // A spike about one spacing tall, centred on a face: its nearest corner moved alone onto the
-  // tip (or part of the way) would leave its triangles below the angle bound.
-  const TriangleMesh coarse_sphere = test::icosphere(2);
-  const Eigen::RowVector3d c = (coarse_sphere.V.row(coarse_sphere.F(0, 0)) + coarse_sphere.V.row(coarse_sphere.F(0, 1)) +
-                                coarse_sphere.V.row(coarse_sphere.F(0, 2))) / 3.0;
-  const Eigen::Vector3d d = c.transpose().normalized();
-  const TriangleMesh fine = spiked(test::icosphere(5), d, 0.6, 48);
+  // A spike about one spacing tall: its nearest corner moved alone onto the tip (or part of the
+  // way) would leave its triangles below the angle bound.
+  const SpikeOnAFace spike = spike_on_a_face(0.6, 48);
+  const TriangleMesh& fine = spike.fine;
+  const WorkingMesh& start = spike.coarse;
+  const double spacing = spike.spacing;
   const MeshSurfaceProjector surface(fine.V, fine.F);
-  const WorkingMesh start = test::working_mesh(spiked(coarse_sphere, d, 0.6, 48));
-  const double spacing = std::sqrt(surface_area(fine.V, fine.F) / start.num_vertices());
   const CoverageRepairOptions o;
   CoverageRepairOptions alone = o;
   alone.ring_drag = 0;
@@ -1128,7 +1144,7 @@ TEST(CoverageRepair, DragsTheRingAlongWhereTheVertexAloneWouldMakeSlivers) {
         << "vertex " << v;
   const ValidationReport r = validate(w, true);
   EXPECT_TRUE(r.ok()) << r.summary();
-  EXPECT_EQ(r.vertices, coarse_sphere.V.rows());
+  EXPECT_EQ(r.vertices, start.num_vertices());
 }
 
 // ---------------------------------------------------------------------------------------------

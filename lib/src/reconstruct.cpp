@@ -218,13 +218,6 @@ PreparedCloud prepare_cloud(const Eigen::MatrixX3d& P_in, const ReconstructionOp
   return out;
 }
 
-// φm of a working mesh (radians; 0 without faces).
-double mean_min_angle(const WorkingMesh& mesh) {
-  double sum = 0;
-  for (const MeshFace& f : mesh.faces()) sum += face_min_angle(mesh, f);
-  return mesh.num_faces() > 0 ? sum / mesh.num_faces() : 0.0;
-}
-
 // The coverage repair of the tips of closed pieces (ReconstructionOptions::coverage) on the
 // mesher's result `mesh` against the CVT points `samples`; undone where it makes faces cross,
 // lowers φm by more than `max_loss_deg`, or below `mean_angle_deg` (at all, where it was below):
@@ -243,14 +236,10 @@ bool cover_tips(WorkingMesh& mesh, const SurfaceProjector& fit, const Eigen::Mat
     if (open[pieces.of_face[f]])
       for (int v : mesh.face(f)) fixed[v] = 1;
   if (std::all_of(open.begin(), open.end(), [](char o) { return o != 0; })) return false;
-  double length = 0;
-  int edges = 0;
-  for (const MeshFace& f : mesh.faces())
-    for (int k = 0; k < 3; ++k, ++edges) length += (mesh.V.row(f[k]) - mesh.V.row(f[(k + 1) % 3])).norm();
   const WorkingMesh::Checkpoint before = mesh.checkpoint();
   const double phi_m = mean_min_angle(mesh);
   const double floor = std::max(phi_m - max_loss_deg * M_PI / 180, std::min(phi_m, mean_angle_deg * M_PI / 180));
-  stats = repair_coverage(mesh, fit, samples, length / edges, options, &fixed);
+  stats = repair_coverage(mesh, fit, samples, mean_edge_length(mesh), options, &fixed);
   // Only the faces around moved vertices can cross anything new.
   if (stats.moves > 0 && (mean_min_angle(mesh) < floor || !crossing_face_pairs_after(mesh, before, {}).empty())) {
     mesh.rollback(before);

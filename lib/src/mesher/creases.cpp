@@ -109,14 +109,6 @@ double arc_length_near(const Eigen::MatrixX3d& V, const std::vector<int>& line, 
   return at;
 }
 
-double mean_edge_length(const WorkingMesh& mesh) {
-  double sum = 0;
-  long count = 0;
-  for (const MeshFace& f : mesh.faces())
-    for (int k = 0; k < 3; ++k) sum += (mesh.V.row(f[k]) - mesh.V.row(f[(k + 1) % 3])).norm(), ++count;
-  return count > 0 ? sum / count : 0;
-}
-
 double mesh_min_angle(const WorkingMesh& mesh) {
   double m = M_PI;
   for (const MeshFace& f : mesh.faces()) m = std::min(m, face_min_angle(mesh, f));

@@ -218,6 +218,20 @@ double face_min_angle(const WorkingMesh& mesh, const MeshFace& f) {
   return triangle_min_angle(mesh.V.row(f[0]).transpose(), mesh.V.row(f[1]).transpose(), mesh.V.row(f[2]).transpose());
 }
 
+double mean_min_angle(const WorkingMesh& mesh) {
+  double sum = 0;
+  for (const MeshFace& f : mesh.faces()) sum += face_min_angle(mesh, f);
+  return mesh.num_faces() > 0 ? sum / mesh.num_faces() : 0.0;
+}
+
+double mean_edge_length(const WorkingMesh& mesh) {
+  double sum = 0;
+  long count = 0;
+  for (const MeshFace& f : mesh.faces())
+    for (int k = 0; k < 3; ++k, ++count) sum += (mesh.V.row(f[k]) - mesh.V.row(f[(k + 1) % 3])).norm();
+  return count > 0 ? sum / count : 0.0;
+}
+
 double corner_angle(const WorkingMesh& mesh, const MeshFace& f, int k) {
   const Eigen::Vector3d e1 = (mesh.V.row(f[(k + 1) % 3]) - mesh.V.row(f[k])).transpose();
   const Eigen::Vector3d e2 = (mesh.V.row(f[(k + 2) % 3]) - mesh.V.row(f[k])).transpose();

@@ -137,6 +137,10 @@ MeshChanges changes_since(const WorkingMesh::Checkpoint& before, const WorkingMe
 double triangle_min_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c);
 /// Smallest angle of face f of the mesh.
 double face_min_angle(const WorkingMesh& mesh, const MeshFace& f);
+/// φm of the mesh: the mean over its faces of their smallest angle (radians; 0 without faces).
+double mean_min_angle(const WorkingMesh& mesh);
+/// Mean length of the faces' edges, each interior edge counted from both of its faces (0 without faces).
+double mean_edge_length(const WorkingMesh& mesh);
 /// Angle (radians) of face f at its corner k; 0 where an edge there has zero length.
 double corner_angle(const WorkingMesh& mesh, const MeshFace& f, int k);
 /// Sum of the corner angles (radians) at each vertex, over its faces; 0 for an unused vertex.
