@@ -6,13 +6,12 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
-#include <unordered_set>
+#include <unordered_map>
 #include <vector>
 
 #include "heatcvt/errors.h"
 #include "heatcvt/grid_cell.h"
 #include "heatcvt/parallel.h"
-#include "heatcvt/point_index.h"
 
 namespace heatcvt {
 
@@ -47,28 +46,50 @@ double quadratic_residual(const Eigen::MatrixX3d& P, const std::vector<int>& nb,
   return scale * std::sqrt((A * c - h).squaredNorm() / static_cast<double>(m));
 }
 
-// The rows of P within one cell (of side a little over `radius`) of a cell holding a query row,
-// ascending: every point within `radius` of a query is among them. A sample of millions of points
-// is thus indexed only where the queries look.
-std::vector<int> rows_near_queries(const Eigen::MatrixX3d& P, const std::vector<Eigen::Index>& query_rows,
-                                   double radius, int threads) {
-  const double cell = radius * (1 + 1e-5);
-  std::unordered_set<GridCell, GridCellHash> near;
+// The rows of P by the grid cell (of side a little over `radius`) holding them, for the cells
+// within one cell of a query row, ascending in each cell: every point within `radius` of a query
+// is in the 27 cells around the query's own. A sample of millions of points is thus indexed only
+// where the queries look, without a search tree.
+using CellRows = std::unordered_map<GridCell, std::vector<int>, GridCellHash>;
+
+CellRows rows_near_queries(const Eigen::MatrixX3d& P, const std::vector<Eigen::Index>& query_rows, double cell,
+                           int threads) {
+  CellRows near;
   for (const Eigen::Index row : query_rows) {
     const GridCell c = grid_cell(P.row(row).transpose(), cell);
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) near.insert({c[0] + dx, c[1] + dy, c[2] + dz});
+        for (int dz = -1; dz <= 1; ++dz) near.emplace(GridCell{c[0] + dx, c[1] + dy, c[2] + dz}, std::vector<int>{});
   }
   const Eigen::Index n = P.rows();
-  std::vector<char> keep(static_cast<std::size_t>(n), 0);
+  std::vector<std::vector<int>*> slot(static_cast<std::size_t>(n), nullptr);
 #pragma omp parallel for schedule(static) num_threads(resolve_threads(threads))
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto it = near.find(grid_cell(P.row(i).transpose(), cell));
+    if (it != near.end()) slot[static_cast<std::size_t>(i)] = &it->second;
+  }
   for (Eigen::Index i = 0; i < n; ++i)
-    keep[static_cast<std::size_t>(i)] = near.count(grid_cell(P.row(i).transpose(), cell)) > 0;
-  std::vector<int> rows;
-  for (Eigen::Index i = 0; i < n; ++i)
-    if (keep[static_cast<std::size_t>(i)]) rows.push_back(static_cast<int>(i));
-  return rows;
+    if (slot[static_cast<std::size_t>(i)]) slot[static_cast<std::size_t>(i)]->push_back(static_cast<int>(i));
+  return near;
+}
+
+// The rows of P within `radius` of its row q (a relative 1e-6 of slack against rounding),
+// ascending (`near` from rows_near_queries()).
+std::vector<int> rows_within(const Eigen::MatrixX3d& P, const CellRows& near, double cell, Eigen::Index q,
+                             double radius) {
+  const Eigen::Vector3d x = P.row(q).transpose();
+  const GridCell c = grid_cell(x, cell);
+  const double r2 = radius * radius * (1 + 2e-6);
+  std::vector<int> out;
+  for (int dx = -1; dx <= 1; ++dx)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dz = -1; dz <= 1; ++dz) {
+        const auto it = near.find(GridCell{c[0] + dx, c[1] + dy, c[2] + dz});
+        for (const int j : it->second)
+          if ((P.row(j).transpose() - x).squaredNorm() < r2) out.push_back(j);
+      }
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 }  // namespace
@@ -85,15 +106,12 @@ NoiseEstimate estimate_noise(const Eigen::MatrixX3d& P, double spacing, const No
   const double radius = options.radius_spacings * spacing;
   std::vector<Eigen::Index> query_rows(static_cast<std::size_t>(queries));
   for (int q = 0; q < queries; ++q) query_rows[static_cast<std::size_t>(q)] = static_cast<Eigen::Index>(q) * n / queries;
-  const std::vector<int> near = rows_near_queries(P, query_rows, radius, options.threads);
-  Eigen::MatrixX3d near_points(static_cast<Eigen::Index>(near.size()), 3);
-  for (std::size_t k = 0; k < near.size(); ++k) near_points.row(static_cast<Eigen::Index>(k)) = P.row(near[k]);
-  const PointIndex index(near_points);
+  const double cell = radius * (1 + 1e-5);
+  const CellRows near = rows_near_queries(P, query_rows, cell, options.threads);
   std::vector<double> residual(static_cast<std::size_t>(queries), -1.0);
 #pragma omp parallel for schedule(dynamic, 16) num_threads(resolve_threads(options.threads))
   for (int q = 0; q < queries; ++q) {
-    std::vector<int> nb = index.within(P.row(query_rows[static_cast<std::size_t>(q)]).transpose(), radius);
-    for (int& j : nb) j = near[static_cast<std::size_t>(j)];  // ascending rows of P, as `near` is
+    const std::vector<int> nb = rows_within(P, near, cell, query_rows[static_cast<std::size_t>(q)], radius);
     if (static_cast<int>(nb.size()) >= options.min_neighbors)
       residual[static_cast<std::size_t>(q)] = quadratic_residual(P, nb, radius);
   }

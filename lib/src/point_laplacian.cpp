@@ -177,31 +177,33 @@ void glue_sheets(TuftedCover& c, const Eigen::MatrixX3d& P, int threads) {
   }
 }
 
-void set_mollified_lengths(TuftedCover& c, const Eigen::MatrixX3d& P, double mollify_factor) {
+void set_mollified_lengths(TuftedCover& c, const Eigen::MatrixX3d& P, double mollify_factor, int threads) {
   std::vector<int>& tail = c.tail;
   std::vector<int64_t>& next = c.next;
   std::vector<double>& len = c.len;
   const int64_t nh = static_cast<int64_t>(tail.size());
-  // Lengths with mollification (Sharp & Crane §4.5).
+  // Lengths with mollification (Sharp & Crane §4.5); the mean is summed in half-edge order.
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (int64_t h = 0; h < nh; ++h) len[h] = (P.row(tail[h]) - P.row(tail[next[h]])).norm();
   double mean_len = 0;
-  for (int64_t h = 0; h < nh; ++h) {
-    len[h] = (P.row(tail[h]) - P.row(tail[next[h]])).norm();
-    mean_len += len[h];
-  }
+  for (int64_t h = 0; h < nh; ++h) mean_len += len[h];
   mean_len /= static_cast<double>(nh);
   const double eps = mollify_factor * mean_len;
   double delta = 0;
+#pragma omp parallel for num_threads(threads) schedule(static) reduction(max : delta)
   for (int64_t h = 0; h < nh; ++h) {
     const double a = len[h], b = len[next[h]], c = len[next[next[h]]];
     delta = std::max(delta, eps - (b + c - a));
   }
   if (delta > 0)
     for (double& l : len) l += delta;
-
 }
 
 // Lawson flips of the cover's non-Delaunay edges (cotangent sum below zero).
-TuftedResult flip_to_delaunay(TuftedCover& c, double cot_clamp) {
+// Every edge is queued once, in ascending order of its first half-edge; a flip queues the four
+// edges around it again. Whether an edge is Delaunay depends only on its two faces, so the
+// verdicts of the edges no flip has touched yet are computed beforehand on every thread.
+TuftedResult flip_to_delaunay(TuftedCover& c, double cot_clamp, int threads) {
   std::vector<int>& tail = c.tail;
   std::vector<int64_t>& next = c.next;
   std::vector<int64_t>& twin = c.twin;
@@ -211,6 +213,11 @@ TuftedResult flip_to_delaunay(TuftedCover& c, double cot_clamp) {
     const double a = len[h], b = len[next[h]], c = len[next[next[h]]];
     return cot_opposite(a, b, c, triangle_area(a, b, c), cot_clamp);
   };
+  auto delaunay = [&](int64_t h) { return halfedge_cot(h) + halfedge_cot(twin[h]) >= -1e-10; };
+  std::vector<char> delaunay_at_start(nh, 0), touched(nh, 0);
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (int64_t h = 0; h < nh; ++h)
+    if (h < twin[h]) delaunay_at_start[h] = delaunay(h);
   TuftedResult result;
   std::vector<int64_t> stack;
   std::vector<char> queued(nh, 0);
@@ -225,7 +232,7 @@ TuftedResult flip_to_delaunay(TuftedCover& c, double cot_clamp) {
     stack.pop_back();
     queued[h] = 0;
     const int64_t t = twin[h];
-    if (halfedge_cot(h) + halfedge_cot(t) >= -1e-10) continue;
+    if (touched[h] ? delaunay(h) : delaunay_at_start[h]) continue;
     const int64_t h1 = next[h], h2 = next[h1], t1 = next[t], t2 = next[t1];
     // Guards: distinct faces, no endpoint of degree 2 (the flip would leave a degree-1 vertex).
     if (t == h1 || t == h2 || result.flips >= max_flips) {
@@ -252,8 +259,10 @@ TuftedResult flip_to_delaunay(TuftedCover& c, double cot_clamp) {
     next[h] = h2, next[h2] = t1, next[t1] = h;
     next[t] = t2, next[t2] = h1, next[h1] = t;
     ++result.flips;
+    touched[h] = 1;
     for (int64_t g : {h1, h2, t1, t2}) {
       const int64_t rep = std::min(g, twin[g]);
+      touched[rep] = 1;
       if (!queued[rep]) {
         queued[rep] = 1;
         stack.push_back(rep);
@@ -264,21 +273,27 @@ TuftedResult flip_to_delaunay(TuftedCover& c, double cot_clamp) {
 }
 
 // Cotan weights and masses of the final triangulation: every half-edge lies in one face.
-void add_cover_weights(const TuftedCover& c, int64_t n, double cot_clamp, double scale,
+// (The areas and cotangents on every thread, then added in half-edge order.)
+void add_cover_weights(const TuftedCover& c, int64_t n, double cot_clamp, double scale, int threads,
                        std::vector<std::pair<int64_t, double>>& edge_weights, Eigen::VectorXd& M) {
   const std::vector<int>& tail = c.tail;
   const std::vector<int64_t>& next = c.next;
   const std::vector<double>& len = c.len;
   const int64_t nh = static_cast<int64_t>(tail.size());
   const double w_scale = 0.5 * scale;  // ½ for the two sheets
+  std::vector<double> area(nh), cot(nh);
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (int64_t h = 0; h < nh; ++h) {
+    const double la = len[h], lb = len[next[h]], lc = len[next[next[h]]];
+    area[h] = triangle_area(la, lb, lc);
+    cot[h] = cot_opposite(la, lb, lc, area[h], cot_clamp);
+  }
   for (int64_t h = 0; h < nh; ++h) {
     const int a = tail[h], b = tail[next[h]];
-    const double la = len[h], lb = len[next[h]], lc = len[next[next[h]]];
-    const double area = triangle_area(la, lb, lc);
-    M[a] += w_scale * area / 3.0;
+    M[a] += w_scale * area[h] / 3.0;
     if (a == b) continue;  // an intrinsic loop adds nothing to L u
     const int64_t key = std::min<int64_t>(a, b) * n + std::max<int64_t>(a, b);
-    edge_weights.emplace_back(key, w_scale * 0.5 * cot_opposite(la, lb, lc, area, cot_clamp));
+    edge_weights.emplace_back(key, w_scale * 0.5 * cot[h]);
   }
 }
 
@@ -287,9 +302,9 @@ TuftedResult tufted_intrinsic_delaunay(const std::vector<std::array<int, 3>>& so
                                        std::vector<std::pair<int64_t, double>>& edge_weights, Eigen::VectorXd& M) {
   TuftedCover cover = tufted_sheets(soup);
   glue_sheets(cover, P, threads);
-  set_mollified_lengths(cover, P, mollify_factor);
-  const TuftedResult result = flip_to_delaunay(cover, cot_clamp);
-  add_cover_weights(cover, P.rows(), cot_clamp, scale, edge_weights, M);
+  set_mollified_lengths(cover, P, mollify_factor, threads);
+  const TuftedResult result = flip_to_delaunay(cover, cot_clamp, threads);
+  add_cover_weights(cover, P.rows(), cot_clamp, scale, threads, edge_weights, M);
   return result;
 }
 

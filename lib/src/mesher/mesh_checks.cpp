@@ -205,14 +205,25 @@ std::vector<std::pair<int, int>> intersecting_face_pairs(const WorkingMesh& mesh
     CGAL::Bbox_3 b;
     if (face_box(mesh, f, eps, b)) boxes.emplace_back(b, f);
   }
-  std::vector<std::pair<int, int>> pairs;
+  // The box scan lists the overlapping pairs; the exact tests, most of the work, then run on
+  // every core. The sort makes the result independent of the thread count.
+  std::vector<std::pair<int, int>> overlapping;
   CGAL::box_self_intersection_d<CGAL::Sequential_tag>(
       boxes.begin(), boxes.end(),
       [&](const Box& a, const Box& b) {
-        const int f = std::min(a.info(), b.info()), g = std::max(a.info(), b.info());
-        if (faces_intersect(mesh, mesh.face(f), mesh.face(g), eps)) pairs.emplace_back(f, g);
+        overlapping.emplace_back(std::min(a.info(), b.info()), std::max(a.info(), b.info()));
       },
       kBoxCutoff);
+  std::vector<char> hit(overlapping.size(), 0);
+  const auto count = static_cast<std::ptrdiff_t>(overlapping.size());
+#pragma omp parallel for schedule(dynamic, 256)
+  for (std::ptrdiff_t i = 0; i < count; ++i) {
+    const auto& [f, g] = overlapping[static_cast<std::size_t>(i)];
+    hit[static_cast<std::size_t>(i)] = faces_intersect(mesh, mesh.face(f), mesh.face(g), eps);
+  }
+  std::vector<std::pair<int, int>> pairs;
+  for (std::size_t i = 0; i < overlapping.size(); ++i)
+    if (hit[i]) pairs.push_back(overlapping[i]);
   std::sort(pairs.begin(), pairs.end());
   return pairs;
 }
