@@ -247,6 +247,7 @@ TEST(RemeshCvt, ARefusedPostCvtResultGetsHeatIterationsAndASecondRun) {
   // the stages' extraction rebuilds the dual's faces, so that their first result is refused
   no_fallback.mesher.keep_manifold_dual = false;
   no_fallback.tip_defect_deg = 0;  // nor does a second run with the tips held replace it
+  no_fallback.coverage_retry_ring_drag = 0;  // nor a coverage repair with the rings dragged
   const RemeshResult first = remesh_cvt(input, no_fallback);
   ASSERT_FALSE(first.post_cvt_kept) << "the first result must be refused for the test";
   ASSERT_LT(first.quality.min_angle_deg, 25.0);

@@ -344,7 +344,8 @@ cli::Json make_report(const Settings& s, const TriangleMesh& mesh, int input_gen
                     {"border_undone_reason", res.creases.border_undone_reason}};
   rep["coverage"] = {{"uncovered_before", res.coverage.uncovered_before},
                      {"uncovered_after", res.coverage.uncovered_after}, {"moves", res.coverage.moves},
-                     {"gap_before", res.coverage.gap_before}, {"gap_after", res.coverage.gap_after}};
+                     {"gap_before", res.coverage.gap_before}, {"gap_after", res.coverage.gap_after},
+                     {"ring_dragged", res.coverage_ring_dragged}};
   rep["refinement_levels"] = res.refinement_levels;
   rep["cvt_vertices"] = res.cvt_vertices;
   rep["repair_rounds"] = res.repair_rounds;
@@ -389,9 +390,9 @@ void print_summary(const Settings& s, const RemeshOptions& remesh, const RemeshR
               f.total_s);
   cli::print_stages(res.stage_seconds);
   if (res.coverage.uncovered_before > 0)
-    std::printf("  coverage repair: %d vertex moves; %d input vertices farther than %.2f site spacings, %d after\n",
-                res.coverage.moves, res.coverage.uncovered_before, remesh.coverage.max_gap,
-                res.coverage.uncovered_after);
+    std::printf("  coverage repair: %d vertex moves%s; %d input vertices farther than %.2f site spacings, %d after\n",
+                res.coverage.moves, res.coverage_ring_dragged ? " (rings dragged along)" : "",
+                res.coverage.uncovered_before, remesh.coverage.max_gap, res.coverage.uncovered_after);
   if (!s.no_post && !res.post_cvt_kept)
     std::printf("  post-CVT stages: %s; the dual is written\n", res.post_cvt_refusal.c_str());
   if (res.creases.lines + res.creases.skipped_lines > 0)

@@ -393,8 +393,11 @@ bool dual_meets_targets(const RemeshResult& out, const RemeshOptions& options) {
 // the input's topology (components, Euler characteristic) where the dual has it (the stages must
 // not open, close or cut the surface), and cover the input as well as a dual that is a manifold
 // (RemeshOptions::max_coverage_ratio).
+// `for_coverage` (optional) tells whether the coverage was the reason.
 std::string post_cvt_refusal(const Eigen::MatrixX3d& samples, double spacing, const TriangleMesh& post,
-                             const ValidationReport& after, const RemeshOptions& options, const RemeshResult& out) {
+                             const ValidationReport& after, const RemeshOptions& options, const RemeshResult& out,
+                             bool* for_coverage = nullptr) {
+  if (for_coverage) *for_coverage = false;
   // A dual that is no manifold is no alternative to a result that is one, whatever else it passes.
   if (!is_manifold(out.checks) && is_manifold(after)) return "";
   const auto input_topology = [&](const ValidationReport& r) {
@@ -419,9 +422,11 @@ std::string post_cvt_refusal(const Eigen::MatrixX3d& samples, double spacing, co
       count_error(post, options.cvt.sites) <= options.mesher.sizing.count_tolerance)
     return "";
   const double post_gap = farthest_input_vertex(samples, post), dual_gap = farthest_input_vertex(samples, out.mesh);
-  if (post_gap > options.max_coverage_ratio * dual_gap + options.coverage_slack * spacing)
+  if (post_gap > options.max_coverage_ratio * dual_gap + options.coverage_slack * spacing) {
+    if (for_coverage) *for_coverage = true;
     return "it covers the input less well: an input vertex is " + std::to_string(post_gap / spacing) +
            " site spacings from it, " + std::to_string(dual_gap / spacing) + " from the dual";
+  }
   return "";
 }
 
@@ -435,6 +440,39 @@ void cover_input(const Eigen::MatrixX3d& samples, double spacing, const SurfaceP
   out.coverage = repair_coverage(work, surface, samples, spacing, options.coverage);
   if (out.coverage.moves > 0) mesh = compact_mesh(work);
   out.stage_seconds.emplace_back("coverage repair", seconds_since(t));
+}
+
+// Where the result `mesh` of cover_input() is refused for its coverage (a tip still cut off):
+// the repair again on the stages' result `unrepaired` with each moved vertex's ring dragged along
+// (RemeshOptions::coverage_retry_ring_drag). Where that result is not refused and its φm is at
+// mesher.sizing's target and at most 1° below that of `mesh` (the cloud path's rule for the
+// same repair), it replaces `mesh` and `checks` and true is returned; otherwise out.coverage is that of the first repair again.
+// The time of its checks is added to `check_seconds`.
+bool retry_with_ring_drag(const Eigen::MatrixX3d& samples, double spacing, const SurfaceProjector& surface,
+                          const RemeshOptions& options, const TriangleMesh& unrepaired, TriangleMesh& mesh,
+                          ValidationReport& checks, RemeshResult& out, double& check_seconds) {
+  if (!(options.coverage_retry_ring_drag > 0)) return false;
+  RemeshOptions dragged = options;
+  dragged.coverage.ring_drag = options.coverage_retry_ring_drag;
+  TriangleMesh retry = unrepaired;
+  const CoverageRepairStats first = out.coverage;
+  cover_input(samples, spacing, surface, dragged, retry, out);
+  const auto t = Clock::now();
+  ValidationReport retry_checks = check_result(retry, out.input, true);
+  // The dragged rings must also keep φm at the target and within 1° of the first repair's.
+  const double target = options.mesher.sizing.mean_angle_deg;
+  const double phi_m = triangle_quality(retry.V, retry.F).mean_min_angle_deg;
+  const bool kept = phi_m >= target && phi_m >= triangle_quality(mesh.V, mesh.F).mean_min_angle_deg - 1.0 &&
+                    post_cvt_refusal(samples, spacing, retry, retry_checks, options, out).empty();
+  check_seconds += seconds_since(t);
+  if (!kept) {
+    out.coverage = first;
+    return false;
+  }
+  mesh = std::move(retry);
+  checks = std::move(retry_checks);
+  out.coverage_ring_dragged = true;
+  return true;
 }
 
 // The shared post-CVT stages on out.cvt.dual with the input mesh as the projector (the refined
@@ -465,17 +503,23 @@ bool run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options
     if (stage.first != "validate") out.stage_seconds.push_back(stage);
   const Eigen::MatrixX3d samples = face_vertices(input);
   const double spacing = site_spacing(input, options.cvt.sites);
+  const TriangleMesh unrepaired = options.coverage_retry_ring_drag > 0 ? post.mesh : TriangleMesh{};
   cover_input(samples, spacing, surface, options, post.mesh, out);
   const auto t = Clock::now();
   ValidationReport checks = check_result(post.mesh, out.input, true);
-  const std::string refusal = post_cvt_refusal(samples, spacing, post.mesh, checks, options, out);
+  bool for_coverage = false;
+  std::string refusal = post_cvt_refusal(samples, spacing, post.mesh, checks, options, out, &for_coverage);
+  double check_seconds = seconds_since(t);
+  if (for_coverage && retry_with_ring_drag(samples, spacing, surface, options, unrepaired, post.mesh, checks, out,
+                                            check_seconds))
+    refusal.clear();
   out.post_cvt_kept = refusal.empty();
   if (!out.post_cvt_kept) out.post_cvt_refusal = "result not kept: " + refusal;
   if (out.post_cvt_kept) {
     out.mesh = std::move(post.mesh);
     out.checks = std::move(checks);
   }
-  out.stage_seconds.emplace_back("post-CVT checks", seconds_since(t));
+  out.stage_seconds.emplace_back("post-CVT checks", check_seconds);
   return out.post_cvt_kept;
 }
 
@@ -625,6 +669,10 @@ void explain_short_loops(const TriangleMesh& input, const RemeshOptions& options
 }
 
 // The pipeline of remesh_cvt() on a mesh already in its unit frame.
+// Crease lines of the input that the recovery did not keep: left out because their snap made
+// faces cross, or all of them where it was undone.
+int crease_lines_missed(const CreaseStats& c) { return c.skipped_lines + (c.undone ? c.lines : 0); }
+
 RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions& options, const CvtCallback& progress) {
   const int sites = options.cvt.sites;
   if (sites < 1) throw InvalidInputError("remesh_cvt: the number of sites must be >= 1, got " + std::to_string(sites));
@@ -711,6 +759,14 @@ RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options, 
   TriangleMesh unit = mesh;
   const NormalizationFrame frame = normalize_positions(unit.V);
   RemeshResult out = remesh_in_unit_frame(unit, options, progress);
+  // The coverage repair's retry with dragged rings leaves the crease recovery another start:
+  // where it then misses crease lines, the run without that retry is taken if it misses fewer.
+  if (out.coverage_ring_dragged && crease_lines_missed(out.creases) > 0) {
+    RemeshOptions alone = options;
+    alone.coverage_retry_ring_drag = 0;
+    RemeshResult again = remesh_in_unit_frame(unit, alone, progress);
+    if (crease_lines_missed(again.creases) < crease_lines_missed(out.creases)) out = std::move(again);
+  }
   for (Eigen::MatrixX3d* V : {&out.mesh.V, &out.cvt.positions, &out.cvt.diagram.V, &out.cvt.dual.V})
     if (V->rows() > 0) restore_frame(*V, frame);
   return out;

@@ -176,12 +176,20 @@ struct RemeshOptions {
   /// it off.
   /// The ring drag (CoverageRepairOptions::ring_drag) is off here: this repair has no φm bound
   /// (the cloud path undoes its repair where φm falls), and dragged rings can take φm below its
-  /// target. Otherwise the defaults of CoverageRepairOptions.
+  /// target; it runs only as a retry (coverage_retry_ring_drag). Otherwise the defaults of
+  /// CoverageRepairOptions.
   CoverageRepairOptions coverage = [] {
     CoverageRepairOptions c;
     c.ring_drag = 0;
     return c;
   }();
+  /// Where the result after that repair would be refused because it covers the input less well
+  /// than the dual (max_coverage_ratio: a tip still cut off), the repair runs again on the
+  /// stages' result with ring_drag set to this, and that result is taken where it is not
+  /// refused and its φm is at mesher.sizing.mean_angle_deg and at most 1° below the first
+  /// repair's. Only such results change: the others keep the vertex alone. 0 = no retry.
+  /// Default 0.5 (CoverageRepairOptions::ring_drag's default).
+  double coverage_retry_ring_drag = 0.5;
   /// ... and undone where the input vertex farthest from the result is more than this many times
   /// farther than from the mesh before (snapping a tip's vertex onto a short crease near the tip
   /// of an organic shape cuts the tip off). Default 1.1.
@@ -216,6 +224,7 @@ struct RemeshResult {
   MesherStats mesher;                ///< counts of the post-CVT stages (empty when not run)
   CreaseStats creases;               ///< what the crease recovery did (zero when the input has no creases)
   CoverageRepairStats coverage;      ///< what the coverage repair did (zero when it did not run)
+  bool coverage_ring_dragged = false;  ///< the kept repair dragged rings (RemeshOptions::coverage_retry_ring_drag)
   /// The post-CVT stages ran and their result is `mesh`; false when they did not run, their
   /// result failed a check that the dual passed or covers the input less well than the dual
   /// (RemeshOptions::max_coverage_ratio; then `mesh` is the dual).
