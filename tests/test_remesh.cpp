@@ -236,6 +236,28 @@ TEST(RemeshCvt, RepairGivesAManifoldWhereCellsWrapAThinTube) {
   EXPECT_EQ(r.mesh.V.rows(), 60 + r.repair_sites - r.repair_dropped_sites);
 }
 
+// bunny_pmp at 1,000 sites, one run of the stages: their result, its tips repaired vertex by
+// vertex, is refused for cutting off more of the ears than the dual. The repair again with the rings dragged along
+// reaches them: that result is kept instead of the dual, a valid remesh at the count with
+// meshcvt's targets (φmin ≥ 30°, φm ≥ 52°).
+TEST(RemeshCvt, ATipCutOffIsReachedAgainWithTheRingDraggedAlong) {
+  const TriangleMesh input = read_mesh(test::data_path("meshes/bunny_pmp.off"));
+  RemeshOptions o = remesh_options(1000);
+  o.fallback_phi_min_deg = 0;  // no heat iterations and second run after a refusal
+  o.tip_defect_deg = 0;        // nor a second run with the tips held
+  o.coverage_retry_ring_drag = 0;
+  const RemeshResult alone = remesh_cvt(input, o);
+  ASSERT_FALSE(alone.post_cvt_kept) << "the vertex-alone repair must be refused for the test";
+  ASSERT_NE(alone.post_cvt_refusal.find("covers the input less well"), std::string::npos) << alone.post_cvt_refusal;
+
+  o.coverage_retry_ring_drag = RemeshOptions().coverage_retry_ring_drag;
+  const RemeshResult r = remesh_cvt(input, o);
+  EXPECT_TRUE(r.post_cvt_kept) << r.post_cvt_refusal;
+  EXPECT_TRUE(r.coverage_ring_dragged);
+  expect_valid_at_count(r, 1000, 30.0);
+  EXPECT_GE(r.quality.mean_min_angle_deg, 52.0);
+}
+
 // bunny_libigl at 300 sites: the post-CVT stages' first result cuts off more of the tips than the
 // dual (refused), so without the fallback the dual, with φmin below 25°, is the output. With it,
 // the CVT goes on from its sites until the dual's φmin reaches fallback_phi_min_deg and the stages
@@ -247,7 +269,6 @@ TEST(RemeshCvt, ARefusedPostCvtResultGetsHeatIterationsAndASecondRun) {
   // the stages' extraction rebuilds the dual's faces, so that their first result is refused
   no_fallback.mesher.keep_manifold_dual = false;
   no_fallback.tip_defect_deg = 0;  // nor does a second run with the tips held replace it
-  no_fallback.coverage_retry_ring_drag = 0;  // nor a coverage repair with the rings dragged
   const RemeshResult first = remesh_cvt(input, no_fallback);
   ASSERT_FALSE(first.post_cvt_kept) << "the first result must be refused for the test";
   ASSERT_LT(first.quality.min_angle_deg, 25.0);
