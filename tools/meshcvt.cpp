@@ -346,6 +346,7 @@ cli::Json make_report(const Settings& s, const TriangleMesh& mesh, int input_gen
                      {"uncovered_after", res.coverage.uncovered_after}, {"moves", res.coverage.moves},
                      {"gap_before", res.coverage.gap_before}, {"gap_after", res.coverage.gap_after},
                      {"ring_dragged", res.coverage_ring_dragged}};
+  rep["tips_held_deg"] = res.tips_held_deg;
   rep["refinement_levels"] = res.refinement_levels;
   rep["cvt_vertices"] = res.cvt_vertices;
   rep["repair_rounds"] = res.repair_rounds;
@@ -393,6 +394,9 @@ void print_summary(const Settings& s, const RemeshOptions& remesh, const RemeshR
     std::printf("  coverage repair: %d vertex moves%s; %d input vertices farther than %.2f site spacings, %d after\n",
                 res.coverage.moves, res.coverage_ring_dragged ? " (rings dragged along)" : "",
                 res.coverage.uncovered_before, remesh.coverage.max_gap, res.coverage.uncovered_after);
+  if (res.tips_held_deg > 0)
+    std::printf("  tips held: the stages' result with the vertices of angle defect above %.0f deg held is the output\n",
+                res.tips_held_deg);
   if (!s.no_post && !res.post_cvt_kept)
     std::printf("  post-CVT stages: %s; the dual is written\n", res.post_cvt_refusal.c_str());
   if (res.creases.lines + res.creases.skipped_lines > 0)

@@ -610,28 +610,41 @@ bool improves_on(const RemeshResult& after, const RemeshResult& before, int site
          triangle_quality(before.mesh.V, before.mesh.F).min_angle_deg;
 }
 
-// The post-CVT stages (run_post_cvt_stages()); where their result is refused or misses a target,
-// once more on the same dual with the tips of thin parts held (RemeshOptions::tip_defect_deg).
-// The second result replaces the first (or the dual) where it is kept, improves_on() it and
-// reaches every input vertex within RemeshOptions::max_tip_run_gap site spacings.
-// Returns whether a result of the stages is the output.
-bool run_stages(const TriangleMesh& input, const RemeshOptions& options, RemeshResult& out) {
-  RemeshResult held = out;  // before the stages: the dual
-  const bool kept = run_post_cvt_stages(input, options, out);
-  if (!(options.tip_defect_deg > 0) || (kept && targets_met(out, options.cvt.sites, options.mesher.sizing).all()))
-    return kept;
+// One more run of the stages on `dual` (the state before the stages) with the vertices whose angle
+// defect exceeds `defect_deg` held (mesher/tips.h). Its result replaces `out` where it is kept,
+// improves on it (improves_on()) and reaches every input vertex within
+// RemeshOptions::max_tip_run_gap site spacings. Returns whether it replaced `out`.
+bool replace_with_tips_held(const TriangleMesh& input, const RemeshOptions& options, double defect_deg,
+                            const RemeshResult& dual, RemeshResult& out) {
   RemeshOptions with_tips = options;
-  with_tips.mesher.polish.tips.min_defect_deg = options.tip_defect_deg;
-  with_tips.mesher.sizing.tips.min_defect_deg = options.tip_defect_deg;
+  with_tips.mesher.polish.tips.min_defect_deg = defect_deg;
+  with_tips.mesher.sizing.tips.min_defect_deg = defect_deg;
+  RemeshResult held = dual;
   held.stage_seconds = out.stage_seconds;
   const double spacing = site_spacing(input, options.cvt.sites);
   if (!run_post_cvt_stages(input, with_tips, held) || !improves_on(held, out, options.cvt.sites, options.mesher.sizing) ||
       farthest_input_vertex(face_vertices(input), held.mesh) > options.max_tip_run_gap * spacing) {
     out.stage_seconds = std::move(held.stage_seconds);
-    return kept;
+    return false;
   }
   out = std::move(held);
+  out.tips_held_deg = defect_deg;
   return true;
+}
+
+// The post-CVT stages (run_post_cvt_stages()); where their result is refused or misses a target,
+// once more on the same dual with the tips of thin parts held (RemeshOptions::tip_defect_deg),
+// and where that result does not replace it or still misses a target, once more with the tips
+// of a lower defect held (RemeshOptions::tip_defect_retry_deg): replace_with_tips_held().
+// Returns whether a result of the stages is the output.
+bool run_stages(const TriangleMesh& input, const RemeshOptions& options, RemeshResult& out) {
+  const RemeshResult dual = out;  // before the stages
+  bool kept = run_post_cvt_stages(input, options, out);
+  for (const double defect : {options.tip_defect_deg, options.tip_defect_retry_deg}) {
+    if (!(defect > 0) || (kept && targets_met(out, options.cvt.sites, options.mesher.sizing).all())) break;
+    if (replace_with_tips_held(input, options, defect, dual, out)) kept = true;
+  }
+  return kept;
 }
 
 // Where the result fails its no_self_intersections check, whether the input crosses itself too:
@@ -759,11 +772,14 @@ RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options, 
   TriangleMesh unit = mesh;
   const NormalizationFrame frame = normalize_positions(unit.V);
   RemeshResult out = remesh_in_unit_frame(unit, options, progress);
-  // The coverage repair's retry with dragged rings leaves the crease recovery another start:
-  // where it then misses crease lines, the run without that retry is taken if it misses fewer.
-  if (out.coverage_ring_dragged && crease_lines_missed(out.creases) > 0) {
+  // The coverage repair's retry with dragged rings and the run with the tips of a lower defect
+  // held leave the crease recovery another start: where it then misses crease lines, the run
+  // without those retries is taken if it misses fewer.
+  const bool retried = out.coverage_ring_dragged || (out.tips_held_deg > 0 && out.tips_held_deg == options.tip_defect_retry_deg);
+  if (retried && crease_lines_missed(out.creases) > 0) {
     RemeshOptions alone = options;
     alone.coverage_retry_ring_drag = 0;
+    alone.tip_defect_retry_deg = 0;
     RemeshResult again = remesh_in_unit_frame(unit, alone, progress);
     if (crease_lines_missed(again.creases) < crease_lines_missed(out.creases)) out = std::move(again);
   }

@@ -132,6 +132,12 @@ struct RemeshOptions {
   /// replaces the first where it is kept and better (the same rule as the fallback's). 0 = no
   /// second run. Default kRemeshTipDefectDeg (120°).
   double tip_defect_deg = kRemeshTipDefectDeg;
+  /// Where that run does not replace the result or it still misses a target, the stages run a
+  /// third time with the vertices of defect above this held (the same rule). At finer spacings
+  /// the cap of a finger spreads its defect over several vertices, none above 120°: at 10,000
+  /// sites the armadillo's fingertips and toes are cut off otherwise. 0 = no third run.
+  /// Default 40°.
+  double tip_defect_retry_deg = 40.0;
   /// ... and only where every input vertex is within this many site spacings of it (its purpose
   /// is to keep the tips). Default 1.
   double max_tip_run_gap = 1.0;
@@ -225,6 +231,9 @@ struct RemeshResult {
   CreaseStats creases;               ///< what the crease recovery did (zero when the input has no creases)
   CoverageRepairStats coverage;      ///< what the coverage repair did (zero when it did not run)
   bool coverage_ring_dragged = false;  ///< the kept repair dragged rings (RemeshOptions::coverage_retry_ring_drag)
+  /// the defect above which the output's tips were held (RemeshOptions::tip_defect_deg or
+  /// tip_defect_retry_deg); 0 where no run with tips held is the output
+  double tips_held_deg = 0;
   /// The post-CVT stages ran and their result is `mesh`; false when they did not run, their
   /// result failed a check that the dual passed or covers the input less well than the dual
   /// (RemeshOptions::max_coverage_ratio; then `mesh` is the dual).
