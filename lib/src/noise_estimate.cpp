@@ -74,7 +74,8 @@ CellRows rows_near_queries(const Eigen::MatrixX3d& P, const std::vector<Eigen::I
 }
 
 // The rows of P within `radius` of its row q (a relative 1e-6 of slack against rounding),
-// ascending (`near` from rows_near_queries()).
+// ascending; `near` from rows_near_queries() with q among its query rows (so that the 27 cells
+// around q are in it).
 std::vector<int> rows_within(const Eigen::MatrixX3d& P, const CellRows& near, double cell, Eigen::Index q,
                              double radius) {
   const Eigen::Vector3d x = P.row(q).transpose();

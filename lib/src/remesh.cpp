@@ -446,8 +446,8 @@ void cover_input(const Eigen::MatrixX3d& samples, double spacing, const SurfaceP
 // the repair again on the stages' result `unrepaired` with each moved vertex's ring dragged along
 // (RemeshOptions::coverage_retry_ring_drag). Where that result is not refused and its φm is at
 // mesher.sizing's target and at most 1° below that of `mesh` (the cloud path's rule for the
-// same repair), it replaces `mesh` and `checks` and true is returned; otherwise out.coverage is that of the first repair again.
-// The time of its checks is added to `check_seconds`.
+// same repair), it replaces `mesh` and `checks` and true is returned; otherwise out.coverage is
+// that of the first repair again. The time of its checks is added to `check_seconds`.
 bool retry_with_ring_drag(const Eigen::MatrixX3d& samples, double spacing, const SurfaceProjector& surface,
                           const RemeshOptions& options, const TriangleMesh& unrepaired, TriangleMesh& mesh,
                           ValidationReport& checks, RemeshResult& out, double& check_seconds) {
@@ -681,11 +681,11 @@ void explain_short_loops(const TriangleMesh& input, const RemeshOptions& options
                      " site spacings (holes below the resolution asked for: more sites keep them)";
 }
 
-// The pipeline of remesh_cvt() on a mesh already in its unit frame.
 // Crease lines of the input that the recovery did not keep: left out because their snap made
 // faces cross, or all of them where it was undone.
 int crease_lines_missed(const CreaseStats& c) { return c.skipped_lines + (c.undone ? c.lines : 0); }
 
+// The pipeline of remesh_cvt() on a mesh already in its unit frame.
 RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions& options, const CvtCallback& progress) {
   const int sites = options.cvt.sites;
   if (sites < 1) throw InvalidInputError("remesh_cvt: the number of sites must be >= 1, got " + std::to_string(sites));
@@ -775,7 +775,8 @@ RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options, 
   // The coverage repair's retry with dragged rings and the run with the tips of a lower defect
   // held leave the crease recovery another start: where it then misses crease lines, the run
   // without those retries is taken if it misses fewer.
-  const bool retried = out.coverage_ring_dragged || (out.tips_held_deg > 0 && out.tips_held_deg == options.tip_defect_retry_deg);
+  const bool retried =
+      out.coverage_ring_dragged || (out.tips_held_deg > 0 && out.tips_held_deg == options.tip_defect_retry_deg);
   if (retried && crease_lines_missed(out.creases) > 0) {
     RemeshOptions alone = options;
     alone.coverage_retry_ring_drag = 0;
