@@ -135,8 +135,8 @@ struct RemeshOptions {
   /// Where that run does not replace the result or it still misses a target, the stages run a
   /// third time with the vertices of defect above this held (the same rule). At finer spacings
   /// the cap of a finger spreads its defect over several vertices, none above 120°: at 10,000
-  /// sites the armadillo's fingertips and toes are cut off otherwise. 0 = no third run.
-  /// Default 40°.
+  /// sites the armadillo's fingertips and toes are cut off otherwise. 0 = no third run; there is
+  /// none either where tip_defect_deg is 0 (no run with tips held at all). Default 40°.
   double tip_defect_retry_deg = 40.0;
   /// ... and only where every input vertex is within this many site spacings of it (its purpose
   /// is to keep the tips). Default 1.
