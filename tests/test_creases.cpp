@@ -257,6 +257,24 @@ TEST(Creases, FandiskRemeshKeepsItsCreases) {
   expect_creases_kept(fandisk, 3000);
 }
 
+// max_planck_decimated (a decimated scan) at 2,222 sites: its "creases" are ragged edges of the
+// decimation, and two of them met at the output's scale at well under a degree. Such a corner
+// excused the sliver between them: φmin 0.7°. No face below half of min_angle_deg is excused
+// now; the lines next to such faces are left out and the others kept: creases are still
+// recovered (most of the lines), with every face at least that half and every check passed.
+TEST(Creases, TwoRaggedLinesMeetingSharplyExcuseNoSliver) {
+  const TriangleMesh input = read_mesh(test::data_path("meshes/max_planck_decimated.obj"));
+  RemeshOptions o;
+  o.cvt.sites = 2222;
+  o.cvt.threads = 2;
+  const RemeshResult r = remesh_cvt(input, o);
+  ASSERT_FALSE(r.creases.undone) << r.creases.undone_reason;
+  EXPECT_GT(r.creases.dropped_crease_lines, 0);
+  EXPECT_GT(r.creases.lines, r.creases.dropped_crease_lines);
+  EXPECT_GE(r.quality.min_angle_deg, 0.5 * o.creases.min_angle_deg);
+  EXPECT_TRUE(r.checks.ok()) << r.checks.summary();
+}
+
 
 // A flat sheet of n × n unit cells (scaled to side 1) keeping the cells (i, j) with
 // i + j < n when `staircase`: a right triangle whose hypotenuse is a staircase of cell steps.

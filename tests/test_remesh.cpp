@@ -329,6 +329,44 @@ TEST(RemeshCvt, TheStagesKeepAManifoldDualAroundEarsThinnerThanACell) {
   EXPECT_GE(r.quality.mean_min_angle_deg, 52.0);
 }
 
+// bun_zipper at 1,000 sites: the stages' extraction cut the top of an ear open while two holes of
+// the bottom about two spacings apart ran into one, so that its loop count and Euler
+// characteristic were still the dual's (and the input's). The loops are compared one by one, so
+// the dual's own faces are kept there. With the stages' result taken whatever it covers (no
+// coverage refusal, retry or fallback), each of its loops runs along its own loop of the input:
+// a vertex within half a site spacing of that loop's vertices, no two on the same loop, as many
+// loops as the input.
+TEST(RemeshCvt, EachLoopOfTheStagesResultRunsAlongItsOwnLoopOfTheInput) {
+  const TriangleMesh input = read_mesh(test::data_path("meshes/bun_zipper.ply"));
+  RemeshOptions o = remesh_options(1000);
+  o.max_coverage_ratio = std::numeric_limits<double>::infinity();
+  o.fallback_phi_min_deg = o.tip_defect_deg = o.tip_defect_retry_deg = o.coverage_retry_ring_drag = 0;
+  const RemeshResult r = remesh_cvt(input, o);
+  ASSERT_TRUE(r.post_cvt_kept) << r.post_cvt_refusal;
+  Eigen::VectorXi input_loop, output_loop;
+  const int input_loops = boundary_loop_labels(static_cast<int>(input.V.rows()), input.F, input_loop);
+  const int output_loops = boundary_loop_labels(static_cast<int>(r.mesh.V.rows()), r.mesh.F, output_loop);
+  ASSERT_EQ(input_loops, 5);
+  EXPECT_EQ(output_loops, input_loops);
+  const double spacing = std::sqrt(surface_area(input.V, input.F) / 1000);
+  std::vector<int> matched(static_cast<std::size_t>(input_loops), 0);
+  for (int l = 0; l < output_loops; ++l) {
+    double nearest = std::numeric_limits<double>::infinity();
+    int along = -1;
+    for (Eigen::Index v = 0; v < r.mesh.V.rows(); ++v) {
+      if (output_loop[v] != l) continue;
+      for (Eigen::Index u = 0; u < input.V.rows(); ++u) {
+        if (input_loop[u] < 0) continue;
+        const double d = (input.V.row(u) - r.mesh.V.row(v)).norm();
+        if (d < nearest) nearest = d, along = input_loop[u];
+      }
+    }
+    EXPECT_LE(nearest, 0.5 * spacing) << "output loop " << l << " is " << nearest / spacing << " spacings from the input's loops";
+    if (along >= 0) ++matched[static_cast<std::size_t>(along)];
+  }
+  for (int l = 0; l < input_loops; ++l) EXPECT_EQ(matched[static_cast<std::size_t>(l)], 1) << "input loop " << l;
+}
+
 // armadillo_remeshed_14k at 300 sites: the closed-ball splits and repairs give a valid dual of
 // far more vertices than asked for (its fingers and ears are thinner than a cell). The stages
 // size it to the count, rounding those parts off; with the coverage comparison applied anyway

@@ -336,6 +336,7 @@ cli::Json make_report(const Settings& s, const TriangleMesh& mesh, int input_gen
   if (!res.post_cvt_refusal.empty()) rep["post_cvt_refusal"] = res.post_cvt_refusal;
   if (res.input_self_intersections >= 0) rep["input_self_intersections"] = res.input_self_intersections;
   rep["creases"] = {{"lines", res.creases.lines}, {"skipped_lines", res.creases.skipped_lines},
+                    {"dropped_lines", res.creases.dropped_crease_lines},
                     {"corners", res.creases.corners},
                     {"snapped_vertices", res.creases.snapped}, {"line_edges", res.creases.line_edges},
                     {"missing_edges", res.creases.missing_edges}, {"undone", res.creases.undone},
@@ -399,11 +400,16 @@ void print_summary(const Settings& s, const RemeshOptions& remesh, const RemeshR
                 res.tips_held_deg);
   if (!s.no_post && !res.post_cvt_kept)
     std::printf("  post-CVT stages: %s; the dual is written\n", res.post_cvt_refusal.c_str());
-  if (res.creases.lines + res.creases.skipped_lines > 0)
-    std::printf("  creases: %d lines%s, %d corners, %d vertices moved onto them, %d of %d line edges made%s\n",
+  if (res.creases.lines + res.creases.skipped_lines + res.creases.dropped_crease_lines > 0)
+    std::printf("  creases: %d lines%s%s, %d corners, %d vertices moved onto them, %d of %d line edges made%s\n",
                 res.creases.lines,
                 res.creases.skipped_lines > 0
                     ? (" (" + std::to_string(res.creases.skipped_lines) + " more left out: their snap made faces cross)").c_str()
+                    : "",
+                res.creases.dropped_crease_lines > 0
+                    ? (" (" + std::to_string(res.creases.dropped_crease_lines) +
+                       " more left out: faces next to them fell below the smallest angle)")
+                          .c_str()
                     : "",
                 res.creases.corners, res.creases.snapped,
                 res.creases.line_edges, res.creases.line_edges + res.creases.missing_edges,

@@ -682,8 +682,11 @@ void explain_short_loops(const TriangleMesh& input, const RemeshOptions& options
 }
 
 // Crease lines of the input that the recovery did not keep: left out because their snap made
-// faces cross, or all of them where it was undone.
-int crease_lines_missed(const CreaseStats& c) { return c.skipped_lines + (c.undone ? c.lines : 0); }
+// faces cross or faces next to them fell below the smallest angle, or all of them where it was
+// undone.
+int crease_lines_missed(const CreaseStats& c) {
+  return c.skipped_lines + c.dropped_crease_lines + (c.undone ? c.lines : 0);
+}
 
 // The pipeline of remesh_cvt() on a mesh already in its unit frame.
 RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions& options, const CvtCallback& progress) {

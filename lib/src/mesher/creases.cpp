@@ -552,9 +552,11 @@ class CreaseRecovery {
   }
 
   // The faces below `floor` that the lines do not excuse. A face is excused where its smallest
-  // angle is at a corner between two line edges (two lines meeting at that angle bound every
-  // triangle between them), or, between crease lines, where its three corners are on lines (two
-  // lines closer than the spacing) and its smallest angle is at least half of `floor`. `blamed`
+  // angle is at least half of `floor` and at a corner between two line edges (two lines meeting
+  // at that angle bound every triangle between them), or, between crease lines, where its three
+  // corners are on lines (two lines closer than the spacing). Below half of it no corner excuses
+  // a face: two lines meeting that sharply are most likely a ragged crease of a coarse input
+  // (a decimated scan), not a feature worth a sliver. `blamed`
   // gets the lines with a recovered vertex within polish_rings + 1 rings of the faces counted.
   int unexcused_below(double floor, std::vector<int>& blamed) const {
     int count = 0;
@@ -569,8 +571,8 @@ class CreaseRecovery {
       for (int q = 1; q < 3; ++q)
         if (corner_angle(mesh_, f, q) < corner_angle(mesh_, f, k)) k = q;
       const bool at_corner = on_line(f[k], f[(k + 1) % 3]) && on_line(f[k], f[(k + 2) % 3]);
-      const bool between_lines = !border_pass_ && taken_[f[0]] && taken_[f[1]] && taken_[f[2]] && smallest >= 0.5 * floor;
-      if (at_corner || between_lines) continue;
+      const bool between_lines = !border_pass_ && taken_[f[0]] && taken_[f[1]] && taken_[f[2]];
+      if ((at_corner || between_lines) && smallest >= 0.5 * floor) continue;
       ++count;
       for (int w : ring_vertices(f, vf))
         if (lines_at.count(w)) blamed.insert(blamed.end(), lines_at[w].begin(), lines_at[w].end());
@@ -830,8 +832,8 @@ namespace {
 // One pass of recover_creases(): the crease lines (`border` false) or the border lines. Kept where
 // nothing crosses that did not and no face falls below the lower of the smallest angle before
 // and min_angle_deg (border_min_angle_deg for the border lines), except at a corner between two
-// lines. Where faces fall below it next to border lines, those lines are left out and the others
-// recovered again (options.retries times): a crease is worth a lower angle, a border corner is not.
+// lines (unexcused_below()). Where faces fall below it, the lines next to them are left out and
+// the others recovered again (options.retries times).
 CreaseStats recover_pass(WorkingMesh& mesh, const SurfaceProjector& surface, const Eigen::MatrixX3d& V,
                          const CreaseLines& lines, const CreaseOptions& options, double spacing, bool border) {
   std::vector<char> excluded(lines.lines.size(), 0);
@@ -853,7 +855,7 @@ CreaseStats recover_pass(WorkingMesh& mesh, const SurfaceProjector& surface, con
     const int below = recovery.unexcused_below(floor, blamed);
     if (crossing <= crossing_before && below == 0) return stats;
     mesh.rollback(before);
-    if (border && attempt < options.retries && crossing <= crossing_before && !blamed.empty()) {
+    if (attempt < options.retries && crossing <= crossing_before && !blamed.empty()) {
       for (int l : blamed) excluded[l] = 1;
       continue;
     }
@@ -872,6 +874,7 @@ CreaseStats recover_creases(WorkingMesh& mesh, const SurfaceProjector& surface, 
   const double spacing = mean_edge_length(mesh);
   if (!options.enabled || !(spacing > 0) || lines.lines.empty()) return {};
   CreaseStats stats = recover_pass(mesh, surface, V, lines, options, spacing, false);
+  stats.dropped_crease_lines = stats.dropped_lines;
   stats.dropped_lines = 0;
   if (options.border_corners) {
     const CreaseStats b = recover_pass(mesh, surface, V, lines, options, spacing, true);

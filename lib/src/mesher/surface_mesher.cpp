@@ -2,6 +2,8 @@
 #include "heatcvt/mesher/surface_mesher.h"
 
 #include <chrono>
+#include <map>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -59,9 +61,28 @@ class TopologyGuard {
   MesherStats& stats_;
 };
 
+// Whether the boundary loops of `extracted` and of `dual` (labels of boundary_loop_labels() over
+// the same vertices) correspond one to one: each extracted loop shares vertices with exactly one of
+// the dual's, and no two with the same. Equal counts can hide a cut and a join (an ear cut open
+// while two holes near each other merge): the extracted loop of the cut shares no vertex with the
+// dual's border, the joined one shares vertices with two of its loops.
+bool loops_correspond(const Eigen::VectorXi& extracted, const Eigen::VectorXi& dual) {
+  std::map<int, std::set<int>> touched;  // extracted loop -> the dual's loops it shares vertices with
+  for (Eigen::Index v = 0; v < extracted.size(); ++v)
+    if (extracted[v] >= 0) {
+      std::set<int>& t = touched[extracted[v]];
+      if (dual[v] >= 0) t.insert(dual[v]);
+    }
+  std::set<int> used;
+  for (const auto& [loop, t] : touched)
+    if (t.size() != 1 || !used.insert(*t.begin()).second) return false;
+  return true;
+}
+
 // Whether the dual triangles F form an oriented 2-manifold (every edge on at most two faces,
-// once in each direction) whose components, boundary loops or Euler characteristic the extraction's result
-// `mesh` does not have: it cut or closed the surface (an ear thinner than a cell cut off).
+// once in each direction) whose components, boundary loops or Euler characteristic the extraction's
+// result `mesh` does not have, or whose loops its loops do not match (loops_correspond()): it cut
+// or closed the surface (an ear thinner than a cell cut off).
 bool changes_topology(const WorkingMesh& mesh, const Eigen::MatrixX3i& F) {
   const MeshTopology dual = mesh_topology(F, mesh.num_vertices());
   if (F.rows() == 0 || dual.nonmanifold_edges > 0 || dual.inconsistent_edges > 0) return false;
@@ -69,8 +90,13 @@ bool changes_topology(const WorkingMesh& mesh, const Eigen::MatrixX3i& F) {
   for (int f = 0; f < mesh.num_faces(); ++f)
     for (int k = 0; k < 3; ++k) E(f, k) = mesh.face(f)[k];
   const MeshTopology extracted = mesh_topology(E, mesh.num_vertices());
-  return extracted.components != dual.components || extracted.boundary_loops != dual.boundary_loops ||
-         extracted.euler_characteristic() != dual.euler_characteristic();
+  if (extracted.components != dual.components || extracted.boundary_loops != dual.boundary_loops ||
+      extracted.euler_characteristic() != dual.euler_characteristic())
+    return true;
+  Eigen::VectorXi extracted_loops, dual_loops;
+  boundary_loop_labels(mesh.num_vertices(), E, extracted_loops);
+  boundary_loop_labels(mesh.num_vertices(), F, dual_loops);
+  return !loops_correspond(extracted_loops, dual_loops);
 }
 
 }  // namespace

@@ -49,16 +49,17 @@ struct CreaseOptions {
   int slide_steps = 8;
   double slide_range = 0.6;
   /// The recovery is undone where a face falls below the lower of the mesh's smallest angle
-  /// before and this, unless that smallest angle is at a corner between two line edges (two
+  /// before and this (after `retries` runs without the lines next to such faces), unless it
+  /// keeps half of it and that smallest angle is at a corner between two line edges (two
   /// crease lines meeting at that angle bound every triangle between them) or the face's three
-  /// corners are on lines (two lines closer than the spacing) and it keeps half of it. Faces
-  /// below it are also where the polish flips edges at a line vertex. Default 25°.
+  /// corners are on lines (two lines closer than the spacing). Faces below it are also where the
+  /// polish flips edges at a line vertex. Default 25°.
   double min_angle_deg = 25;
   /// The border lines' pass must keep the lower of the mesh's smallest angle before it and this
   /// (a border corner is worth less than a crease). Default 30°.
   double border_min_angle_deg = 30;
-  /// Times the border lines' pass is run again without the lines next to faces below its floor
-  /// before it is undone. Default 2.
+  /// Times a pass (the crease lines', the border lines') is run again without the lines next to
+  /// faces below its floor before it is undone. Default 2.
   int retries = 2;
   int threads = 0;  ///< 0 = all cores; the result does not depend on it.
 };
@@ -88,6 +89,7 @@ CreaseLines detect_creases(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
 struct CreaseStats {
   int lines = 0;          ///< lines recovered (long enough, and their snap made no faces cross)
   int skipped_lines = 0;  ///< lines long enough whose snap made faces cross: left out (a part thinner than the spacing)
+  int dropped_crease_lines = 0;  ///< crease lines left out: faces next to them fell below min_angle_deg
   int corners = 0;        ///< corners of those lines
   int snapped = 0;        ///< output vertices moved onto a line
   int line_edges = 0;     ///< consecutive samples joined by an output edge (after flips)
@@ -110,8 +112,9 @@ struct CreaseStats {
 /// joined by an edge (an existing one, one flip of the edge between them, or through a common
 /// neighbour moved onto the line); a line whose snap makes faces cross is left out; then the
 /// vertices off the lines are relaxed, flipped (no edge along a line) and polished around them.
-/// Undone as a whole where it makes more face pairs cross than before or lowers the smallest
-/// angle (CreaseOptions::min_angle_deg).
+/// Where faces fall below the smallest angle (CreaseOptions::min_angle_deg) the lines next to them
+/// are left out and the rest recovered again (`retries` times); undone as a whole where it makes
+/// more face pairs cross than before or still lowers the smallest angle.
 /// Then, in a pass of their own, the border lines: corners onto the output's border, the border
 /// between them spread along the input's, the same polish; where faces fall below
 /// border_min_angle_deg next to them those lines are left out and the rest recovered again
