@@ -15,6 +15,24 @@
 
 namespace heatcvt {
 
+namespace {
+
+// One thread's scratch space for fit_and_project(), which the polish calls for every trial move
+// on every core: kept between calls, so that a fit allocates nothing once it has seen its size.
+struct FitWorkspace {
+  std::vector<double> s, t, h, w;
+  Eigen::MatrixXd A;
+  Eigen::VectorXd b;
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr;
+};
+
+FitWorkspace& fit_workspace() {
+  thread_local FitWorkspace workspace;
+  return workspace;
+}
+
+}  // namespace
+
 CloudSurfaceProjector::CloudSurfaceProjector(Eigen::MatrixX3d P, Eigen::MatrixX3d N, const CloudFitOptions& options,
                                              Eigen::MatrixXi knn)
     : P_(std::move(P)), N_(std::move(N)), options_(options), knn_(std::move(knn)) {
@@ -58,7 +76,15 @@ void CloudSurfaceProjector::fit_and_project(const std::vector<int>& nb, const Ei
   const Eigen::Vector3d xl = x - mean;
   const double sx = xl.dot(u), tx = xl.dot(v);
   // Gaussian weights in the plane around the query; bandwidth = RMS planar radius.
-  std::vector<double> s(m), t(m), h(m), w(m);
+  FitWorkspace& ws = fit_workspace();
+  std::vector<double>& s = ws.s;
+  std::vector<double>& t = ws.t;
+  std::vector<double>& h = ws.h;
+  std::vector<double>& w = ws.w;
+  s.resize(m);
+  t.resize(m);
+  h.resize(m);
+  w.resize(m);
   double r2 = 0;
   for (int q = 0; q < m; ++q) {
     const Eigen::Vector3d d = P.row(nb[q]).transpose() - mean;
@@ -70,8 +96,10 @@ void CloudSurfaceProjector::fit_and_project(const std::vector<int>& nb, const Ei
   r2 = std::max(r2 / m, 1e-300);
   for (int q = 0; q < m; ++q) w[q] = std::exp(-((s[q] - sx) * (s[q] - sx) + (t[q] - tx) * (t[q] - tx)) / r2);
   // Local coordinates centred at the query for conditioning.
-  Eigen::MatrixXd A(m, 6);
-  Eigen::VectorXd b(m);
+  Eigen::MatrixXd& A = ws.A;
+  Eigen::VectorXd& b = ws.b;
+  A.resize(m, 6);
+  b.resize(m);
   for (int q = 0; q < m; ++q) {
     const double a = s[q] - sx, c = t[q] - tx, sw = std::sqrt(w[q]);
     A.row(q) << sw, sw * a, sw * c, sw * a * a, sw * a * c, sw * c * c;
@@ -84,8 +112,9 @@ void CloudSurfaceProjector::fit_and_project(const std::vector<int>& nb, const Ei
     // Scale the columns so that the quadratic terms are O(1).
     Eigen::VectorXd scale(6);
     scale << 1, radius, radius, radius * radius, radius * radius, radius * radius;
-    Eigen::MatrixXd As = A * scale.cwiseInverse().asDiagonal();
-    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(As);
+    A = A * scale.cwiseInverse().asDiagonal();  // coefficient-wise: no aliasing
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd>& qr = ws.qr;
+    qr.compute(A);
     qr.setThreshold(options_.rank_threshold);
     if (qr.rank() == 6) {
       const Eigen::VectorXd coef = scale.cwiseInverse().asDiagonal() * qr.solve(b);
