@@ -129,6 +129,7 @@ class VertexMover {
     const Eigen::Vector3d u = nv.unitOrthogonal(), w = nv.cross(u);
     // Ring triangles in 2D with v at the origin: (b, c) of each face (a = v), counter-clockwise.
     std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> ring;
+    ring.reserve(vf_[v].size());
     double mean_edge = 0, area_sum = 0;
     Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
     for (int id : vf_[v]) {

@@ -45,7 +45,13 @@ CloudSurfaceProjector::CloudSurfaceProjector(Eigen::MatrixX3d P, Eigen::MatrixX3
 }
 
 std::vector<int> CloudSurfaceProjector::neighbourhood(int c) const {
-  std::vector<int> nb = {c};
+  std::vector<int> nb;
+  neighbourhood_into(c, nb);
+  return nb;
+}
+
+void CloudSurfaceProjector::neighbourhood_into(int c, std::vector<int>& nb) const {
+  nb.assign(1, c);
   const Eigen::Vector3d nc = N_.row(c);
   for (Eigen::Index q = 0; q < knn_.cols(); ++q)
     if (N_.row(knn_(c, q)).dot(nc) > 0) nb.push_back(knn_(c, q));
@@ -53,7 +59,6 @@ std::vector<int> CloudSurfaceProjector::neighbourhood(int c) const {
     nb.assign(1, c);
     for (Eigen::Index q = 0; q < knn_.cols(); ++q) nb.push_back(knn_(c, q));
   }
-  return nb;
 }
 
 void CloudSurfaceProjector::fit_and_project(const std::vector<int>& nb, const Eigen::Vector3d& x,
@@ -140,7 +145,9 @@ void CloudSurfaceProjector::fit_and_project(const std::vector<int>& nb, const Ei
 
 void CloudSurfaceProjector::project_at(int c, const Eigen::Vector3d& x, const Eigen::Vector3d& orient,
                                        Eigen::Vector3d& position, Eigen::Vector3d& normal) const {
-  fit_and_project(neighbourhood(c), x, orient, position, normal);
+  thread_local std::vector<int> nb;  // kept between calls: no allocation once grown
+  neighbourhood_into(c, nb);
+  fit_and_project(nb, x, orient, position, normal);
 }
 
 int CloudSurfaceProjector::walk(int start, const Eigen::Vector3d& x) const {

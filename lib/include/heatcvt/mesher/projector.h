@@ -114,6 +114,8 @@ class CloudSurfaceProjector final : public SurfaceProjector {
   /// The fit neighbourhood of cloud point c: c and its nearest points whose normal agrees with
   /// c's (all of them when too few agree).
   std::vector<int> neighbourhood(int c) const;
+  /// The same into `nb` (its storage reused).
+  void neighbourhood_into(int c, std::vector<int>& nb) const;
   /// Projects x onto the fit around cloud point c; the normal is oriented like `orient`.
   void project_at(int c, const Eigen::Vector3d& x, const Eigen::Vector3d& orient, Eigen::Vector3d& position,
                   Eigen::Vector3d& normal) const;
