@@ -777,7 +777,8 @@ RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options, 
   RemeshResult out = remesh_in_unit_frame(unit, options, progress);
   // The coverage repair's retry with dragged rings and the run with the tips of a lower defect
   // held leave the crease recovery another start: where it then misses crease lines, the run
-  // without those retries is taken if it misses fewer.
+  // without those retries is taken if it misses fewer, passes every check and meets every
+  // target (count, φmin, φm) that the first passes and meets.
   const bool retried =
       out.coverage_ring_dragged || (out.tips_held_deg > 0 && out.tips_held_deg == options.tip_defect_retry_deg);
   if (retried && crease_lines_missed(out.creases) > 0) {
@@ -785,7 +786,10 @@ RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options, 
     alone.coverage_retry_ring_drag = 0;
     alone.tip_defect_retry_deg = 0;
     RemeshResult again = remesh_in_unit_frame(unit, alone, progress);
-    if (crease_lines_missed(again.creases) < crease_lines_missed(out.creases)) out = std::move(again);
+    const IsotropicRemeshOptions& targets = options.mesher.sizing;
+    if (crease_lines_missed(again.creases) < crease_lines_missed(out.creases) && !check_lost(out.checks, again.checks) &&
+        targets_met(again, options.cvt.sites, targets).covers(targets_met(out, options.cvt.sites, targets)))
+      out = std::move(again);
   }
   for (Eigen::MatrixX3d* V : {&out.mesh.V, &out.cvt.positions, &out.cvt.diagram.V, &out.cvt.dual.V})
     if (V->rows() > 0) restore_frame(*V, frame);

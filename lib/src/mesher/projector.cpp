@@ -17,9 +17,11 @@ namespace heatcvt {
 
 namespace {
 
-// One thread's scratch space for fit_and_project(), which the polish calls for every trial move
-// on every core: kept between calls, so that a fit allocates nothing once it has seen its size.
+// One thread's scratch space for project_at() and fit_and_project(), which the polish calls for
+// every trial move on every core: kept between calls, so that a fit allocates nothing once it has
+// seen its size.
 struct FitWorkspace {
+  std::vector<int> neighbourhood;
   std::vector<double> s, t, h, w;
   Eigen::MatrixXd A;
   Eigen::VectorXd b;
@@ -44,13 +46,7 @@ CloudSurfaceProjector::CloudSurfaceProjector(Eigen::MatrixX3d P, Eigen::MatrixX3
     knn_ = k_nearest_neighbors(P_, std::min<int>(options_.fit_neighbors, static_cast<int>(P_.rows()) - 1), options_.threads);
 }
 
-std::vector<int> CloudSurfaceProjector::neighbourhood(int c) const {
-  std::vector<int> nb;
-  neighbourhood_into(c, nb);
-  return nb;
-}
-
-void CloudSurfaceProjector::neighbourhood_into(int c, std::vector<int>& nb) const {
+void CloudSurfaceProjector::neighbourhood(int c, std::vector<int>& nb) const {
   nb.assign(1, c);
   const Eigen::Vector3d nc = N_.row(c);
   for (Eigen::Index q = 0; q < knn_.cols(); ++q)
@@ -145,8 +141,8 @@ void CloudSurfaceProjector::fit_and_project(const std::vector<int>& nb, const Ei
 
 void CloudSurfaceProjector::project_at(int c, const Eigen::Vector3d& x, const Eigen::Vector3d& orient,
                                        Eigen::Vector3d& position, Eigen::Vector3d& normal) const {
-  thread_local std::vector<int> nb;  // kept between calls: no allocation once grown
-  neighbourhood_into(c, nb);
+  std::vector<int>& nb = fit_workspace().neighbourhood;  // (fit_and_project() reads it only)
+  neighbourhood(c, nb);
   fit_and_project(nb, x, orient, position, normal);
 }
 

@@ -111,11 +111,9 @@ class CloudSurfaceProjector final : public SurfaceProjector {
   double distance_to_scan_edge(const Eigen::Vector3d& x) const override;
   bool sample_border_mean(const Eigen::Vector3d& x, double radius, Eigen::Vector3d& mean) const override;
 
-  /// The fit neighbourhood of cloud point c: c and its nearest points whose normal agrees with
-  /// c's (all of them when too few agree).
-  std::vector<int> neighbourhood(int c) const;
-  /// The same into `nb` (its storage reused).
-  void neighbourhood_into(int c, std::vector<int>& nb) const;
+  /// The fit neighbourhood of cloud point c into `nb` (its storage reused): c and its nearest
+  /// points whose normal agrees with c's (all of them when too few agree).
+  void neighbourhood(int c, std::vector<int>& nb) const;
   /// Projects x onto the fit around cloud point c; the normal is oriented like `orient`.
   void project_at(int c, const Eigen::Vector3d& x, const Eigen::Vector3d& orient, Eigen::Vector3d& position,
                   Eigen::Vector3d& normal) const;
