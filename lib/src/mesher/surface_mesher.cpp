@@ -2,6 +2,7 @@
 #include "heatcvt/mesher/surface_mesher.h"
 
 #include <chrono>
+#include <cmath>
 #include <map>
 #include <set>
 #include <string>
@@ -10,6 +11,7 @@
 
 #include "heatcvt/errors.h"
 #include "heatcvt/mesher/mesh_checks.h"
+#include "heatcvt/mesher/sliver_repair.h"
 #include "heatcvt/mesher/untangle.h"
 
 namespace heatcvt {
@@ -221,6 +223,12 @@ TriangleMesh finish_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, con
     UntangleOptions last_step = options.untangle;
     last_step.rounds = 0;
     untangle(mesh, surface, last_step, options.holes, options.manifold, stats);
+    // The refilled holes may hold slivers, with no polish after them.
+    const IsotropicRemeshOptions& sizing = options.sizing;
+    const int floor = static_cast<int>(std::ceil((1 - sizing.count_tolerance) * sizing.target_vertices));
+    if (options.repair_after_untangle)
+      repair_slivers_without_crossings(mesh, surface, sizing.repair, std::vector<char>(mesh.num_vertices(), 0), floor,
+                                       crossing_face_pairs(mesh));
   }
   timer.done("untangle after sizing");
   stats.faces_turned_outward += orient_closed_pieces_outward(mesh);

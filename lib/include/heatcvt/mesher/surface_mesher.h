@@ -64,6 +64,11 @@ struct SurfaceMesherOptions {
   /// still close the dual's own holes, and small pieces are still removed. Not enabled by
   /// default (a cloud).
   TopologyTarget keep_topology;
+  /// Where the sizing left faces crossing, untangle() takes them out and refills their holes;
+  /// the slivers of those fills then get the best of their local edits that makes no faces
+  /// cross (repair_slivers_without_crossings() with sizing.repair, the count kept within
+  /// sizing.count_tolerance). Default true.
+  bool repair_after_untangle = true;
   /// Worker threads of the parallel stages (overrides polish.threads and split.threads);
   /// 0 = all cores. Results do not depend on it. Default 0.
   int threads = 0;
