@@ -570,7 +570,7 @@ class Sizer {
     }
     // The repairs, then the cut of what they leave; the count the cut restores can leave new
     // slivers, which get the repairs and the cut again (at most cut_rounds times).
-    const int floor = static_cast<int>(std::ceil((1 - o_.count_tolerance) * o_.target_vertices));
+    const int floor = count_floor(o_);
     for (int round = 0; round <= o_.cut_rounds && figures_below_target(); ++round) {
       thaw();
       attempt([&] { return repair_slivers(mesh_, surface_, o_.repair, frozen(), floor); });
@@ -1008,6 +1008,10 @@ bool sizing_no_worse(const SizingFigures& after, const SizingFigures& before, co
 
 bool sizing_reshapes(const WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options) {
   return reshapes(sizing_figures(mesh, surface, options), options);
+}
+
+int count_floor(const IsotropicRemeshOptions& options) {
+  return static_cast<int>(std::ceil((1 - options.count_tolerance) * options.target_vertices));
 }
 
 bool needs_sizing(const WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options) {

@@ -2,7 +2,6 @@
 #include "heatcvt/mesher/surface_mesher.h"
 
 #include <chrono>
-#include <cmath>
 #include <map>
 #include <set>
 #include <string>
@@ -225,12 +224,9 @@ TriangleMesh finish_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, con
     untangle(mesh, surface, last_step, options.holes, options.manifold, stats);
     // The refilled holes may hold slivers, with no polish after them: the sizing's last repair,
     // its edits checked against the pairs crossing now, the count kept within its tolerance.
-    if (options.repair_after_untangle) {
-      const IsotropicRemeshOptions& sizing = options.sizing;
-      const int floor = static_cast<int>(std::ceil((1 - sizing.count_tolerance) * sizing.target_vertices));
-      repair_slivers_without_crossings(mesh, surface, sizing.repair, std::vector<char>(mesh.num_vertices(), 0), floor,
-                                       crossing_face_pairs(mesh));
-    }
+    if (options.repair_after_untangle)
+      repair_slivers_without_crossings(mesh, surface, options.sizing.repair, std::vector<char>(mesh.num_vertices(), 0),
+                                       count_floor(options.sizing), crossing_face_pairs(mesh));
   }
   timer.done("untangle after sizing");
   stats.faces_turned_outward += orient_closed_pieces_outward(mesh);

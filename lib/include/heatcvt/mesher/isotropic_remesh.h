@@ -212,6 +212,9 @@ SizingFigures sizing_figures(const WorkingMesh& mesh, const SurfaceProjector& su
 /// of the three targets than before with φmin ≥ traded_min_angle_deg, the border no farther off.
 bool sizing_no_worse(const SizingFigures& after, const SizingFigures& before, const IsotropicRemeshOptions& options);
 
+/// The fewest vertices (in faces) a repair may leave: target_vertices less count_tolerance of it.
+int count_floor(const IsotropicRemeshOptions& options);
+
 /// Whether the mesh misses the targets of `options` (count, smallest angle, φm, border), i.e.
 /// whether size_to_target() would work on it.
 bool needs_sizing(const WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& options);
