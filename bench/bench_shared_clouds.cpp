@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "bench_util.h"
+#include "cloud_rows.h"
 #include "heatcvt/closest_point.h"
 #include "heatcvt/cloud_io.h"
 #include "heatcvt/mesh.h"
@@ -34,58 +35,10 @@
 namespace {
 
 using namespace heatcvt;
-
-struct Row {
-  int vertices = 0, components = 0, loops = 0, genus = -1;
-  double phi_min = 0, phi_boundary = 180, phi_mean = 0, seconds = 0;
-  BorderFit border;  // against the cloud's border points, in the output's mean edge lengths
-  double covered = 0;  // fraction of the cloud's points within one mean edge length of the output
-  long flying_pixels = -1;  // dropped by the flying-pixel rule; −1 on the peer row (it meshes read_cloud's points, the same ones dropped)
-};
-
-Row describe(const TriangleMesh& m, double seconds, const Eigen::MatrixX3d& P, const std::vector<char>& on_border) {
-  Row r;
-  ValidationOptions vo;
-  vo.require_closed = false;
-  const ValidationReport v = validate_triangle_mesh(m.V, m.F, vo);
-  const TriangleQuality q = triangle_quality(m.V, m.F);
-  r.vertices = v.vertices;
-  r.components = v.components;
-  r.loops = v.boundary_loops;
-  r.genus = v.genus;
-  r.phi_min = q.min_angle_deg;
-  r.phi_mean = q.mean_min_angle_deg;
-  r.phi_boundary = q.boundary_min_angle_deg;
-  r.seconds = seconds;
-  if (m.F.rows() == 0) return r;
-  const double h = mean_edge_length(m.V, m.F);
-  r.border = border_fit(P, on_border, m, h);
-  // Every point of clouds up to 100,000 points, an even stride of larger ones.
-  const Eigen::Index stride = std::max<Eigen::Index>(1, P.rows() / 100000);
-  Eigen::MatrixX3d Q(P.rows() / stride, 3);
-  for (Eigen::Index i = 0; i < Q.rows(); ++i) Q.row(i) = P.row(i * stride);
-  const std::vector<SurfacePoint> closest = closest_surface_points(m.V, m.F, Q);
-  long near = 0;
-  for (Eigen::Index i = 0; i < Q.rows(); ++i)
-    near += (position(m.V, m.F, closest[static_cast<std::size_t>(i)]) - Q.row(i).transpose()).norm() <= h;
-  r.covered = Q.rows() > 0 ? static_cast<double>(near) / static_cast<double>(Q.rows()) : 0.0;
-  return r;
-}
-
-// PCL greedy projection triangulation (the acceptance's peer settings, peer_pipelines.h) of the
-// cloud voxel-downsampled to about `target` points, with the peers' normals.
-Row greedy_projection(const Eigen::MatrixX3d& P, int target, const std::vector<char>& on_border) {
-  const double t0 = bench::now_seconds();
-  const TriangleMesh m = test::pcl_greedy_projection_at_count(P, target);
-  return describe(m, bench::now_seconds() - t0, P, on_border);
-}
-
-void print(const char* method, const Row& r, int n) {
-  std::printf("| %s | %d (%+.1f %%) | %d | %d | %d | %.1f | %.1f | %.1f | %.3f | %.2f | %.3f | %.2f | %s |\n",
-              method, r.vertices, 100.0 * (r.vertices - n) / n, r.components, r.loops, r.genus, r.phi_min,
-              r.phi_boundary, r.phi_mean, r.border.mesh_border_on_edge, r.border.mesh_border_distance, r.covered, r.seconds,
-              r.flying_pixels < 0 ? "-" : std::to_string(r.flying_pixels).c_str());
-}
+using bench::Row;
+using bench::describe;
+using bench::greedy_projection;
+using bench::print;
 
 }  // namespace
 

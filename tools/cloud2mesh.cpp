@@ -120,6 +120,8 @@ cli::Json make_report(const std::string& cloud_path, const std::vector<std::stri
   j["sites"] = opt.sites;
   j["iterations"] = res.iterations;
   j["neighbors"] = opt.neighbors;
+  j["neighbors_cvt"] = res.neighbors_cvt;
+  j["neighbors_fit"] = res.neighbors_fit;
   j["anisotropy"] = opt.anisotropy;
   j["seed"] = opt.seed;
   j["vertices"] = res.mesh.V.rows();
@@ -307,8 +309,14 @@ void add_reconstruction_options(CLI::App& app, Settings& s) {
   app.add_option("-i,--iterations", s.opt.iterations, "maximum heat Lloyd iterations (after the surface Lloyd; use 30 with --surface-lloyd 0)")->capture_default_str();
   app.add_option("-k,--neighbours,--neighbors", s.opt.neighbors,
                  "k nearest neighbours of the point Laplacian, in [" + std::to_string(ReconstructionOptions::min_neighbors) +
-                     ", " + std::to_string(ReconstructionOptions::max_neighbors) + "]")
+                     ", " + std::to_string(ReconstructionOptions::max_neighbors) + "]; more where they lie along a line (--spread-factor)")
       ->capture_default_str();
+  app.add_option("--spread-factor", s.opt.cloud.spread.factor,
+                 "where the -k nearest points lie along a line (the rings of a rotating lidar, the stripes of a line scanner), "
+                 "neighbourhoods hold this many times the size at which 90 % of them span the surface (their second PCA "
+                 "axis at least 0.05 of the first), up to 200; an isotropic sampling keeps -k; 0 = always -k")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 100.0));
   app.add_option("--anisotropy", s.opt.anisotropy, "lambda of the anisotropic lift (p, lambda n); 0 = isotropic")
       ->capture_default_str();
   app.add_flag("--denoise", s.opt.denoise, "statistical outlier removal before reconstruction");
@@ -510,6 +518,10 @@ void print_summary(const Settings& s, const std::string& cloud_path, const Recon
     std::printf("  note: only %.1f points per site; the surface is undersampled for -n %d (about 10 per site "
                 "give a clean mesh): a smaller -n gives a better one\n",
                 points_per_site, opt.sites);
+  if (res.neighbors_cvt > opt.neighbors)
+    std::printf("  neighbours: %d on the CVT points, %d in the surface fit (-k %d): the sampling is in rows, whose %d "
+                "nearest points lie along a line\n",
+                res.neighbors_cvt, res.neighbors_fit, opt.neighbors, opt.neighbors);
   if (rec.stream)
     std::printf("  streamed: %ld points in %d passes into voxels of %g, reconstructed from %ld voxel points\n",
                 static_cast<long>(streamed.points_read), streamed.passes, streamed.voxel_size,

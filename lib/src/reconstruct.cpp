@@ -327,7 +327,7 @@ PointLaplacian cvt_point_laplacian(const CvtPoints& c, const ReconstructionOptio
         break;
       }
   PointLaplacianOptions lopt;
-  lopt.k = options.neighbors;
+  lopt.k = static_cast<int>(c.knn.cols());
   lopt.threads = options.threads;
   lopt.neighbors = &c.knn;
   if (crossing_points > 0 && crossing_points <= options.cloud.max_crossing_fraction * nc) lopt.oriented_normals = &c.NC;
@@ -457,18 +457,25 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   // Laplacian.
   report("laplacian", 0);
   const auto t0 = Clock::now();
-  cp.knn = k_nearest_neighbors(cp.PC, options.neighbors, options.threads);
+  // Neighbourhoods spanning the surface: more than `neighbors` where the sampling is in rows.
+  const int k_cvt = neighbours_for_spread(cp.PC, options.neighbors, options.cloud.spread, options.threads);
+  const int k_cloud =
+      cp.subsampled ? neighbours_for_spread(P, options.neighbors, options.cloud.spread, options.threads) : k_cvt;
+  cp.knn = k_nearest_neighbors(cp.PC, k_cvt, options.threads);
   cp.NC = estimate_normals(cp.PC, cp.knn, options.threads);
-  orient_normals_mst(cp.PC, cp.NC, std::min(options.cloud.orientation_neighbors, options.neighbors), options.threads,
-                     options.cloud.orientation_offset_penalty);
+  orient_normals_mst(cp.PC, cp.NC, std::min(k_cvt, options.cloud.orientation_neighbors * k_cvt / options.neighbors),
+                     options.threads, options.cloud.orientation_offset_penalty);
   stage.done("normals");
   report("laplacian", 0.2);
   CloudFitOptions fopt = options.fit;
-  fopt.fit_neighbors = std::min(std::max(options.neighbors, static_cast<int>(std::lround(options.cloud.fit_cells * n / options.sites))),
-                                std::min(options.cloud.max_fit_neighbors, n - 1));
-  fopt.walk_neighbors = options.neighbors;
+  fopt.fit_neighbors = std::min(std::max(k_cloud, static_cast<int>(std::lround(options.cloud.fit_cells * n / options.sites))),
+                                std::min(std::max(options.cloud.max_fit_neighbors, k_cloud), n - 1));
+  fopt.walk_neighbors = std::min(k_cloud, fopt.fit_neighbors);
+  fopt.border.neighbors = std::max(fopt.border.neighbors, fopt.walk_neighbors);
   fopt.threads = options.threads;
-  Eigen::MatrixXi knn_fit = fopt.fit_neighbors == options.neighbors && !cp.subsampled
+  res.neighbors_cvt = k_cvt;
+  res.neighbors_fit = fopt.fit_neighbors;
+  Eigen::MatrixXi knn_fit = fopt.fit_neighbors == k_cvt && !cp.subsampled
                                 ? cp.knn
                                 : k_nearest_neighbors(P, fopt.fit_neighbors, options.threads);
   stage.done("fit neighbourhoods");

@@ -134,6 +134,97 @@ DepthFrame virtual_scan(const TriangleMesh& scene, const View& view, bool stereo
   return f;
 }
 
+Eigen::MatrixX3d lidar_scan(const TriangleMesh& scene, const LidarOptions& o, std::uint32_t seed) {
+  const Triangles tri = triangles(scene);
+  Tree tree(tri.begin(), tri.end());
+  const int turn = static_cast<int>(std::lround(360.0 / o.azimuth_step_deg));
+  std::vector<double> range(static_cast<size_t>(o.beams) * turn, 0.0);
+  const K::Point_3 eye(o.origin.x(), o.origin.y(), o.origin.z());
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int b = 0; b < o.beams; ++b) {
+    const double t = o.beams > 1 ? static_cast<double>(b) / (o.beams - 1) : 0.5;
+    const double e = (o.min_elevation_deg + t * (o.max_elevation_deg - o.min_elevation_deg)) * M_PI / 180;
+    for (int a = 0; a < turn; ++a) {
+      const double az = a * o.azimuth_step_deg * M_PI / 180;
+      const K::Ray_3 ray(eye, K::Vector_3(std::cos(e) * std::cos(az), std::cos(e) * std::sin(az), std::sin(e)));
+      const auto hit = tree.first_intersection(ray);
+      if (!hit) continue;
+      const K::Point_3* q = boost::get<K::Point_3>(&hit->first);
+      if (q) range[static_cast<size_t>(b) * turn + a] = std::sqrt(CGAL::to_double(CGAL::squared_distance(eye, *q)));
+    }
+  }
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, o.range_sigma);
+  std::vector<Eigen::RowVector3d> rows;
+  for (int b = 0; b < o.beams; ++b) {
+    const double t = o.beams > 1 ? static_cast<double>(b) / (o.beams - 1) : 0.5;
+    const double e = (o.min_elevation_deg + t * (o.max_elevation_deg - o.min_elevation_deg)) * M_PI / 180;
+    for (int a = 0; a < turn; ++a) {
+      const double r = range[static_cast<size_t>(b) * turn + a];
+      if (!(r > 0) || r > o.max_range) continue;
+      const double az = a * o.azimuth_step_deg * M_PI / 180;
+      const Eigen::RowVector3d d(std::cos(e) * std::cos(az), std::cos(e) * std::sin(az), std::sin(e));
+      rows.push_back(o.origin.transpose() + (r + noise(rng)) * d);
+    }
+  }
+  Eigen::MatrixX3d P(static_cast<Eigen::Index>(rows.size()), 3);
+  for (size_t i = 0; i < rows.size(); ++i) P.row(static_cast<Eigen::Index>(i)) = rows[i];
+  return P;
+}
+
+namespace {
+
+// Appends the quad (a, b, c, d), counter-clockwise seen from where it faces, as two triangles.
+void add_quad(std::vector<Eigen::RowVector3d>& V, std::vector<Eigen::RowVector3i>& F, const Eigen::RowVector3d& a,
+              const Eigen::RowVector3d& b, const Eigen::RowVector3d& c, const Eigen::RowVector3d& d) {
+  const int n = static_cast<int>(V.size());
+  V.insert(V.end(), {a, b, c, d});
+  F.emplace_back(n, n + 1, n + 2);
+  F.emplace_back(n, n + 2, n + 3);
+}
+
+// The closed box [lo, hi] as six quads.
+void add_box(std::vector<Eigen::RowVector3d>& V, std::vector<Eigen::RowVector3i>& F, const Eigen::RowVector3d& lo,
+             const Eigen::RowVector3d& hi) {
+  auto p = [&](int i, int j, int k) { return Eigen::RowVector3d(i ? hi.x() : lo.x(), j ? hi.y() : lo.y(), k ? hi.z() : lo.z()); };
+  add_quad(V, F, p(0, 0, 0), p(0, 1, 0), p(1, 1, 0), p(1, 0, 0));
+  add_quad(V, F, p(0, 0, 1), p(1, 0, 1), p(1, 1, 1), p(0, 1, 1));
+  add_quad(V, F, p(0, 0, 0), p(1, 0, 0), p(1, 0, 1), p(0, 0, 1));
+  add_quad(V, F, p(0, 1, 0), p(0, 1, 1), p(1, 1, 1), p(1, 1, 0));
+  add_quad(V, F, p(0, 0, 0), p(0, 0, 1), p(0, 1, 1), p(0, 1, 0));
+  add_quad(V, F, p(1, 0, 0), p(1, 1, 0), p(1, 1, 1), p(1, 0, 1));
+}
+
+}  // namespace
+
+TriangleMesh lidar_scene(const std::string& name) {
+  std::vector<Eigen::RowVector3d> V;
+  std::vector<Eigen::RowVector3i> F;
+  const double r = 40;
+  add_quad(V, F, {-r, -r, 0}, {r, -r, 0}, {r, r, 0}, {-r, r, 0});
+  if (name == "yard") {
+    add_box(V, F, {4, -1, 0}, {6, 1, 1.5});
+    const int sides = 32;  // the post: a prism of 32 sides
+    for (int i = 0; i < sides; ++i) {
+      const double a0 = 2 * M_PI * i / sides, a1 = 2 * M_PI * (i + 1) / sides;
+      const Eigen::RowVector3d p0(-3 + 0.6 * std::cos(a0), 3 + 0.6 * std::sin(a0), 0);
+      const Eigen::RowVector3d p1(-3 + 0.6 * std::cos(a1), 3 + 0.6 * std::sin(a1), 0);
+      add_quad(V, F, p0, p1, p1 + Eigen::RowVector3d(0, 0, 2), p0 + Eigen::RowVector3d(0, 0, 2));
+    }
+  } else if (name == "street") {
+    add_quad(V, F, {-30, 6, 0}, {30, 6, 0}, {30, 6, 5}, {-30, 6, 5});
+    add_quad(V, F, {-30, -6, 0}, {-30, -6, 5}, {30, -6, 5}, {30, -6, 0});
+  } else if (name != "floor") {
+    throw std::invalid_argument("lidar_scene: no scene named " + name);
+  }
+  TriangleMesh m;
+  m.V.resize(static_cast<Eigen::Index>(V.size()), 3);
+  m.F.resize(static_cast<Eigen::Index>(F.size()), 3);
+  for (size_t i = 0; i < V.size(); ++i) m.V.row(static_cast<Eigen::Index>(i)) = V[i];
+  for (size_t i = 0; i < F.size(); ++i) m.F.row(static_cast<Eigen::Index>(i)) = F[i];
+  return m;
+}
+
 void write_organised_pcd(const std::string& path, const DepthFrame& frame) {
   const Eigen::MatrixX3d& P = frame.P;
   const Eigen::Vector3d& eye = frame.eye;

@@ -55,6 +55,29 @@ struct DepthFrame {
 DepthFrame virtual_scan(const TriangleMesh& scene, const View& view, bool stereo, const ScanOptions& options,
                         std::uint32_t seed);
 
+/// A rotating multi-beam lidar (Velodyne, Ouster, Hesai): `beams` beams at elevations spread evenly
+/// over [min_elevation_deg, max_elevation_deg], each returning the first hit every
+/// azimuth_step_deg of a full turn, up to max_range, with Gaussian range noise. Its points lie in
+/// rings (on a floor, circles whose spacing grows with the square of the range) and, on walls,
+/// in rows: dense along the ring, sparse across.
+struct LidarOptions {
+  int beams = 32;
+  double min_elevation_deg = -25, max_elevation_deg = -2;
+  double azimuth_step_deg = 0.2;
+  double max_range = 40;
+  double range_sigma = 0.01;               ///< m
+  Eigen::Vector3d origin{0.0, 0.0, 1.8};   ///< the sensor, 1.8 m above the floor z = 0
+};
+
+/// The returns of one turn of the lidar in `scene` (metres); `seed` drives the noise.
+Eigen::MatrixX3d lidar_scan(const TriangleMesh& scene, const LidarOptions& options, std::uint32_t seed);
+
+/// Scenes for the lidar, z up, the floor at z = 0 (80 m square) around the sensor at the origin:
+/// "floor" (the floor alone), "yard" (a box 2 × 2 × 1.5 m at x = 5 and a post 0.6 m in radius,
+/// 2 m high, at (−3, 3)), "street" (two house fronts 5 m high along y = ±6 from x = −30 to 30).
+/// \throw std::invalid_argument for another name.
+TriangleMesh lidar_scene(const std::string& name);
+
 /// Writes the frame as an organised ASCII PCD ("nan" where there is no return) with the camera
 /// position as its VIEWPOINT. \throw std::runtime_error when the file cannot be written.
 void write_organised_pcd(const std::string& path, const DepthFrame& frame);

@@ -16,6 +16,7 @@
 #include "heatcvt/mesher/coverage_repair.h"
 #include "heatcvt/mesher/projector.h"
 #include "heatcvt/mesher/surface_mesher.h"
+#include "heatcvt/neighbour_spread.h"
 #include "heatcvt/sample_border.h"
 #include "heatcvt/stray_points.h"
 #include "heatcvt/validate.h"
@@ -51,6 +52,12 @@ struct CloudPreparationOptions {
   int graph_lloyd_iterations = 20;
   /// Over-relaxation ω of the surface Lloyd start (CvtOptions::surface_lloyd_relaxation). Default 1.5.
   double surface_lloyd_relaxation = 1.5;
+  /// Neighbourhoods that span the surface (neighbour_spread.h): where `neighbors` nearest points
+  /// lie along a line (the rings of a rotating lidar, the stripes of a line scanner), the CVT
+  /// points' neighbourhoods (normals, orientation, point Laplacian) and the cloud's (fit, walk,
+  /// border test) grow to neighbours_for_spread() of their own points; an isotropic sampling
+  /// keeps `neighbors`. spread.factor = 0 turns it off.
+  NeighbourSpreadOptions spread;
 };
 
 /// Options of reconstruct_surface(). Every default is the one `cloud2mesh --help` shows.
@@ -170,6 +177,10 @@ struct ReconstructionResult {
   TriangleMesh mesh;               ///< the reconstructed, consistently oriented surface
   ValidationReport validation;     ///< CGAL checks of `mesh`
   int points_used = 0;             ///< after clean-up / denoising / downsampling
+  /// Neighbourhood sizes used (CloudPreparationOptions::spread): on the CVT points (normals, point
+  /// Laplacian) and on the cloud (surface fit, border test). `neighbors` and the fit's own size
+  /// where the sampling spans the surface at them.
+  int neighbors_cvt = 0, neighbors_fit = 0;
   double laplacian_seconds = 0, factor_seconds = 0, cvt_seconds = 0, total_seconds = 0;
   int iterations = 0;              ///< Lloyd iterations run
   double min_angle_deg = 0;        ///< φmin: smallest interior angle over all triangles
