@@ -68,7 +68,9 @@ int spanning_neighbours(const Eigen::MatrixX3d& P, const NeighbourSpreadOptions&
 int neighbours_for_spread(const Eigen::MatrixX3d& P, int k, const NeighbourSpreadOptions& options, int threads) {
   check(options);
   if (options.factor == 0 || P.rows() <= kFirstSize) return k;
-  const double wanted = std::ceil(options.factor * spanning_neighbours(P, options, threads));
+  const int spanning = spanning_neighbours(P, options, threads);
+  if (spanning <= kFirstSize) return k;  // spans at the first size looked at: isotropic
+  const double wanted = std::ceil(options.factor * spanning);
   const int spread = static_cast<int>(std::min<double>(options.max_neighbors, wanted));
   return static_cast<int>(std::min<Eigen::Index>(std::max(k, spread), P.rows() - 1));
 }

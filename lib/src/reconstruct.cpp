@@ -317,6 +317,22 @@ void smooth_cvt_points(CvtPoints& c, const CloudSurfaceProjector& fit, const Rec
 // normal, such neighbours are left out of each local triangulation, so that heat (hence a cell)
 // does not cross to the other side; where many do, the orientation itself is unreliable and the
 // point graph is not cut.
+// The cloud's fit: about cloud.fit_cells cells' worth of points, at least `k_cloud` (the
+// neighbourhood size, `neighbors` or more where the sampling is in rows: neighbour_spread.h) and
+// at most cloud.max_fit_neighbors (or `k_cloud` where it is more); the projector's walk and, where
+// the neighbourhoods grew, its border test look at `k_cloud` of them.
+CloudFitOptions cloud_fit_options(const ReconstructionOptions& options, int n, int k_cloud) {
+  CloudFitOptions fopt = options.fit;
+  const bool grown = k_cloud > options.neighbors;
+  const int cap = grown ? std::max(options.cloud.max_fit_neighbors, k_cloud) : options.cloud.max_fit_neighbors;
+  const int cells = static_cast<int>(std::lround(options.cloud.fit_cells * n / options.sites));
+  fopt.fit_neighbors = std::min(std::max(k_cloud, cells), std::min(cap, n - 1));
+  fopt.walk_neighbors = grown ? std::min(k_cloud, fopt.fit_neighbors) : options.neighbors;
+  if (grown) fopt.border.neighbors = std::max(fopt.border.neighbors, fopt.walk_neighbors);
+  fopt.threads = options.threads;
+  return fopt;
+}
+
 PointLaplacian cvt_point_laplacian(const CvtPoints& c, const ReconstructionOptions& options) {
   const int nc = static_cast<int>(c.PC.rows());
   long crossing_points = 0;
@@ -467,12 +483,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
                      options.threads, options.cloud.orientation_offset_penalty);
   stage.done("normals");
   report("laplacian", 0.2);
-  CloudFitOptions fopt = options.fit;
-  fopt.fit_neighbors = std::min(std::max(k_cloud, static_cast<int>(std::lround(options.cloud.fit_cells * n / options.sites))),
-                                std::min(std::max(options.cloud.max_fit_neighbors, k_cloud), n - 1));
-  fopt.walk_neighbors = std::min(k_cloud, fopt.fit_neighbors);
-  fopt.border.neighbors = std::max(fopt.border.neighbors, fopt.walk_neighbors);
-  fopt.threads = options.threads;
+  CloudFitOptions fopt = cloud_fit_options(options, n, k_cloud);
   res.neighbors_cvt = k_cvt;
   res.neighbors_fit = fopt.fit_neighbors;
   Eigen::MatrixXi knn_fit = fopt.fit_neighbors == k_cvt && !cp.subsampled

@@ -39,8 +39,9 @@ struct NeighbourSpreadOptions {
 int spanning_neighbours(const Eigen::MatrixX3d& P, const NeighbourSpreadOptions& options = {}, int threads = 0);
 
 /// The neighbourhood size to use on P where `k` is asked for: max(k, min(max_neighbors,
-/// ⌈factor · spanning_neighbours()⌉)), and at most #P − 1. `k` itself where factor is 0 or P
-/// has too few points to look at.
+/// ⌈factor · spanning_neighbours()⌉)), and at most #P − 1. `k` itself where factor is 0, where P
+/// has too few points to look at, and where the neighbourhoods span the surface at the first size
+/// looked at (8 points: an isotropic sampling, whatever `k`).
 int neighbours_for_spread(const Eigen::MatrixX3d& P, int k, const NeighbourSpreadOptions& options = {},
                           int threads = 0);
 
