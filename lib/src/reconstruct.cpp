@@ -313,10 +313,6 @@ void smooth_cvt_points(CvtPoints& c, const CloudSurfaceProjector& fit, const Rec
   }
 }
 
-// Point Laplacian of the CVT points. Where a few points (thin parts) have a neighbour of opposite
-// normal, such neighbours are left out of each local triangulation, so that heat (hence a cell)
-// does not cross to the other side; where many do, the orientation itself is unreliable and the
-// point graph is not cut.
 // The cloud's fit: about cloud.fit_cells cells' worth of points, at least `k_cloud` (the
 // neighbourhood size, `neighbors` or more where the sampling is in rows: neighbour_spread.h) and
 // at most cloud.max_fit_neighbors (or `k_cloud` where it is more); the projector's walk and, where
@@ -333,6 +329,10 @@ CloudFitOptions cloud_fit_options(const ReconstructionOptions& options, int n, i
   return fopt;
 }
 
+// Point Laplacian of the CVT points. Where a few points (thin parts) have a neighbour of opposite
+// normal, such neighbours are left out of each local triangulation, so that heat (hence a cell)
+// does not cross to the other side; where many do, the orientation itself is unreliable and the
+// point graph is not cut.
 PointLaplacian cvt_point_laplacian(const CvtPoints& c, const ReconstructionOptions& options) {
   const int nc = static_cast<int>(c.PC.rows());
   long crossing_points = 0;
