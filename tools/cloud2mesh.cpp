@@ -317,6 +317,12 @@ void add_reconstruction_options(CLI::App& app, Settings& s) {
                  "axis at least 0.05 of the first), up to 200; an isotropic sampling keeps -k; 0 = always -k")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 100.0));
+  app.add_option("--across-offset", s.opt.cloud.across_min_offset,
+                 "where many points have a neighbour of opposite normal (a plate or wall about as thick as the "
+                 "neighbourhood, a cluttered scene), the point Laplacian still cuts the pairs whose second point lies off "
+                 "the first's tangent plane by at least this fraction of their distance (the other face); 0 = no cut there")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   app.add_option("--anisotropy", s.opt.anisotropy, "lambda of the anisotropic lift (p, lambda n); 0 = isotropic")
       ->capture_default_str();
   app.add_flag("--denoise", s.opt.denoise, "statistical outlier removal before reconstruction");

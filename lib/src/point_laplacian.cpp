@@ -376,8 +376,16 @@ LocalFan local_fan(const Eigen::MatrixX3d& P, const Eigen::MatrixXi& nb, int i, 
   }
   Delaunay::Vertex_handle centre = dt.insert(Kernel::Point_2(0.0, 0.0));
   centre->info() = 0;
+  // The other side of a thin part: opposite oriented normals and, with across_min_offset, b off
+  // a's tangent plane (its oriented normal's).
+  auto across = [&](int a, int b) {
+    if (on->row(a).dot(on->row(b)) >= 0) return false;
+    if (options.across_min_offset <= 0) return true;
+    const Eigen::RowVector3d d = P.row(b) - P.row(a);
+    return std::abs(d.dot(on->row(a))) >= options.across_min_offset * d.norm();
+  };
   for (int c = 1; c <= k; ++c) {
-    if (on && on->row(i).dot(on->row(ids[c])) < 0) continue;  // other side of a thin part
+    if (on && across(i, ids[c])) continue;
     const auto before = dt.number_of_vertices();
     Delaunay::Vertex_handle vh = dt.insert(Kernel::Point_2(q[c].x(), q[c].y()));
     if (dt.number_of_vertices() != before) vh->info() = c;  // else: duplicate, keep the first
@@ -391,9 +399,8 @@ LocalFan local_fan(const Eigen::MatrixX3d& P, const Eigen::MatrixXi& nb, int i, 
     for (int c = 0; c < 3; ++c) local[c] = fc->vertex(c)->info();
     // Rotate so the centre comes first (keeps CCW order, makes output deterministic).
     while (local[0] != 0) std::rotate(local, local + 1, local + 3);
-    if (on && (on->row(ids[local[0]]).dot(on->row(ids[local[1]])) < 0 ||
-               on->row(ids[local[1]]).dot(on->row(ids[local[2]])) < 0 ||
-               on->row(ids[local[0]]).dot(on->row(ids[local[2]])) < 0))
+    if (on && (across(ids[local[0]], ids[local[1]]) || across(ids[local[1]], ids[local[2]]) ||
+               across(ids[local[0]], ids[local[2]])))
       continue;
     const Eigen::Vector2d a = q[local[0]], b = q[local[1]], d = q[local[2]];
     const double twice_area2d = (b - a).x() * (d - a).y() - (b - a).y() * (d - a).x();
@@ -486,9 +493,9 @@ PointLaplacian point_laplacian(const Eigen::MatrixX3d& P, const PointLaplacianOp
     throw InvalidInputError("point_laplacian: the cloud has " + std::to_string(P.rows()) +
                             " points, need at least k + 1 = " + std::to_string(k + 1));
   if (!(options.cot_clamp > 0) || !(options.degenerate_area_epsilon >= 0) || !(options.min_mass_fraction > 0) ||
-      !(options.mollify_factor >= 0))
+      !(options.mollify_factor >= 0) || !(options.across_min_offset >= 0 && options.across_min_offset <= 1))
     throw InvalidInputError("point_laplacian: cot_clamp and min_mass_fraction must be > 0, "
-                            "degenerate_area_epsilon and mollify_factor >= 0");
+                            "degenerate_area_epsilon and mollify_factor >= 0, across_min_offset in [0, 1]");
   const int n = static_cast<int>(P.rows());
   const int threads = resolve_threads(options.threads);
   const Eigen::MatrixXi nb = neighbour_table(P, options, threads);

@@ -72,6 +72,7 @@ void check_options(const ReconstructionOptions& o) {
   if (!(c.orientation_offset_penalty >= 0) || !std::isfinite(c.orientation_offset_penalty))
     bad("cloud.orientation_offset_penalty must be a finite number >= 0");
   if (!(c.max_crossing_fraction >= 0 && c.max_crossing_fraction <= 1)) bad("cloud.max_crossing_fraction must be in [0, 1]");
+  if (!(c.across_min_offset >= 0 && c.across_min_offset <= 1)) bad("cloud.across_min_offset must be in [0, 1]");
   if (!(c.max_subset_fraction > 0 && c.max_subset_fraction <= 1)) bad("cloud.max_subset_fraction must be in (0, 1]");
   if (c.graph_lloyd_iterations < 0) bad("cloud.graph_lloyd_iterations must be >= 0");
   if (!(c.surface_lloyd_relaxation >= 1 && c.surface_lloyd_relaxation < 2)) bad("cloud.surface_lloyd_relaxation must be in [1, 2)");
@@ -346,7 +347,12 @@ PointLaplacian cvt_point_laplacian(const CvtPoints& c, const ReconstructionOptio
   lopt.k = static_cast<int>(c.knn.cols());
   lopt.threads = options.threads;
   lopt.neighbors = &c.knn;
-  if (crossing_points > 0 && crossing_points <= options.cloud.max_crossing_fraction * nc) lopt.oriented_normals = &c.NC;
+  if (crossing_points > 0 && crossing_points <= options.cloud.max_crossing_fraction * nc) {
+    lopt.oriented_normals = &c.NC;
+  } else if (crossing_points > 0 && options.cloud.across_min_offset > 0) {
+    lopt.oriented_normals = &c.NC;
+    lopt.across_min_offset = options.cloud.across_min_offset;
+  }
   return point_laplacian(c.PC, lopt);
 }
 

@@ -82,6 +82,11 @@ struct PointLaplacianOptions {
   /// part thinner than the neighbourhood are not connected (the PCA `normals` still use all k
   /// neighbours). Default nullptr (all neighbours).
   const Eigen::MatrixX3d* oriented_normals = nullptr;
+  /// With `oriented_normals`: two points of opposite normal are kept apart only where the
+  /// second lies off the first's tangent plane by at least this fraction of their distance (the
+  /// other side of a thin part), so that normals flipped within one sheet (an orientation error)
+  /// keep their links. 0 = every pair of opposite normal is kept apart. Default 0.
+  double across_min_offset = 0;
   /// Optional precomputed neighbours (#P by ≥ k, nearest first, as k_nearest_neighbors()
   /// returns them; the first k columns are used), so that a caller who already searched does not
   /// search again. Default nullptr (searched here).

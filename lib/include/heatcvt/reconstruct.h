@@ -45,6 +45,13 @@ struct CloudPreparationOptions {
   /// thin part) only when at most this fraction of the CVT points has one: where they are common
   /// the orientation itself is unreliable (cluttered scenes). Default 0.08.
   double max_crossing_fraction = 0.08;
+  /// ... and where more do, the pairs of opposite normal are still kept apart where the second
+  /// point lies off the first's tangent plane by at least this fraction of their distance
+  /// (PointLaplacianOptions::across_min_offset): the two faces of a plate or a wall about as
+  /// thick as the neighbourhood, where nearly every point has a neighbour on the other face,
+  /// while normals flipped within one sheet keep their links. 0 = no such pairs kept apart.
+  /// Default 0.5 (the other face at most about twice as far along the surface as across it).
+  double across_min_offset = 0.5;
   /// The voxel subset of the CVT points is used only when it has fewer than this fraction of the
   /// points. Default 0.8.
   double max_subset_fraction = 0.8;
