@@ -13,6 +13,7 @@
 #include "heatcvt/mesh.h"
 #include "heatcvt/point_laplacian.h"
 #include "heatcvt/reconstruct.h"
+#include "thin_scenes.h"
 
 using namespace heatcvt;
 
@@ -43,28 +44,6 @@ void add_sheet(int n, double h, double z, double nz, std::mt19937& rng, Eigen::M
       P.row(row) << i * h + jitter(rng), j * h + jitter(rng), z;
       N.row(row) << 0, 0, nz;
     }
-}
-
-// Points on the faces of the box [0, 1] × [0, 1] × [0, t] (area-uniform), Gaussian noise σ.
-Eigen::MatrixX3d thin_plate(double t, int count, double sigma) {
-  std::mt19937 rng(10);
-  std::uniform_real_distribution<double> u(0, 1);
-  std::normal_distribution<double> noise(0, sigma);
-  const double areas[3] = {1.0, t, t};  // faces normal to z, to x, to y (two each)
-  const double total = 2 * (areas[0] + areas[1] + areas[2]);
-  Eigen::MatrixX3d P(count, 3);
-  for (int i = 0; i < count; ++i) {
-    double pick = u(rng) * total / 2;
-    int axis = 0;
-    while (axis < 2 && pick > areas[axis]) pick -= areas[axis++];
-    Eigen::Vector3d p(u(rng), u(rng), u(rng) * t);
-    const double side = u(rng) < 0.5 ? 0.0 : 1.0;
-    if (axis == 0) p.z() = side * t;
-    else if (axis == 1) p.x() = side;
-    else p.y() = side;
-    P.row(i) = (p + Eigen::Vector3d(noise(rng), noise(rng), noise(rng))).transpose();
-  }
-  return P;
 }
 
 }  // namespace
@@ -115,7 +94,7 @@ TEST(ThinSlabs, TheTwoFacesOfASlabAreCutApartFlippedNormalsInOneSheetKeepTheirLi
 // 8 % rule (max_crossing_fraction) does not cut them; without the offset rule the mesh falls
 // apart. With it: one closed piece of genus 0 at the count with the shape targets.
 TEST(ThinSlabs, AClosedPlateThinnerThanASiteSpacingIsOneClosedPiece) {
-  const Eigen::MatrixX3d P = thin_plate(0.03, 40000, 0.0005);
+  const Eigen::MatrixX3d P = test::thin_plate(0.03, 40000, 0.0005);
   ReconstructionOptions options;
   options.sites = 2000;
   options.threads = 2;
