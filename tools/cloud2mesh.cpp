@@ -318,9 +318,10 @@ void add_reconstruction_options(CLI::App& app, Settings& s) {
       ->capture_default_str()
       ->check(CLI::Range(0.0, 100.0));
   app.add_option("--across-offset", s.opt.cloud.across_min_offset,
-                 "where many points have a neighbour of opposite normal (a plate or wall about as thick as the "
-                 "neighbourhood, a cluttered scene), the point Laplacian still cuts the pairs whose second point lies off "
-                 "the first's tangent plane by at least this fraction of their distance (the other face); 0 = no cut there")
+                 "where more than 8 % of the points have a neighbour of opposite normal, the point Laplacian still cuts "
+                 "the pairs across a thin part (normals more than 120 deg apart, the second point off the first's "
+                 "tangent plane by at least this fraction of their distance: the faces of a plate or a wall about a "
+                 "neighbourhood thick) when they are at least 3/4 of those pairs; 0 = no cut there")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
   app.add_option("--anisotropy", s.opt.anisotropy, "lambda of the anisotropic lift (p, lambda n); 0 = isotropic")

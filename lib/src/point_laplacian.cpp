@@ -331,6 +331,20 @@ Eigen::MatrixXi neighbour_table(const Eigen::MatrixX3d& P, const PointLaplacianO
   return nb;
 }
 
+}  // namespace
+
+bool across_thin_part(const Eigen::RowVector3d& a, const Eigen::RowVector3d& na, const Eigen::RowVector3d& b,
+                      const Eigen::RowVector3d& nb, double min_offset, double max_dot) {
+  const double dot = na.dot(nb);
+  if (dot >= 0) return false;
+  if (min_offset <= 0) return true;
+  if (dot > max_dot) return false;
+  const Eigen::RowVector3d d = b - a;
+  return std::abs(d.dot(na)) >= min_offset * d.norm();
+}
+
+namespace {
+
 // The local triangles of point i (paper §8, Sharp & Crane 2020): PCA frame of the point and its
 // k neighbours, their projection to the tangent plane, its Delaunay triangulation, and the
 // triangles incident to the centre with their cotangents. `dt`, `q`, `ids` are per-thread work
@@ -376,13 +390,9 @@ LocalFan local_fan(const Eigen::MatrixX3d& P, const Eigen::MatrixXi& nb, int i, 
   }
   Delaunay::Vertex_handle centre = dt.insert(Kernel::Point_2(0.0, 0.0));
   centre->info() = 0;
-  // The other side of a thin part: opposite oriented normals and, with across_min_offset, b off
-  // a's tangent plane (its oriented normal's).
   auto across = [&](int a, int b) {
-    if (on->row(a).dot(on->row(b)) >= 0) return false;
-    if (options.across_min_offset <= 0) return true;
-    const Eigen::RowVector3d d = P.row(b) - P.row(a);
-    return std::abs(d.dot(on->row(a))) >= options.across_min_offset * d.norm();
+    return across_thin_part(P.row(a), on->row(a), P.row(b), on->row(b), options.across_min_offset,
+                            options.across_max_dot);
   };
   for (int c = 1; c <= k; ++c) {
     if (on && across(i, ids[c])) continue;
@@ -493,9 +503,10 @@ PointLaplacian point_laplacian(const Eigen::MatrixX3d& P, const PointLaplacianOp
     throw InvalidInputError("point_laplacian: the cloud has " + std::to_string(P.rows()) +
                             " points, need at least k + 1 = " + std::to_string(k + 1));
   if (!(options.cot_clamp > 0) || !(options.degenerate_area_epsilon >= 0) || !(options.min_mass_fraction > 0) ||
-      !(options.mollify_factor >= 0) || !(options.across_min_offset >= 0 && options.across_min_offset <= 1))
+      !(options.mollify_factor >= 0) || !(options.across_min_offset >= 0 && options.across_min_offset <= 1) ||
+      !(options.across_max_dot >= -1 && options.across_max_dot <= 0))
     throw InvalidInputError("point_laplacian: cot_clamp and min_mass_fraction must be > 0, "
-                            "degenerate_area_epsilon and mollify_factor >= 0, across_min_offset in [0, 1]");
+                            "degenerate_area_epsilon and mollify_factor >= 0, across_min_offset in [0, 1], across_max_dot in [-1, 0]");
   const int n = static_cast<int>(P.rows());
   const int threads = resolve_threads(options.threads);
   const Eigen::MatrixXi nb = neighbour_table(P, options, threads);

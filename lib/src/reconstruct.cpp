@@ -73,6 +73,7 @@ void check_options(const ReconstructionOptions& o) {
     bad("cloud.orientation_offset_penalty must be a finite number >= 0");
   if (!(c.max_crossing_fraction >= 0 && c.max_crossing_fraction <= 1)) bad("cloud.max_crossing_fraction must be in [0, 1]");
   if (!(c.across_min_offset >= 0 && c.across_min_offset <= 1)) bad("cloud.across_min_offset must be in [0, 1]");
+  if (!(c.min_thin_pair_share >= 0 && c.min_thin_pair_share <= 1)) bad("cloud.min_thin_pair_share must be in [0, 1]");
   if (!(c.max_subset_fraction > 0 && c.max_subset_fraction <= 1)) bad("cloud.max_subset_fraction must be in (0, 1]");
   if (c.graph_lloyd_iterations < 0) bad("cloud.graph_lloyd_iterations must be >= 0");
   if (!(c.surface_lloyd_relaxation >= 1 && c.surface_lloyd_relaxation < 2)) bad("cloud.surface_lloyd_relaxation must be in [1, 2)");
@@ -332,26 +333,36 @@ CloudFitOptions cloud_fit_options(const ReconstructionOptions& options, int n, i
 
 // Point Laplacian of the CVT points. Where a few points (thin parts) have a neighbour of opposite
 // normal, such neighbours are left out of each local triangulation, so that heat (hence a cell)
-// does not cross to the other side; where many do, the orientation itself is unreliable and the
-// point graph is not cut.
+// does not cross to the other side. Where many do, the orientation is unreliable (clutter, noise)
+// unless nearly all of those pairs lie across a thin part (antiparallel normals, off each other's
+// tangent plane: a plate or a wall about a neighbourhood thick, two scans of a plane offset by a
+// registration error); then those pairs are cut, otherwise none.
 PointLaplacian cvt_point_laplacian(const CvtPoints& c, const ReconstructionOptions& options) {
   const int nc = static_cast<int>(c.PC.rows());
-  long crossing_points = 0;
-  for (int i = 0; i < nc; ++i)
-    for (Eigen::Index q = 0; q < c.knn.cols(); ++q)
-      if (c.NC.row(i).dot(c.NC.row(c.knn(i, q))) < 0) {
-        ++crossing_points;
-        break;
-      }
+  const PointLaplacianOptions defaults;
+  const double offset = options.cloud.across_min_offset;
+  long crossing_points = 0, crossing_pairs = 0, thin_pairs = 0;
+  for (int i = 0; i < nc; ++i) {
+    bool crossing = false;
+    for (Eigen::Index q = 0; q < c.knn.cols(); ++q) {
+      const int j = c.knn(i, q);
+      if (c.NC.row(i).dot(c.NC.row(j)) >= 0) continue;
+      crossing = true;
+      ++crossing_pairs;
+      thin_pairs += offset > 0 && across_thin_part(c.PC.row(i), c.NC.row(i), c.PC.row(j), c.NC.row(j), offset,
+                                                   defaults.across_max_dot);
+    }
+    crossing_points += crossing;
+  }
   PointLaplacianOptions lopt;
   lopt.k = static_cast<int>(c.knn.cols());
   lopt.threads = options.threads;
   lopt.neighbors = &c.knn;
   if (crossing_points > 0 && crossing_points <= options.cloud.max_crossing_fraction * nc) {
     lopt.oriented_normals = &c.NC;
-  } else if (crossing_points > 0 && options.cloud.across_min_offset > 0) {
+  } else if (offset > 0 && thin_pairs >= options.cloud.min_thin_pair_share * static_cast<double>(crossing_pairs)) {
     lopt.oriented_normals = &c.NC;
-    lopt.across_min_offset = options.cloud.across_min_offset;
+    lopt.across_min_offset = offset;
   }
   return point_laplacian(c.PC, lopt);
 }

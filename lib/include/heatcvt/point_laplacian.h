@@ -87,6 +87,10 @@ struct PointLaplacianOptions {
   /// other side of a thin part), so that normals flipped within one sheet (an orientation error)
   /// keep their links. 0 = every pair of opposite normal is kept apart. Default 0.
   double across_min_offset = 0;
+  /// ... and, with across_min_offset > 0, only where their normals' dot product is at most this
+  /// (the two faces of a slab face opposite ways; at a crease whose normals an orientation error
+  /// flipped they are nearer perpendicular). Default −0.5 (more than 120° apart).
+  double across_max_dot = -0.5;
   /// Optional precomputed neighbours (#P by ≥ k, nearest first, as k_nearest_neighbors()
   /// returns them; the first k columns are used), so that a caller who already searched does not
   /// search again. Default nullptr (searched here).
@@ -133,5 +137,13 @@ struct PointLaplacian {
 /// \throw InvalidInputError if options.k < 3, #P < k + 1, options.threads < 0, a coordinate is
 ///        NaN or infinite, or the cloud is degenerate so that no local triangle exists at all.
 PointLaplacian point_laplacian(const Eigen::MatrixX3d& P, const PointLaplacianOptions& options = {});
+
+/// Whether point b (unit oriented normal nb) is on the other side of a thin part from a (na), as
+/// point_laplacian() decides with oriented normals: opposite normals, and where `min_offset` > 0
+/// also normals at most `max_dot` apart (their dot product) and b off a's tangent plane by at
+/// least `min_offset` of their distance (PointLaplacianOptions::across_min_offset,
+/// across_max_dot).
+bool across_thin_part(const Eigen::RowVector3d& a, const Eigen::RowVector3d& na, const Eigen::RowVector3d& b,
+                      const Eigen::RowVector3d& nb, double min_offset, double max_dot);
 
 }  // namespace heatcvt

@@ -45,13 +45,16 @@ struct CloudPreparationOptions {
   /// thin part) only when at most this fraction of the CVT points has one: where they are common
   /// the orientation itself is unreliable (cluttered scenes). Default 0.08.
   double max_crossing_fraction = 0.08;
-  /// ... and where more do, the pairs of opposite normal are still kept apart where the second
-  /// point lies off the first's tangent plane by at least this fraction of their distance
-  /// (PointLaplacianOptions::across_min_offset): the two faces of a plate or a wall about as
-  /// thick as the neighbourhood, where nearly every point has a neighbour on the other face,
-  /// while normals flipped within one sheet keep their links. 0 = no such pairs kept apart.
-  /// Default 0.5 (the other face at most about twice as far along the surface as across it).
+  /// ... and where more do, the pairs of opposite normal are still cut where at least
+  /// min_thin_pair_share of them lie across a thin part: normals more than 120° apart
+  /// (PointLaplacianOptions::across_max_dot) and the second point off the first's tangent plane
+  /// by at least across_min_offset of their distance (the two faces of a plate or a wall about as
+  /// thick as the neighbourhood, where nearly every point has a neighbour on the other face);
+  /// then those pairs are cut. In cluttered and noisy scans most opposite pairs are orientation
+  /// errors within one sheet (0.1–0.4 of them across), on such plates 0.9 and more (measured in
+  /// docs/benchmarks.md). across_min_offset = 0 turns this off. Defaults 0.5 and 0.75.
   double across_min_offset = 0.5;
+  double min_thin_pair_share = 0.75;
   /// The voxel subset of the CVT points is used only when it has fewer than this fraction of the
   /// points. Default 0.8.
   double max_subset_fraction = 0.8;
