@@ -360,7 +360,8 @@ PointLaplacian cvt_point_laplacian(const CvtPoints& c, const ReconstructionOptio
   lopt.neighbors = &c.knn;
   if (crossing_points > 0 && crossing_points <= options.cloud.max_crossing_fraction * nc) {
     lopt.oriented_normals = &c.NC;
-  } else if (offset > 0 && thin_pairs >= options.cloud.min_thin_pair_share * static_cast<double>(crossing_pairs)) {
+  } else if (crossing_points > 0 && offset > 0 &&
+             thin_pairs >= options.cloud.min_thin_pair_share * static_cast<double>(crossing_pairs)) {
     lopt.oriented_normals = &c.NC;
     lopt.across_min_offset = offset;
   }
