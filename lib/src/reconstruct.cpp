@@ -331,6 +331,26 @@ CloudFitOptions cloud_fit_options(const ReconstructionOptions& options, int n, i
   return fopt;
 }
 
+// The CVT points' neighbourhoods and normals: sizes that span the surface (neighbour_spread.h:
+// `neighbors`, more where the sampling is in rows), the kNN table, PCA normals oriented along an
+// MST (edges leaving the tangent plane are propagated through last, so the two sides of a thin
+// part get opposite normals; its k scaled like the neighbourhoods). Returns the cloud fit's
+// options; the sizes used go to res.neighbors_cvt / neighbors_fit.
+CloudFitOptions orient_cvt_points(CvtPoints& cp, const Eigen::MatrixX3d& P, const ReconstructionOptions& options,
+                                  ReconstructionResult& res) {
+  const int k_cvt = neighbours_for_spread(cp.PC, options.neighbors, options.cloud.spread, options.threads);
+  const int k_cloud =
+      cp.subsampled ? neighbours_for_spread(P, options.neighbors, options.cloud.spread, options.threads) : k_cvt;
+  cp.knn = k_nearest_neighbors(cp.PC, k_cvt, options.threads);
+  cp.NC = estimate_normals(cp.PC, cp.knn, options.threads);
+  orient_normals_mst(cp.PC, cp.NC, std::min(k_cvt, options.cloud.orientation_neighbors * k_cvt / options.neighbors),
+                     options.threads, options.cloud.orientation_offset_penalty);
+  const CloudFitOptions fopt = cloud_fit_options(options, static_cast<int>(P.rows()), k_cloud);
+  res.neighbors_cvt = k_cvt;
+  res.neighbors_fit = fopt.fit_neighbors;
+  return fopt;
+}
+
 // Point Laplacian of the CVT points. Where a few points (thin parts) have a neighbour of opposite
 // normal, such neighbours are left out of each local triangulation, so that heat (hence a cell)
 // does not cross to the other side. Where many do, the orientation is unreliable (clutter, noise)
@@ -486,25 +506,13 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   res.points_cvt = static_cast<int>(cp.sub.size());
   stage.done("preprocess");
 
-  // 2. Normals (PCA, MST orientation: edges leaving the tangent plane are propagated through
-  // last, so the two sides of a thin part get opposite normals), the fitted surface, the point
-  // Laplacian.
+  // 2. Normals, the fitted surface, the point Laplacian.
   report("laplacian", 0);
   const auto t0 = Clock::now();
-  // Neighbourhoods spanning the surface: more than `neighbors` where the sampling is in rows.
-  const int k_cvt = neighbours_for_spread(cp.PC, options.neighbors, options.cloud.spread, options.threads);
-  const int k_cloud =
-      cp.subsampled ? neighbours_for_spread(P, options.neighbors, options.cloud.spread, options.threads) : k_cvt;
-  cp.knn = k_nearest_neighbors(cp.PC, k_cvt, options.threads);
-  cp.NC = estimate_normals(cp.PC, cp.knn, options.threads);
-  orient_normals_mst(cp.PC, cp.NC, std::min(k_cvt, options.cloud.orientation_neighbors * k_cvt / options.neighbors),
-                     options.threads, options.cloud.orientation_offset_penalty);
+  CloudFitOptions fopt = orient_cvt_points(cp, P, options, res);
   stage.done("normals");
   report("laplacian", 0.2);
-  CloudFitOptions fopt = cloud_fit_options(options, n, k_cloud);
-  res.neighbors_cvt = k_cvt;
-  res.neighbors_fit = fopt.fit_neighbors;
-  Eigen::MatrixXi knn_fit = fopt.fit_neighbors == k_cvt && !cp.subsampled
+  Eigen::MatrixXi knn_fit = fopt.fit_neighbors == res.neighbors_cvt && !cp.subsampled
                                 ? cp.knn
                                 : k_nearest_neighbors(P, fopt.fit_neighbors, options.threads);
   stage.done("fit neighbourhoods");
