@@ -135,6 +135,8 @@ cli::Json make_report(const std::string& cloud_path, const std::vector<std::stri
   j["trimmed_faces"] = res.trimmed_faces;
   j["pieces_removed"] = res.pieces_removed;
   j["sized"] = res.sized;
+  j["count_retries"] = res.count_retries;
+  j["seed_used"] = res.seed_used;
   j["crossing_after_sizing"] = res.crossing_after_sizing;
   j["flying_faces_removed"] = res.flying_faces;
   j["boundary_loops"] = res.validation.boundary_loops;
@@ -343,6 +345,12 @@ void add_reconstruction_options(CLI::App& app, Settings& s) {
       ->capture_default_str();
   app.add_option("--t-coef", s.opt.time_coefficient, "time step t = C * (mean edge length)^2")->capture_default_str();
   app.add_option("--seed", s.opt.seed, "seed of the initial sites")->capture_default_str();
+  app.add_option("--count-retries", s.opt.count_retries,
+                 "where the mesh is more than --retry-count-error * -n off the count, run the CVT and the mesher again "
+                 "from the start sites of the next seeds, at most this many times, and keep the best result (0 = never)")
+      ->capture_default_str();
+  app.add_option("--retry-count-error", s.opt.retry_count_error, "see --count-retries (a fraction of -n)")
+      ->capture_default_str();
   app.add_option("--relaxation", s.opt.lloyd_relaxation, "Lloyd over-relaxation factor in [1, 2); 1 = plain Lloyd")
       ->capture_default_str();
   app.add_option("--tolerance", s.opt.lloyd_tolerance,
@@ -506,6 +514,9 @@ void print_summary(const Settings& s, const std::string& cloud_path, const Recon
               static_cast<long>(res.mesh.V.rows()), static_cast<long>(res.mesh.F.rows()), val.components,
               val.boundary_loops, val.genus, res.holes_filled, res.unused_sites, res.pieces_removed,
               res.flying_faces, res.sized ? ", sized to -n" : "");
+  if (res.count_retries > 0)
+    std::printf("  retries: %d more CVT and mesher runs for a mesh far off -n; kept the one from seed %u\n",
+                res.count_retries, res.seed_used);
   const std::string boundary = val.boundary_loops > 0 ? format_angle(res.boundary_min_angle_deg) : "none";
   std::printf("  quality: phi_min %.2f deg (boundary triangles %s), phi_m %.2f deg\n", res.min_angle_deg,
               boundary.c_str(), res.mean_min_angle_deg);

@@ -11,6 +11,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <cstdlib>
 #include <cmath>
 #include <limits>
@@ -45,6 +46,8 @@ void check_options(const ReconstructionOptions& o) {
   auto bad = [](const std::string& m) { throw InvalidInputError("reconstruct_surface: " + m); };
   if (o.sites < 4) bad("sites = " + std::to_string(o.sites) + " (need at least 4)");
   if (o.iterations < 0) bad("iterations = " + std::to_string(o.iterations) + " (must be >= 0)");
+  if (o.count_retries < 0) bad("count_retries = " + std::to_string(o.count_retries) + " (must be >= 0)");
+  if (!(o.retry_count_error >= 0) || !std::isfinite(o.retry_count_error)) bad("retry_count_error must be >= 0");
   if (!(o.lloyd_mean_tolerance >= 0) || !std::isfinite(o.lloyd_mean_tolerance)) bad("lloyd_mean_tolerance must be >= 0");
   if (o.neighbors < o.min_neighbors || o.neighbors > o.max_neighbors)
     bad("neighbors = " + std::to_string(o.neighbors) + " (must be in [" + std::to_string(o.min_neighbors) + ", " +
@@ -445,6 +448,152 @@ void copy_stats(const MesherStats& st, ReconstructionResult& res) {
   res.stage_seconds.insert(res.stage_seconds.end(), st.stage_seconds.begin(), st.stage_seconds.end());
 }
 
+// What one run of the CVT and the mesher reads: the CVT points, their triangles and Laplacian
+// (metric_area: the lifted metric's face areas, empty when isotropic), the fitted surface, the
+// cloud's frame and its point count.
+struct MeshingInputs {
+  const CvtPoints& cp;
+  const Eigen::MatrixX3i& T;
+  const Laplacian& lap;
+  const Eigen::VectorXd& metric_area;
+  const CloudSurfaceProjector& fit;
+  const CloudFrame& frame;
+  int points;
+};
+
+using StageReport = std::function<void(const std::string&, double)>;
+
+// Steps 3-5 with the start sites of options.seed: the heat CVT on the CVT points, its dual
+// meshed on the fitted surface (surface_mesher.h), the tips, the border fit, quality and CGAL
+// validation, into `res`.
+void cvt_and_mesh(const MeshingInputs& in, const ReconstructionOptions& options, const StageReport& report,
+                  ReconstructionResult& res) {
+  StageClock stage{res};
+  // 3. Heat CVT on the CVT points.
+  const auto t1 = Clock::now();
+  report("cvt", 0);
+  const CvtResult cvt = centroidal_voronoi(
+      in.cp.PC, in.T, in.lap, reconstruction_cvt_options(options), {},
+      [&](const CvtIterationStats& st) {
+        report("cvt", options.iterations > 0 ? static_cast<double>(st.iteration) / options.iterations : 1.0);
+        return true;
+      },
+      in.metric_area);
+  res.cvt_seconds = since(t1);
+  res.factor_seconds = cvt.factor_seconds;
+  res.iterations = static_cast<int>(cvt.iterations.size());
+  double iteration_sum = 0;
+  const double site_spacing = std::sqrt(surface_area(in.cp.PC, in.T) / options.sites);
+  for (const auto& st : cvt.iterations) {
+    res.iteration_seconds.push_back(st.seconds);
+    res.iteration_moves.push_back(st.mean_move / site_spacing);
+    iteration_sum += st.seconds;
+  }
+  // The CVT's own parts: start (factorisation overlapped with the start sites' Lloyd), the
+  // quality evaluations of the start sites, the heat Lloyd iterations, and the rest (the final
+  // exact diagram and its dual).
+  const double cvt_rest = since(stage.t) - cvt.setup_seconds - cvt.start_quality_seconds - iteration_sum;
+  res.stage_seconds.emplace_back("cvt start", cvt.setup_seconds);
+  res.stage_seconds.emplace_back("cvt start quality", cvt.start_quality_seconds);
+  res.stage_seconds.emplace_back("cvt iterations", iteration_sum);
+  res.stage_seconds.emplace_back("cvt final diagram", std::max(0.0, cvt_rest));
+  stage.t = Clock::now();
+  report("mesh", 0);
+
+  // 4. Sites on the fitted surface; dual candidates witnessed by the point triangles and the
+  // Voronoi vertices; then the surface mesher's stages with the fit as projector.
+  WorkingMesh mesh = sites_on_surface(cvt, in.T, in.cp, in.fit, options.threads);
+  DualCandidateOptions candidate_options = options.mesher.candidates;
+  candidate_options.threads = options.threads;
+  const DualCandidates candidates = dual_candidates(in.T, cell_labels(cvt.diagram, static_cast<int>(in.cp.sub.size())),
+                                                    cvt.diagram, mesh, candidate_options);
+  stage.done("sites and candidates");
+  SurfaceMesherOptions mopt = options.mesher;
+  mopt.holes.max_hole_edges = options.max_hole_edges;
+  mopt.polish.relaxation_iterations = options.relaxation_iterations;
+  mopt.threads = options.threads;
+  // The long-edge splits may add vertices up to the vertex count asked for, plus the 2 % the
+  // count is allowed to be off by.
+  if (mopt.split.max_vertices == 0) mopt.split.max_vertices = options.sites + options.sites / 50;
+  // Every piece kept gets its share of the vertex count: sized to -n where the dual fell short.
+  if (mopt.sizing.target_vertices == 0) mopt.sizing.target_vertices = options.sites;
+  MesherStats stats;
+  mesh_from_candidates(mesh, candidates, in.fit, mopt, stats);
+  report("mesh", 0.5);
+  stage.t = Clock::now();
+  if (mesh.empty())
+    throw Error("reconstruct_surface: no triangle could be extracted from the Voronoi diagram of " +
+                std::to_string(mesh.num_vertices()) + " sites on " + std::to_string(in.points) + " points");
+  res.mesh = finish_mesh(mesh, in.fit, mopt, stats);
+  copy_stats(stats, res);
+  stage.t = Clock::now();
+  if (cover_tips(mesh, in.fit, in.cp.PC, options.coverage, mopt.sizing.mean_angle_deg,
+                 options.tips_max_mean_angle_loss_deg, res.coverage))
+    res.mesh = compact_mesh(mesh);
+  stage.done("tips");
+  // Only an open mesh has a border to fit (a closed one leaves the cloud's border unsearched).
+  if (!boundary_edges(res.mesh.F).empty())
+    res.border = border_fit(in.fit.sample_border(), res.mesh, mean_edge_length(res.mesh.V, res.mesh.F));
+  stage.done("border fit");
+  restore_frame(res.mesh.V, in.frame);
+  const TriangleQuality tq = triangle_quality(res.mesh.V, res.mesh.F);
+  res.min_angle_deg = tq.min_angle_deg;
+  res.mean_min_angle_deg = tq.mean_min_angle_deg;
+  res.boundary_min_angle_deg = tq.boundary_min_angle_deg;
+  stage.done("quality");
+
+  // 5. Validation (open scans legitimately keep boundaries).
+  report("validate", 0);
+  ValidationOptions vopt;
+  vopt.require_closed = false;
+  res.validation = validate_triangle_mesh(res.mesh.V, res.mesh.F, vopt);
+  stage.done("validate");
+  report("validate", 1);
+}
+
+// How far the mesh is off the vertex count asked for, beyond the count's tolerance (0 within it).
+double excess_count_error(const ReconstructionResult& r, const ReconstructionOptions& options) {
+  const double error = std::abs(static_cast<double>(r.mesh.V.rows()) - options.sites) / options.sites;
+  return std::max(0.0, error - options.mesher.sizing.count_tolerance);
+}
+
+// Whether `a` is a better result than `b`: it passes every check where `b` does not, then it is
+// nearer the count, then its φmin is larger.
+bool better_result(const ReconstructionResult& a, const ReconstructionResult& b, const ReconstructionOptions& options) {
+  if (a.validation.ok() != b.validation.ok()) return a.validation.ok();
+  const double ea = excess_count_error(a, options), eb = excess_count_error(b, options);
+  if (ea != eb) return ea < eb;
+  return a.min_angle_deg > b.min_angle_deg;
+}
+
+// cvt_and_mesh() with options.seed; where the mesh is more than retry_count_error off the count,
+// again with the next seeds (at most count_retries times), keeping the best result
+// (better_result()). A coarse dual that crosses itself can lose most of its faces to the
+// untangling, and start sites a little elsewhere give another dual. The stage times of every run
+// are kept, those of a retry prefixed with its seed.
+ReconstructionResult mesh_with_retries(const MeshingInputs& in, const ReconstructionOptions& options,
+                                       const StageReport& report, ReconstructionResult start) {
+  ReconstructionResult best = start;
+  best.seed_used = options.seed;
+  cvt_and_mesh(in, options, report, best);
+  std::vector<std::pair<std::string, double>> seconds = best.stage_seconds;
+  for (int retry = 1; retry <= options.count_retries; ++retry) {
+    const double error = std::abs(static_cast<double>(best.mesh.V.rows()) - options.sites) / options.sites;
+    if (error <= options.retry_count_error) break;
+    ReconstructionOptions again = options;
+    again.seed = options.seed + static_cast<std::uint32_t>(retry);
+    ReconstructionResult r = start;
+    r.stage_seconds.clear();
+    cvt_and_mesh(in, again, report, r);
+    for (const auto& [name, t] : r.stage_seconds) seconds.emplace_back("seed " + std::to_string(again.seed) + ": " + name, t);
+    r.seed_used = again.seed;
+    if (better_result(r, best, options)) best = std::move(r);
+    best.count_retries = retry;
+  }
+  best.stage_seconds = std::move(seconds);
+  return best;
+}
+
 }  // namespace
 
 CvtOptions reconstruction_cvt_options(const ReconstructionOptions& options) {
@@ -532,86 +681,10 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   res.laplacian_seconds = since(t0);
   report("laplacian", 1);
 
-  // 3. Heat CVT on the CVT points.
-  const auto t1 = Clock::now();
-  report("cvt", 0);
-  const CvtResult cvt = centroidal_voronoi(
-      cp.PC, T, lap, reconstruction_cvt_options(options), {},
-      [&](const CvtIterationStats& st) {
-        report("cvt", options.iterations > 0 ? static_cast<double>(st.iteration) / options.iterations : 1.0);
-        return true;
-      },
-      metric_area);
-  res.cvt_seconds = since(t1);
-  res.factor_seconds = cvt.factor_seconds;
-  res.iterations = static_cast<int>(cvt.iterations.size());
-  double iteration_sum = 0;
-  const double site_spacing = std::sqrt(surface_area(cp.PC, T) / options.sites);
-  for (const auto& st : cvt.iterations) {
-    res.iteration_seconds.push_back(st.seconds);
-    res.iteration_moves.push_back(st.mean_move / site_spacing);
-    iteration_sum += st.seconds;
-  }
-  // The CVT's own parts: start (factorisation overlapped with the start sites' Lloyd), the
-  // quality evaluations of the start sites, the heat Lloyd iterations, and the rest (the final
-  // exact diagram and its dual).
-  const double cvt_rest = since(stage.t) - cvt.setup_seconds - cvt.start_quality_seconds - iteration_sum;
-  res.stage_seconds.emplace_back("cvt start", cvt.setup_seconds);
-  res.stage_seconds.emplace_back("cvt start quality", cvt.start_quality_seconds);
-  res.stage_seconds.emplace_back("cvt iterations", iteration_sum);
-  res.stage_seconds.emplace_back("cvt final diagram", std::max(0.0, cvt_rest));
-  stage.t = Clock::now();
-  report("mesh", 0);
-
-  // 4. Sites on the fitted surface; dual candidates witnessed by the point triangles and the
-  // Voronoi vertices; then the surface mesher's stages with the fit as projector.
-  WorkingMesh mesh = sites_on_surface(cvt, T, cp, fit, options.threads);
-  DualCandidateOptions candidate_options = options.mesher.candidates;
-  candidate_options.threads = options.threads;
-  const DualCandidates candidates = dual_candidates(T, cell_labels(cvt.diagram, static_cast<int>(cp.sub.size())),
-                                                    cvt.diagram, mesh, candidate_options);
-  stage.done("sites and candidates");
-  SurfaceMesherOptions mopt = options.mesher;
-  mopt.holes.max_hole_edges = options.max_hole_edges;
-  mopt.polish.relaxation_iterations = options.relaxation_iterations;
-  mopt.threads = options.threads;
-  // The long-edge splits may add vertices up to the vertex count asked for, plus the 2 % the
-  // count is allowed to be off by.
-  if (mopt.split.max_vertices == 0) mopt.split.max_vertices = options.sites + options.sites / 50;
-  // Every piece kept gets its share of the vertex count: sized to -n where the dual fell short.
-  if (mopt.sizing.target_vertices == 0) mopt.sizing.target_vertices = options.sites;
-  MesherStats stats;
-  mesh_from_candidates(mesh, candidates, fit, mopt, stats);
-  report("mesh", 0.5);
-  stage.t = Clock::now();
-  if (mesh.empty())
-    throw Error("reconstruct_surface: no triangle could be extracted from the Voronoi diagram of " +
-                std::to_string(mesh.num_vertices()) + " sites on " + std::to_string(n) + " points");
-  res.mesh = finish_mesh(mesh, fit, mopt, stats);
-  copy_stats(stats, res);
-  stage.t = Clock::now();
-  if (cover_tips(mesh, fit, cp.PC, options.coverage, mopt.sizing.mean_angle_deg,
-                 options.tips_max_mean_angle_loss_deg, res.coverage))
-    res.mesh = compact_mesh(mesh);
-  stage.done("tips");
-  // Only an open mesh has a border to fit (a closed one leaves the cloud's border unsearched).
-  if (!boundary_edges(res.mesh.F).empty())
-    res.border = border_fit(fit.sample_border(), res.mesh, mean_edge_length(res.mesh.V, res.mesh.F));
-  stage.done("border fit");
-  restore_frame(res.mesh.V, cloud.frame);
-  const TriangleQuality tq = triangle_quality(res.mesh.V, res.mesh.F);
-  res.min_angle_deg = tq.min_angle_deg;
-  res.mean_min_angle_deg = tq.mean_min_angle_deg;
-  res.boundary_min_angle_deg = tq.boundary_min_angle_deg;
-  stage.done("quality");
-
-  // 5. Validation (open scans legitimately keep boundaries).
-  report("validate", 0);
-  ValidationOptions vopt;
-  vopt.require_closed = false;
-  res.validation = validate_triangle_mesh(res.mesh.V, res.mesh.F, vopt);
-  stage.done("validate");
-  report("validate", 1);
+  // 3.-5. The CVT, its mesh and the checks; again from other start sites where the mesh is far
+  // off the count.
+  const MeshingInputs in{cp, T, lap, metric_area, fit, cloud.frame, n};
+  res = mesh_with_retries(in, options, report, std::move(res));
   res.total_seconds = since(t_start);
   return res;
 }

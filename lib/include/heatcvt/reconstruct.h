@@ -171,6 +171,16 @@ struct ReconstructionOptions {
   CoverageRepairOptions coverage;
   /// See `coverage`. Default 1°.
   double tips_max_mean_angle_loss_deg = 1.0;
+  /// Where the mesh comes out more than retry_count_error · `sites` off the vertex count (a
+  /// coarse dual that crosses itself can lose most of its faces to the untangling, and what is
+  /// left may be too little for the sizing to regrow), the CVT and the mesher run again from the
+  /// start sites of the next seeds (seed + 1, seed + 2, ...), at most count_retries times, on the
+  /// same points, fit and Laplacian; the result kept passes every check where another does not,
+  /// then is nearest the count (beyond mesher.sizing.count_tolerance), then has the larger φmin.
+  /// 0 = no retry. Default 2.
+  int count_retries = 2;
+  /// See `count_retries` (a fraction of `sites`). Default 0.25.
+  double retry_count_error = 0.25;
 };
 
 /// The CVT options reconstruct_surface() runs centroidal_voronoi() with (sites, iterations,
@@ -236,6 +246,10 @@ struct ReconstructionResult {
   /// max_gap from the mesh before and after, vertex moves kept, largest gaps (in the cloud's
   /// bounding-box frame, not the input's units). All zero where it was off or undone.
   CoverageRepairStats coverage;
+  /// Runs of the CVT and the mesher after the first, for a mesh far off the count
+  /// (ReconstructionOptions::count_retries), and the seed of the start sites of the result kept.
+  int count_retries = 0;
+  std::uint32_t seed_used = 1;
 };
 
 /// Reconstructs a surface from the points P (#P by 3; NaN-free, duplicates allowed).
