@@ -284,7 +284,9 @@ struct ReconstructionResult {
 ///     (mesher/isotropic_remesh.h: flying faces across depth jumps removed, isotropic remeshing
 ///     on the fitted surface to `sites` vertices shared among the pieces by area, kept only when
 ///     no worse on any target), closed pieces outward, unused sites removed;
-///  6. validate_triangle_mesh() (require_closed = false: open scans legitimately keep boundaries).
+///  6. validate_triangle_mesh() (require_closed = false: open scans legitimately keep boundaries);
+///  7. where the mesh is more than `retry_count_error` off `sites`, steps 3-6 again from the start
+///     sites of the next seeds (at most `count_retries` times), the best result kept.
 /// Deterministic for a given input, options and seed, independent of `threads`.
 /// \throw InvalidInputError for empty / too small clouds, sites < 4 or > usable points, bad options.
 ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P, const ReconstructionOptions& options = {},
