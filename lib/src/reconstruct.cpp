@@ -569,8 +569,9 @@ bool better_result(const ReconstructionResult& a, const ReconstructionResult& b,
 // cvt_and_mesh() with options.seed; where the mesh is more than retry_count_error off the count,
 // again with the next seeds (at most count_retries times), keeping the best result
 // (better_result()). A coarse dual that crosses itself can lose most of its faces to the
-// untangling, and start sites a little elsewhere give another dual. The stage times of every run
-// are kept, those of a retry prefixed with its seed.
+// untangling, and start sites a little elsewhere give another dual. A retry that fails (nothing
+// extracted from its start sites) is passed over. The stage times of every run are kept, those of a retry
+// prefixed with its seed.
 ReconstructionResult mesh_with_retries(const MeshingInputs& in, const ReconstructionOptions& options,
                                        const StageReport& report, ReconstructionResult start) {
   ReconstructionResult best = start;
@@ -584,7 +585,12 @@ ReconstructionResult mesh_with_retries(const MeshingInputs& in, const Reconstruc
     again.seed = options.seed + static_cast<std::uint32_t>(retry);
     ReconstructionResult r = start;
     r.stage_seconds.clear();
-    cvt_and_mesh(in, again, report, r);
+    try {
+      cvt_and_mesh(in, again, report, r);
+    } catch (const Error&) {  // nothing extracted from these start sites: the result so far stays
+      best.count_retries = retry;
+      continue;
+    }
     for (const auto& [name, t] : r.stage_seconds) seconds.emplace_back("seed " + std::to_string(again.seed) + ": " + name, t);
     r.seed_used = again.seed;
     if (better_result(r, best, options)) best = std::move(r);
