@@ -551,10 +551,21 @@ void cvt_and_mesh(const MeshingInputs& in, const ReconstructionOptions& options,
   report("validate", 1);
 }
 
-// How far the mesh is off the vertex count asked for, beyond the count's tolerance (0 within it).
+// The vertex count asked for: the sizing's target where one is set (the streamed path runs the
+// CVT on fewer sites where the noise is wide and sizes the mesh to the count), else `sites`.
+int requested_vertices(const ReconstructionOptions& options) {
+  return options.mesher.sizing.target_vertices > 0 ? options.mesher.sizing.target_vertices : options.sites;
+}
+
+// How far the mesh is off the vertex count asked for, as a fraction of it.
+double count_error(const ReconstructionResult& r, const ReconstructionOptions& options) {
+  const double asked = requested_vertices(options);
+  return std::abs(static_cast<double>(r.mesh.V.rows()) - asked) / asked;
+}
+
+// count_error() beyond the count's tolerance (0 within it).
 double excess_count_error(const ReconstructionResult& r, const ReconstructionOptions& options) {
-  const double error = std::abs(static_cast<double>(r.mesh.V.rows()) - options.sites) / options.sites;
-  return std::max(0.0, error - options.mesher.sizing.count_tolerance);
+  return std::max(0.0, count_error(r, options) - options.mesher.sizing.count_tolerance);
 }
 
 // Whether `a` is a better result than `b`: it passes every check where `b` does not, then it is
@@ -579,8 +590,7 @@ ReconstructionResult mesh_with_retries(const MeshingInputs& in, const Reconstruc
   cvt_and_mesh(in, options, report, best);
   std::vector<std::pair<std::string, double>> seconds = best.stage_seconds;
   for (int retry = 1; retry <= options.count_retries; ++retry) {
-    const double error = std::abs(static_cast<double>(best.mesh.V.rows()) - options.sites) / options.sites;
-    if (error <= options.retry_count_error) break;
+    if (count_error(best, options) <= options.retry_count_error) break;
     ReconstructionOptions again = options;
     again.seed = options.seed + static_cast<std::uint32_t>(retry);
     ReconstructionResult r = start;
