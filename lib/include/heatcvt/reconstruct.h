@@ -171,15 +171,16 @@ struct ReconstructionOptions {
   CoverageRepairOptions coverage;
   /// See `coverage`. Default 1°.
   double tips_max_mean_angle_loss_deg = 1.0;
-  /// Where the mesh comes out more than retry_count_error · `sites` off the vertex count (a
-  /// coarse dual that crosses itself can lose most of its faces to the untangling, and what is
-  /// left may be too little for the sizing to regrow), the CVT and the mesher run again from the
+  /// Where the mesh comes out more than retry_count_error off the vertex count asked for
+  /// (mesher.sizing.target_vertices where set, else `sites`; a coarse dual that crosses itself
+  /// can lose most of its faces to the untangling, and what is left may be too little for the
+  /// sizing to regrow), the CVT and the mesher run again from the
   /// start sites of the next seeds (seed + 1, seed + 2, ...), at most count_retries times, on the
   /// same points, fit and Laplacian; the result kept passes every check where another does not,
   /// then is nearest the count (beyond mesher.sizing.count_tolerance), then has the larger φmin.
   /// 0 = no retry. Default 2.
   int count_retries = 2;
-  /// See `count_retries` (a fraction of `sites`). Default 0.25.
+  /// See `count_retries` (a fraction of the count asked for). Default 0.25.
   double retry_count_error = 0.25;
 };
 
@@ -285,7 +286,7 @@ struct ReconstructionResult {
 ///     on the fitted surface to `sites` vertices shared among the pieces by area, kept only when
 ///     no worse on any target), closed pieces outward, unused sites removed;
 ///  6. validate_triangle_mesh() (require_closed = false: open scans legitimately keep boundaries);
-///  7. where the mesh is more than `retry_count_error` off `sites`, steps 3-6 again from the start
+///  7. where the mesh is more than `retry_count_error` off the count, steps 3-6 again from the start
 ///     sites of the next seeds (at most `count_retries` times), the best result kept.
 /// Deterministic for a given input, options and seed, independent of `threads`.
 /// \throw InvalidInputError for empty / too small clouds, sites < 4 or > usable points, bad options.
