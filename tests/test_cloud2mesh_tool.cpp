@@ -284,6 +284,8 @@ TEST(Cloud2MeshTool, NonsenseOptions) {
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--mean-tolerance nan"), {"--mean-tolerance"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--points-per-site 2"), {"--points-per-site"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--points-per-site nan"), {"--points-per-site"}, dir, 1);
+  expect_clean_failure(test::run_tool("cloud2mesh", base + "--count-retries -1"), {"--count-retries"}, dir, 1);
+  expect_clean_failure(test::run_tool("cloud2mesh", base + "--retry-count-error nan"), {"--retry-count-error"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--bogus"), {"bogus"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", dir.path("s.xyz") + " -o " + dir.path("o.xyz")), {"o.xyz"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", dir.path("s.xyz") + " -o " + dir.path("missing/o.ply")),

@@ -81,6 +81,9 @@ void check_options(const ReconstructionOptions& opt) {
   if (!(opt.lloyd_tolerance >= 0) || !std::isfinite(opt.lloyd_tolerance)) throw InvalidInputError("--tolerance must be >= 0");
   if (!(opt.lloyd_mean_tolerance >= 0) || !std::isfinite(opt.lloyd_mean_tolerance))
     throw InvalidInputError("--mean-tolerance must be >= 0");
+  if (opt.count_retries < 0) throw InvalidInputError("--count-retries must be >= 0");
+  if (!(opt.retry_count_error >= 0) || !std::isfinite(opt.retry_count_error))
+    throw InvalidInputError("--retry-count-error must be >= 0");
   if (opt.max_hole_edges < 0) throw InvalidInputError("--max-hole-edges must be >= 0");
   if (opt.relaxation_iterations < 0) throw InvalidInputError("--polish-iterations must be >= 0");
   if (opt.denoise_neighbors < 2) throw InvalidInputError("--denoise-k must be >= 2");
