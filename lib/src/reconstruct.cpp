@@ -589,23 +589,28 @@ ReconstructionResult mesh_with_retries(const MeshingInputs& in, const Reconstruc
   best.seed_used = options.seed;
   cvt_and_mesh(in, options, report, best);
   std::vector<std::pair<std::string, double>> seconds = best.stage_seconds;
+  int retries = 0;
   for (int retry = 1; retry <= options.count_retries; ++retry) {
     if (count_error(best, options) <= options.retry_count_error) break;
+    retries = retry;
     ReconstructionOptions again = options;
     again.seed = options.seed + static_cast<std::uint32_t>(retry);
     ReconstructionResult r = start;
     r.stage_seconds.clear();
+    // One stage of its own in the progress: the first run's stages are done.
+    const std::string stage = "retry with seed " + std::to_string(again.seed);
+    report(stage, 0);
     try {
-      cvt_and_mesh(in, again, report, r);
+      cvt_and_mesh(in, again, [](const std::string&, double) {}, r);
     } catch (const Error&) {  // nothing extracted from these start sites: the result so far stays
-      best.count_retries = retry;
       continue;
     }
+    report(stage, 1);
     for (const auto& [name, t] : r.stage_seconds) seconds.emplace_back("seed " + std::to_string(again.seed) + ": " + name, t);
     r.seed_used = again.seed;
     if (better_result(r, best, options)) best = std::move(r);
-    best.count_retries = retry;
   }
+  best.count_retries = retries;
   best.stage_seconds = std::move(seconds);
   return best;
 }
