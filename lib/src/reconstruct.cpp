@@ -600,12 +600,14 @@ ReconstructionResult mesh_with_retries(const MeshingInputs& in, const Reconstruc
     // One stage of its own in the progress: the first run's stages are done.
     const std::string stage = "retry with seed " + std::to_string(again.seed);
     report(stage, 0);
+    bool extracted = true;
     try {
       cvt_and_mesh(in, again, [](const std::string&, double) {}, r);
     } catch (const Error&) {  // nothing extracted from these start sites: the result so far stays
-      continue;
+      extracted = false;
     }
     report(stage, 1);
+    if (!extracted) continue;
     for (const auto& [name, t] : r.stage_seconds) seconds.emplace_back("seed " + std::to_string(again.seed) + ": " + name, t);
     r.seed_used = again.seed;
     if (better_result(r, best, options)) best = std::move(r);
