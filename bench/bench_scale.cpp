@@ -17,9 +17,11 @@
 // Usage: bench_scale [--sizes 100000,1000000,10000000] [--huge] [--density-max 1000000]
 //                    [--peer-max 1000000] [--sites 3000] [--keep-dir DIR] [--fine F] [--plain-means]
 //                    [--plain-fit] [--glibc-allocator] [--noise F] [--stream-per-site P]
+//                    [--points-per-site M]
 // (--fine: StreamOptions::fine_voxel_factor; --plain-means: project_to_surface = false;
 //  --plain-fit: the 3×3×3 voxel plane fit only, VoxelSurfaceFit max_levels = shift_steps = 0;
 //  --stream-per-site P: StreamOptions::max_raw_points_per_site = P, 0 = no limit per site;
+//  --points-per-site M: StreamOptions::voxel.points_per_site = M (voxel means per site);
 //  --glibc-allocator: both children keep glibc's allocator defaults instead of the tools' setting)
 #include <sys/resource.h>
 #include <unistd.h>
@@ -96,10 +98,12 @@ std::string distance_keys(const TriangleMesh& m) {
 }
 
 // Child: reconstruct one file, print one line "key=value ...".
-int run_child(const std::string& path, int sites, double fine_factor, bool project, bool plain_fit, double per_site) {
+int run_child(const std::string& path, int sites, double fine_factor, bool project, bool plain_fit, double per_site,
+              double means_per_site) {
   ReconstructionOptions options;
   options.sites = sites;
   StreamOptions stream;
+  stream.voxel.points_per_site = means_per_site;
   stream.fine_voxel_factor = fine_factor;
   stream.project_to_surface = project;
   if (plain_fit) stream.surface_fit.max_levels = stream.surface_fit.shift_steps = 0;
@@ -213,14 +217,15 @@ int main(int argc, char** argv) {
   if (argc >= 2 && (std::string(argv[1]) == "--child" || std::string(argv[1]) == "--peer-child") &&
       !std::getenv(kGlibcAllocatorEnv))
     heatcvt::cli::keep_freed_memory();
-  if (argc == 8 && std::string(argv[1]) == "--child")
+  if (argc == 9 && std::string(argv[1]) == "--child")
     return run_child(argv[2], std::atoi(argv[3]), std::atof(argv[4]), std::atoi(argv[5]) != 0, std::atoi(argv[6]) != 0,
-                     std::atof(argv[7]));
+                     std::atof(argv[7]), std::atof(argv[8]));
   if (argc == 4 && std::string(argv[1]) == "--peer-child") return run_peer_child(argv[2], std::atoi(argv[3]));
   const StreamOptions defaults;
   double fine_factor = defaults.fine_voxel_factor;
   bool project = defaults.project_to_surface, plain_fit = false;
   double raw_per_site = defaults.max_raw_points_per_site;
+  double means_per_site = defaults.voxel.points_per_site;
   std::vector<std::int64_t> sizes = {100000, 1000000, 10000000};
   std::int64_t density_max = 1000000;
   std::int64_t peer_max = 1000000;
@@ -240,6 +245,7 @@ int main(int argc, char** argv) {
       else if (a == "--plain-means") project = false;
       else if (a == "--plain-fit") plain_fit = true;
       else if (a == "--stream-per-site" && i + 1 < argc) raw_per_site = std::stod(argv[++i]);
+      else if (a == "--points-per-site" && i + 1 < argc) means_per_site = std::stod(argv[++i]);
       else if (a == "--glibc-allocator") setenv(kGlibcAllocatorEnv, "1", 1);
       else if (a == "--noise" && i + 1 < argc) noise = std::stod(argv[++i]);
       else {
@@ -295,7 +301,8 @@ int main(int argc, char** argv) {
             "'" + self + "' " +
             (peer ? "--peer-child '" + file.string() + "' " + std::to_string(n)
                   : "--child '" + file.string() + "' " + std::to_string(n) + " " + std::to_string(fine_factor) + " " +
-                        (project ? "1" : "0") + (plain_fit ? " 1 " : " 0 ") + std::to_string(raw_per_site)) +
+                        (project ? "1" : "0") + (plain_fit ? " 1 " : " 0 ") + std::to_string(raw_per_site) + " " +
+                        std::to_string(means_per_site)) +
             " 2>&1";
         const double t = print_row(points, n, peer ? "PCL Poisson + CGAL remesh" : "heatcvt", run_command(command));
         if (!peer) ours = t;

@@ -770,6 +770,45 @@ TEST(Polish, TangentialRelaxationEvensOutAndStaysOnTheSurface) {
   EXPECT_TRUE(validate(w, true).ok());
 }
 
+// A vertex's ring is checked against the positions its neighbours had or were just given, for
+// orientation only. On a square of two triangles alone in its component the corners on the
+// diagonal move to its middle and the other two to their triangles' centroids, which narrows a
+// triangle from 45° to 18°, though no triangle turns over. Every corner of the square is on its
+// border: the step undoes such moves and keeps every move that spoils no face.
+TEST(Polish, TangentialRelaxationUndoesMovesThatNarrowAFace) {
+  const TriangleMesh fine = test::icosphere(5);
+  const MeshSurfaceProjector surface(fine.V, fine.F);
+  TriangleMesh coarse = test::icosphere(2);
+  const int nv = static_cast<int>(coarse.V.rows()), nf = static_cast<int>(coarse.F.rows());
+  coarse.V.conservativeResize(nv + 4, 3);
+  coarse.V.bottomRows(4) << -0.05, -0.05, 1, 0.05, -0.05, 1, 0.05, 0.05, 1, -0.05, 0.05, 1;
+  coarse.V.bottomRows(4).rowwise().normalize();
+  coarse.F.conservativeResize(nf + 2, 3);
+  coarse.F.bottomRows(2) << nv, nv + 1, nv + 2, nv, nv + 2, nv + 3;
+  WorkingMesh start = jittered_sphere(coarse, 0.01);
+  start.V.bottomRows(4) = coarse.V.bottomRows(4);  // the square as built
+  start.N.bottomRows(4) = coarse.V.bottomRows(4);
+  const double floor = 20 * M_PI / 180;
+  auto step = [&](double spoiled_deg, int threads) {
+    WorkingMesh w = start;
+    RelaxationBorder border;
+    border.spoiled_angle_deg = spoiled_deg;
+    tangential_relaxation(w, surface, threads, border);
+    return w;
+  };
+  auto spoiled = [&](const WorkingMesh& w, int f) {
+    return face_min_angle(w, w.face(f)) < std::min(face_min_angle(start, start.face(f)), floor);
+  };
+  // Precondition: without the check a face of the square is spoiled, and no face of the sphere.
+  const WorkingMesh unchecked = step(0, 2);
+  ASSERT_TRUE(spoiled(unchecked, nf) || spoiled(unchecked, nf + 1));
+  for (int f = 0; f < nf; ++f) ASSERT_FALSE(spoiled(unchecked, f)) << "face " << f;
+  const WorkingMesh checked = step(20, 2);
+  for (int f = 0; f < nf + 2; ++f) EXPECT_FALSE(spoiled(checked, f)) << "face " << f;
+  EXPECT_EQ(checked.V.topRows(nv), unchecked.V.topRows(nv));
+  EXPECT_EQ(step(20, 1).V, checked.V);
+}
+
 TEST(Polish, AnglePolishRaisesTheSmallestAngleAndHonoursFrozenVertices) {
   const TriangleMesh fine = test::icosphere(5);
   const MeshSurfaceProjector surface(fine.V, fine.F);

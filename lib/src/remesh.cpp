@@ -392,7 +392,7 @@ bool dual_meets_targets(const RemeshResult& out, const RemeshOptions& options) {
 // otherwise it must pass every check the dual passed, keep
 // the input's topology (components, Euler characteristic) where the dual has it (the stages must
 // not open, close or cut the surface), and cover the input as well as a dual that is a manifold
-// (RemeshOptions::max_coverage_ratio).
+// (RemeshOptions::max_coverage_ratio, max_coverage_spacings).
 // `for_coverage` (optional) tells whether the coverage was the reason.
 std::string post_cvt_refusal(const Eigen::MatrixX3d& samples, double spacing, const TriangleMesh& post,
                              const ValidationReport& after, const RemeshOptions& options, const RemeshResult& out,
@@ -422,7 +422,8 @@ std::string post_cvt_refusal(const Eigen::MatrixX3d& samples, double spacing, co
       count_error(post, options.cvt.sites) <= options.mesher.sizing.count_tolerance)
     return "";
   const double post_gap = farthest_input_vertex(samples, post), dual_gap = farthest_input_vertex(samples, out.mesh);
-  if (post_gap > options.max_coverage_ratio * dual_gap + options.coverage_slack * spacing) {
+  const double absolute = std::max(options.max_coverage_spacings * spacing, dual_gap);
+  if (post_gap > options.max_coverage_ratio * dual_gap + options.coverage_slack * spacing || post_gap > absolute) {
     if (for_coverage) *for_coverage = true;
     return "it covers the input less well: an input vertex is " + std::to_string(post_gap / spacing) +
            " site spacings from it, " + std::to_string(dual_gap / spacing) + " from the dual";

@@ -111,6 +111,10 @@ struct RemeshOptions {
   /// ear or a cavity capped by a hole fill is not). Defaults 1.5 and 0.25.
   double max_coverage_ratio = 1.5;
   double coverage_slack = 0.25;
+  /// ... and, wherever the dual covers every input vertex within this many site spacings, so
+  /// must the stages' result (the output reaches every part of the input within one spacing:
+  /// the same bound as max_tip_run_gap's). Default 1.
+  double max_coverage_spacings = 1.0;
   /// ... except where the dual's vertex count is off the sites asked for by more than this
   /// fraction (sites added to cells too big for thin parts: armadillo at 300 sites has a valid
   /// dual of 555 vertices) and the stages' result is within mesher.sizing.count_tolerance of it
@@ -159,7 +163,8 @@ struct RemeshOptions {
   /// the stages run on a dual below that and treat faces below it as slivers; and
   /// keep_manifold_dual = true: a dual that is an oriented manifold keeps its faces where the
   /// extraction would change its topology (the triangles around thin parts coarser than the site
-  /// spacing, which it would cut off).
+  /// spacing, which it would cut off); and polish.spoiled_border_angle_deg = 20: the relaxation
+  /// polish lays no face at the border flat (two border stretches closer than a spacing).
   SurfaceMesherOptions mesher = [] {
     SurfaceMesherOptions m;
     m.holes.policy = HolePolicy::keep;
@@ -168,6 +173,7 @@ struct RemeshOptions {
     m.sizing.min_angle_deg = 30;
     m.sizing.repair.sliver_angle_deg = 30;
     m.keep_manifold_dual = true;
+    m.polish.spoiled_border_angle_deg = 20;
     return m;
   }();
   /// Sharp creases of the input (dihedral angle above creases.min_dihedral_deg, default 60°) kept

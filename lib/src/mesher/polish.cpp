@@ -30,6 +30,7 @@ void relax(WorkingMesh& mesh, const SurfaceProjector& surface, const PolishOptio
            const std::vector<char>& tips, MesherStats& stats) {
   RelaxationBorder border;
   border.follow_sample_border = o.follow_sample_border;
+  border.spoiled_angle_deg = o.spoiled_border_angle_deg;
   std::vector<char> fixed = tips;
   fixed.resize(static_cast<std::size_t>(mesh.num_vertices()), 0);
   for (int it = 0; it < o.relaxation_iterations; ++it) {

@@ -36,6 +36,36 @@ bool follow_sample_border(const WorkingMesh& mesh, const SurfaceProjector& surfa
   return true;
 }
 
+// Undoes the moves (moved[v]) that leave a face with a corner on the border with a smallest
+// angle below both its smallest angle at the old positions (V0) and `floor` radians. The ring
+// check of a move sees only whether a face turns over: a triangle bridging two border stretches
+// closer than a spacing is narrowed to a sliver when its corners slide along them, and neither
+// a flip (not across a border edge) nor the angle polish (a border vertex moves along the
+// border only) can widen it again; an interior face narrowed by a step is left to them.
+// Undoing a move can spoil a face shared with a kept move, so the sweep repeats until none is
+// spoiled (each repeat follows a sweep that undid a move, so it ends).
+void undo_spoiling_moves(WorkingMesh& mesh, const BorderLinks& links, const Eigen::MatrixX3d& V0,
+                         const Eigen::MatrixX3d& N0, std::vector<char>& moved, double floor) {
+  const auto min_angle = [](const Eigen::MatrixX3d& V, const MeshFace& f) {
+    return triangle_min_angle(V.row(f[0]).transpose(), V.row(f[1]).transpose(), V.row(f[2]).transpose());
+  };
+  for (bool undone = true; undone;) {
+    undone = false;
+    for (const MeshFace& f : mesh.faces()) {
+      if (!moved[f[0]] && !moved[f[1]] && !moved[f[2]]) continue;
+      if (!links.on(f[0]) && !links.on(f[1]) && !links.on(f[2])) continue;
+      if (!(min_angle(mesh.V, f) < std::min(min_angle(V0, f), floor))) continue;
+      for (int v : f) {
+        if (!moved[v]) continue;
+        mesh.V.row(v) = V0.row(v);
+        mesh.N.row(v) = N0.row(v);
+        moved[v] = 0;
+        undone = true;
+      }
+    }
+  }
+}
+
 }  // namespace
 
 void tangential_relaxation(WorkingMesh& mesh, const SurfaceProjector& surface, int threads,
@@ -56,7 +86,8 @@ void tangential_relaxation(WorkingMesh& mesh, const SurfaceProjector& surface, i
   }
   Eigen::MatrixX3d S2 = S, SN2 = SN;
   const bool follow = border.follow_sample_border;
-  const BorderLinks links = border.slide || follow ? border_links(mesh) : BorderLinks{};
+  const bool guard = border.spoiled_angle_deg > 0;
+  const BorderLinks links = border.slide || follow || guard ? border_links(mesh) : BorderLinks{};
   const double corner = border.corner_turn_deg * M_PI / 180.0;
   // The radius over which the samples' border is averaged is at most the mesh's mean edge length
   // times max_follow_radius: a long border edge (across a gap, along a sparse wire) does not
@@ -87,6 +118,8 @@ void tangential_relaxation(WorkingMesh& mesh, const SurfaceProjector& surface, i
     SN2.row(v) = nrm.transpose();
   }
   const std::vector<std::vector<int>> vf = mesh.vertex_faces();
+  const Eigen::MatrixX3d V0 = S, N0 = SN;
+  std::vector<char> moved(ns, 0);
   for (int v = 0; v < ns; ++v) {
     bool ok = true;
     for (int id : vf[v]) {
@@ -99,8 +132,10 @@ void tangential_relaxation(WorkingMesh& mesh, const SurfaceProjector& surface, i
     if (ok) {
       S.row(v) = S2.row(v);
       SN.row(v) = SN2.row(v);
+      moved[v] = 1;
     }
   }
+  if (guard) undo_spoiling_moves(mesh, links, V0, N0, moved, border.spoiled_angle_deg * M_PI / 180.0);
 }
 
 }  // namespace heatcvt

@@ -28,6 +28,13 @@ struct PolishOptions {
   /// Surfaces without sample borders (an input mesh, a closed scan) are not affected. false =
   /// border vertices move like the others. Default true.
   bool follow_sample_border = true;
+  /// In the relaxation, the moves that narrow a face with a corner on the border below this
+  /// angle (and below its angle before the step) are undone (RelaxationBorder::spoiled_angle_deg):
+  /// a triangle bridging two border stretches closer than a spacing is otherwise laid flat, and
+  /// no flip can widen it. 0 = off. Default 0: on the shared scans, whose borders follow the
+  /// samples' noisy edge, it measured no better (docs/benchmarks.md); RemeshOptions (an input
+  /// mesh's exact border) sets 20°.
+  double spoiled_border_angle_deg = 0;
   /// Angle polish: attempts (each after the previous one self-intersected, with the vertices of
   /// the intersecting faces and their neighbours held fixed). Default 3.
   int angle_attempts = 3;

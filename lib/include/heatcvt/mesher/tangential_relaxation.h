@@ -27,12 +27,21 @@ struct RelaxationBorder {
   /// With `follow_sample_border`: the radius is at most this many mean edge lengths of the mesh.
   /// Default 1.5.
   double max_follow_radius = 1.5;
+  /// A face with a corner on the border whose smallest angle falls below this and below its own
+  /// smallest angle before the step has the moves of its corners undone: the ring check sees
+  /// orientation only, so corners moving together (on two border stretches closer than a
+  /// spacing) can narrow a face to a sliver without turning it over, and no later flip or polish
+  /// can widen it along the border. Interior faces are left to the flips. 0 = off, as in the
+  /// sizing's and the creases' relaxations, where it measured worse (docs/benchmarks.md).
+  /// Default 0; the relaxation polish passes PolishOptions::spoiled_border_angle_deg.
+  double spoiled_angle_deg = 0;
 };
 
-/// One step of tangential relaxation (Jacobi: every vertex computed from the old positions, in
-/// parallel). A vertex's move is kept only if none of its triangles then faces against its new
-/// normal. Vertices v with (*fixed)[v] stay. `threads`: 0 = all cores; the result does not
-/// depend on it.
+/// One step of tangential relaxation: every vertex's move computed from the old positions (in
+/// parallel), then kept, in index order, only if none of its triangles faces against its new
+/// normal with the moves kept so far; last, the moves that spoil a face are undone
+/// (RelaxationBorder::spoiled_angle_deg). Vertices v with (*fixed)[v] stay. `threads`: 0 = all
+/// cores; the result does not depend on it.
 void tangential_relaxation(WorkingMesh& mesh, const SurfaceProjector& surface, int threads = 0,
                            const RelaxationBorder& border = {}, const std::vector<char>* fixed = nullptr);
 
