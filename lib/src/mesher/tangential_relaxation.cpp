@@ -118,7 +118,7 @@ void tangential_relaxation(WorkingMesh& mesh, const SurfaceProjector& surface, i
     SN2.row(v) = nrm.transpose();
   }
   const std::vector<std::vector<int>> vf = mesh.vertex_faces();
-  const Eigen::MatrixX3d V0 = S, N0 = SN;
+  const Eigen::MatrixX3d V0 = guard ? S : Eigen::MatrixX3d(), N0 = guard ? SN : Eigen::MatrixX3d();  // for the guard
   std::vector<char> moved(ns, 0);
   for (int v = 0; v < ns; ++v) {
     bool ok = true;
