@@ -1186,6 +1186,78 @@ TEST(CoverageRepair, DragsTheRingAlongWhereTheVertexAloneWouldMakeSlivers) {
   EXPECT_EQ(r.vertices, start.num_vertices());
 }
 
+// The coarse icosphere(2) and the fine icosphere(5) with spikes of `height` (sharpness k) on the
+// centroids of faces a and b of the coarse one (radius 1 + the sum of both spike terms).
+struct TwoSpikes {
+  TriangleMesh fine;
+  WorkingMesh coarse;
+  double spacing = 0;
+};
+
+TwoSpikes two_spikes(int a, int b, double height, int k) {
+  const TriangleMesh sphere = test::icosphere(2);
+  const auto centre = [&](int f) {
+    return ((sphere.V.row(sphere.F(f, 0)) + sphere.V.row(sphere.F(f, 1)) + sphere.V.row(sphere.F(f, 2))) / 3.0)
+        .transpose()
+        .normalized()
+        .eval();
+  };
+  const Eigen::Vector3d da = centre(a), db = centre(b);
+  const auto spike = [&](TriangleMesh m) {
+    for (Eigen::Index v = 0; v < m.V.rows(); ++v) {
+      const Eigen::Vector3d x = m.V.row(v).normalized();
+      const double r = 1.0 + height * (std::pow(std::max(0.0, x.dot(da)), k) + std::pow(std::max(0.0, x.dot(db)), k));
+      m.V.row(v) = (x * r).transpose();
+    }
+    return m;
+  };
+  TwoSpikes s;
+  s.fine = spike(test::icosphere(5));
+  s.coarse = test::working_mesh(spike(sphere));
+  s.spacing = std::sqrt(surface_area(s.fine.V, s.fine.F) / s.coarse.num_vertices());
+  return s;
+}
+
+// Two spikes side by side: a ring dragged towards one tip uncovers the other, so a round can
+// widen the largest gap. The repair returns the state after the round with the narrowest one,
+// and the mesh as given where no round narrowed it.
+TEST(CoverageRepair, ReturnsTheRoundWithTheNarrowestLargestGap) {
+  CoverageRepairOptions o;
+  o.keep_narrowest_round = true;
+  {
+    const TwoSpikes s = two_spikes(1, 2, 0.5, 48);
+    const MeshSurfaceProjector surface(s.fine.V, s.fine.F);
+    WorkingMesh w = s.coarse;
+    const CoverageRepairStats st = repair_coverage(w, surface, s.fine.V, s.spacing, o);
+    ASSERT_GE(st.round_gaps.size(), 2u);
+    const double narrowest = *std::min_element(st.round_gaps.begin(), st.round_gaps.end());
+    ASSERT_GT(st.round_gaps.back(), narrowest) << "a later round must widen the gap for the test";
+    CoverageRepairOptions last = o;  // the last round's state: its gap is the last one listed
+    last.keep_narrowest_round = false;
+    WorkingMesh w_last = s.coarse;
+    EXPECT_EQ(repair_coverage(w_last, surface, s.fine.V, s.spacing, last).gap_after, st.round_gaps.back());
+    ASSERT_LT(narrowest, st.gap_before);
+    EXPECT_EQ(st.gap_after, narrowest);
+    EXPECT_NEAR(farthest_from(w, s.fine), narrowest, 1e-12);
+    EXPECT_GT(st.moves, 0);
+    const ValidationReport r = validate(w, true);
+    EXPECT_TRUE(r.ok()) << r.summary();
+  }
+  {
+    const TwoSpikes s = two_spikes(1, 3, 0.5, 48);
+    const MeshSurfaceProjector surface(s.fine.V, s.fine.F);
+    WorkingMesh w = s.coarse;
+    const CoverageRepairStats st = repair_coverage(w, surface, s.fine.V, s.spacing, o);
+    ASSERT_FALSE(st.round_gaps.empty());
+    ASSERT_GT(*std::min_element(st.round_gaps.begin(), st.round_gaps.end()), st.gap_before)
+        << "every round must leave a wider gap than the mesh as given for the test";
+    EXPECT_EQ(st.gap_after, st.gap_before);
+    EXPECT_EQ(st.moves, 0);
+    EXPECT_EQ(w.V, s.coarse.V);
+    EXPECT_NEAR(farthest_from(w, s.fine), st.gap_before, 1e-12);
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 
 TEST(EdgeSplit, SplitsTheLongEdgesOfSliversAcrossAFilledHole) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numeric>
 
 #include "heatcvt/closest_point.h"
@@ -245,6 +246,11 @@ CoverageRepairStats repair_coverage(WorkingMesh& mesh, const SurfaceProjector& s
   };
   stats.gap_before = gaps.largest;
   stats.uncovered_before = uncovered(gaps);
+  // With keep_narrowest_round, the state of the narrowest largest gap so far is kept to return.
+  double best_gap = gaps.largest;
+  int best_uncovered = stats.uncovered_before, best_moves = 0;
+  std::unique_ptr<WorkingMesh::Checkpoint> best;  // none: the state before the first round
+  const WorkingMesh::Checkpoint start = options.keep_narrowest_round ? mesh.checkpoint() : WorkingMesh::Checkpoint{};
   for (int round = 0; round < options.rounds && gaps.largest > limit; ++round) {
     std::vector<int> order;
     for (int i = 0; i < static_cast<int>(gaps.distance.size()); ++i)
@@ -257,9 +263,22 @@ CoverageRepairStats repair_coverage(WorkingMesh& mesh, const SurfaceProjector& s
     stats.moves += static_cast<int>(moved.size());
     if (moved.empty()) break;
     gaps.update(moved, old);
+    stats.round_gaps.push_back(gaps.largest);
+    if (options.keep_narrowest_round && gaps.largest < best_gap) {
+      best_gap = gaps.largest;
+      best_uncovered = uncovered(gaps);
+      best_moves = stats.moves;
+      best = std::make_unique<WorkingMesh::Checkpoint>(mesh.checkpoint());
+    }
   }
   stats.gap_after = gaps.largest;
   stats.uncovered_after = uncovered(gaps);
+  if (options.keep_narrowest_round && gaps.largest > best_gap) {
+    mesh.rollback(best ? *best : start);
+    stats.gap_after = best_gap;
+    stats.uncovered_after = best_uncovered;
+    stats.moves = best_moves;
+  }
   return stats;
 }
 

@@ -35,6 +35,14 @@ struct CoverageRepairOptions {
   double ring_drag = 0.5;
   /// Rounds (distances measured again after each). Default 4.
   int rounds = 4;
+  /// A round can widen the largest gap (a dragged ring uncovers samples next to the one it
+  /// reaches): with this, the mesh is left as it was after the round with the narrowest largest
+  /// gap (as given, where none narrowed it); without, as the last round left it. Default false:
+  /// neither path turns it on. On the cloud path the samples are noisy CVT points, and the round
+  /// whose farthest point is nearest measured worse against the true surface. In meshcvt it
+  /// changed two rows of 30 at 500 sites (one better, one worse), and its narrower start left the
+  /// crease snap on a thin plate beyond max_crease_gap_growth (docs/benchmarks.md).
+  bool keep_narrowest_round = false;
 };
 
 /// What repair_coverage() did.
@@ -44,6 +52,8 @@ struct CoverageRepairStats {
   int moves = 0;             ///< vertex moves kept (a dragged ring neighbour counts as one)
   double gap_before = 0;     ///< largest distance from a sample to the mesh, before and after
   double gap_after = 0;
+  /// The largest distance after each round that moved a vertex, in order.
+  std::vector<double> round_gaps;
 };
 
 /// Moves vertices of `mesh` towards the samples farther than options.max_gap · `spacing` from it
@@ -51,7 +61,9 @@ struct CoverageRepairStats {
 /// that is nearest the sample goes onto it (projected through `surface`), or the largest of
 /// options.fractions of the way that keeps the vertex's triangles within the angle and turn
 /// bounds and facing along its normal; failing that, the same with its ring dragged along
-/// (options.ring_drag). Border vertices and vertices with (*fixed)[v] stay.
+/// (options.ring_drag). Border vertices and vertices with (*fixed)[v] stay. The rounds run
+/// until none moves a vertex or options.rounds; the result is the last round's state or, with
+/// options.keep_narrowest_round, the narrowest one's, and the stats describe that state.
 /// `samples` are points on the surface (an input mesh's vertices).
 CoverageRepairStats repair_coverage(WorkingMesh& mesh, const SurfaceProjector& surface,
                                     const Eigen::MatrixX3d& samples, double spacing,
