@@ -265,6 +265,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "bench_scale: error: --noise %g: must be a finite fraction >= 0\n", noise);
     return 2;
   }
+  if (!(means_per_site > 0) || !std::isfinite(means_per_site)) {
+    std::fprintf(stderr, "bench_scale: error: --points-per-site %g: must be a finite number > 0\n", means_per_site);
+    return 2;
+  }
   const TriangleMesh mesh = read_mesh(std::string(HEATCVT_DATA_DIR) + "/meshes/armadillo.obj");
   const double diag = (mesh.V.colwise().maxCoeff() - mesh.V.colwise().minCoeff()).norm();
   const fs::path dir = keep_dir.empty() ? fs::temp_directory_path() / ("heatcvt_bench_scale_" + std::to_string(::getpid())) : fs::path(keep_dir);
