@@ -7,7 +7,7 @@
 //
 // Usage: bench_reconstruct [points=50000] [sites=3000]
 //            [shapes=bunny_pmp.off,armadillo.obj,kitten.obj,fertility.off,elephant.off]
-//            [--only-heatcvt] [--clean-only | --noisy-only] [--threads T] [--anisotropy L]
+//            [--only-heatcvt] [--clean-only | --noisy-only] [--threads T] [--anisotropy L] [--adaptive A]
 //            [--iterations N] [--relaxation W] [--tolerance X] [--random-start | --fast-start]
 //            [--surface-lloyd N] [--points-per-site X] [--polish N] [--no-smooth] [--no-tips]
 //            (heatcvt options; --no-tips: no repair of the tips after the mesher, coverage.rounds = 0)
@@ -98,6 +98,7 @@ struct BenchOptions {
   bool only_heat = false, clean = true, noisy = true;
   int threads = 0;
   double anisotropy = -1;  // < 0: the library default
+  double adaptivity = -1;  // < 0: the library default (uniform sizing)
   int iterations = -1;     // < 0: the library default (as the next two)
   double relaxation = -1, tolerance = -1;
   bool random_start = false, fast_start = false;
@@ -118,6 +119,7 @@ bool parse_arguments(int argc, char** argv, BenchOptions& o) {
     else if (a == "--noisy-only") o.clean = false;
     else if (a == "--threads" && i + 1 < argc) o.threads = std::atoi(argv[++i]);
     else if (a == "--anisotropy" && i + 1 < argc) o.anisotropy = std::atof(argv[++i]);
+    else if (a == "--adaptive" && i + 1 < argc) o.adaptivity = std::atof(argv[++i]);
     else if (a == "--iterations" && i + 1 < argc) o.iterations = std::atoi(argv[++i]);
     else if (a == "--relaxation" && i + 1 < argc) o.relaxation = std::atof(argv[++i]);
     else if (a == "--tolerance" && i + 1 < argc) o.tolerance = std::atof(argv[++i]);
@@ -154,6 +156,7 @@ ReconstructionOptions heat_options(const BenchOptions& o, int sites) {
   opt.sites = sites;
   opt.threads = o.threads;
   if (o.anisotropy >= 0) opt.anisotropy = o.anisotropy;
+  if (o.adaptivity >= 0) opt.adaptive.adaptivity = o.adaptivity;
   if (o.iterations >= 0) opt.iterations = o.iterations;
   if (o.relaxation >= 0) opt.lloyd_relaxation = o.relaxation;
   if (o.tolerance >= 0) opt.lloyd_tolerance = o.tolerance;

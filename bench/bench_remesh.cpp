@@ -13,6 +13,8 @@
 // Usage: bench_remesh [--sizes 1000,3000,10000] [--only spot,torus] [--threads T] [--samples S]
 //                     [--no-features] (heatcvt without the crease stage, as meshcvt --no-features)
 //                     [--dir DIR] (the meshes of DIR instead, e.g. scripts/make_shapes.py's)
+//                     [--adaptive A] (heatcvt with curvature-adaptive sizing, as meshcvt --adaptive A;
+//                     CGAL stays uniform: Debian 12's CGAL 5.5 has no adaptive sizing field)
 // Inputs that are not edge manifolds or not orientable are skipped with the reason printed.
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
@@ -120,10 +122,11 @@ Row run_cgal(const TriangleMesh& input, int n, const SurfaceDescription& desc, i
   return measure(out, seconds, input, desc, loops, diagonal, samples);
 }
 
-Row run_heatcvt(const TriangleMesh& input, int n, int threads, bool features, const SurfaceDescription& desc,
-                int loops, double diagonal, int samples) {
+Row run_heatcvt(const TriangleMesh& input, int n, int threads, bool features, double adaptivity,
+                const SurfaceDescription& desc, int loops, double diagonal, int samples) {
   RemeshOptions opt;
   opt.creases.enabled = features;
+  opt.adaptive.adaptivity = adaptivity;
   opt.cvt.sites = n;
   opt.cvt.threads = threads;
   const double t0 = bench::now_seconds();
@@ -167,6 +170,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> only;
   int threads = 0, samples = 20000;
   bool features = true;
+  double adaptivity = 0;
   std::filesystem::path dir = std::filesystem::path(HEATCVT_DATA_DIR) / "meshes";
   for (int i = 1; i < argc; ++i) {
     auto next = [&]() -> std::string {
@@ -189,6 +193,12 @@ int main(int argc, char** argv) {
       samples = std::atoi(next().c_str());
     } else if (!std::strcmp(argv[i], "--dir")) {
       dir = next();
+    } else if (!std::strcmp(argv[i], "--adaptive")) {
+      adaptivity = std::atof(next().c_str());
+      if (!(adaptivity >= 0 && adaptivity <= 2)) {
+        std::fprintf(stderr, "bench_remesh: --adaptive must be in [0, 2]\n");
+        return 2;
+      }
     } else {
       std::fprintf(stderr, "bench_remesh: unknown option %s\n", argv[i]);
       return 2;
@@ -234,7 +244,7 @@ int main(int argc, char** argv) {
     const int loops = validate_triangle_mesh(input.V, input.F, io).boundary_loops;
     const double diagonal = (input.V.colwise().maxCoeff() - input.V.colwise().minCoeff()).norm();
     for (int n : sizes) {
-      const Row h = run_heatcvt(input, n, threads, features, desc, loops, diagonal, samples);
+      const Row h = run_heatcvt(input, n, threads, features, adaptivity, desc, loops, diagonal, samples);
       const Row c = run_cgal(input, n, desc, loops, diagonal, samples);
       std::printf("| %s | %d | %d | %s | %s |\n", name.c_str(), static_cast<int>(input.V.rows()), n, cell(h).c_str(),
                   cell(c).c_str());

@@ -277,6 +277,9 @@ TEST(Cloud2MeshTool, NonsenseOptions) {
   expect_clean_failure(test::run_tool("cloud2mesh", base + "-i -3"), {"-i"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "-k 2"), {"-k"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--anisotropy -1"), {"--anisotropy"}, dir, 1);
+  expect_clean_failure(test::run_tool("cloud2mesh", base + "--adaptive -1"), {"--adaptive"}, dir, 1);
+  expect_clean_failure(test::run_tool("cloud2mesh", base + "--adaptive nan"), {"--adaptive"}, dir, 1);
+  expect_clean_failure(test::run_tool("cloud2mesh", base + "--adaptive 1 --size-ratio 0.9"), {"--size-ratio"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--threads -1"), {"--threads"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--relaxation 2"), {"--relaxation"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--surface-lloyd -1"), {"--surface-lloyd"}, dir, 1);

@@ -584,7 +584,8 @@ TEST(Hardening, Cloud2meshHelpShowsEveryReconstructionOption) {
   // One option per field of ReconstructionOptions, with its default.
   for (const std::string& needle : std::vector<std::string>
        {std::string("-n,--sites INT=") + std::to_string(d.sites), "--iterations INT=" + std::to_string(d.iterations),
-        std::string("--neighbours"), std::string("--anisotropy"), std::string("--denoise"), "--denoise-k INT=" + std::to_string(d.denoise_neighbors),
+        std::string("--neighbours"), std::string("--anisotropy"), std::string("--adaptive"), std::string("--size-ratio"),
+        std::string("--denoise"), "--denoise-k INT=" + std::to_string(d.denoise_neighbors),
         std::string("--denoise-stddev"), std::string("--voxel"), std::string("--t-coef"), std::string("--seed"),
         std::string("--threads"), "--max-hole-edges INT=" + std::to_string(d.max_hole_edges),
         "--polish-iterations INT=" + std::to_string(d.relaxation_iterations), std::string("--fast-start"),

@@ -200,6 +200,23 @@ TEST(MeshcvtTool, CreasesAreKeptUnlessNoFeatures) {
   EXPECT_EQ(test::json_number(test::read_file(dir.path("b.json")), "lines"), 0);
 }
 
+// --adaptive on the kitten at 1,000 vertices: a valid remesh with the count, sizes spread by
+// more than 1.5 (and at most --size-ratio), the spread reported on stderr and in the report.
+TEST(MeshcvtTool, AdaptiveSizingSpreadsTheEdgeLengthsWithinTheRatio) {
+  test::ScratchDir dir("meshcvt_adaptive");
+  const test::CommandResult r =
+      test::run_tool("meshcvt", test::data_path("meshes/kitten.obj") + " -n 1000 --adaptive 1 --size-ratio 2.5 -o " +
+                                    dir.path("a.obj") + " --report " + dir.path("a.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("adaptive sizing: largest over smallest edge length"), std::string::npos) << r.err;
+  const std::string a = test::read_file(dir.path("a.json"));
+  EXPECT_EQ(test::json_number(a, "adaptivity"), 1.0);
+  EXPECT_GT(test::json_number(a, "size_ratio"), 1.5);
+  EXPECT_LE(test::json_number(a, "size_ratio"), 2.5 + 1e-9);
+  EXPECT_NE(a.find("\"all_checks_passed\": true"), std::string::npos) << a;
+  EXPECT_NEAR(test::json_number(a, "output_vertices"), 1000.0, 20.0);
+}
+
 // An input that crosses itself (two sheets through each other): the remesh crosses itself too,
 // the tool exits 3 with the output written, and its warning and report say that the input
 // crosses itself rather than suggesting more sites.
@@ -268,6 +285,9 @@ TEST(MeshcvtTool, BadOptions) {
   fails("-n 3 -i -1", "--iterations");
   fails("-n 3 --tolerance -1", "--tolerance");
   fails("-n 3 --anisotropy -0.5", "--anisotropy");
+  fails("-n 3 --adaptive -1", "--adaptive");
+  fails("-n 3 --adaptive 3", "--adaptive");
+  fails("-n 3 --adaptive 1 --size-ratio 0.5", "--size-ratio");
   fails("-n 3 --t-coef 0", "--t-coef");
   fails("-n 3 --threads -1", "--threads");
   fails("-n 3 --relaxation 2", "--relaxation");

@@ -70,6 +70,10 @@ void check_options(const ReconstructionOptions& opt) {
     throw InvalidInputError("-k must be between " + std::to_string(ReconstructionOptions::min_neighbors) + " and " +
                             std::to_string(ReconstructionOptions::max_neighbors));
   if (!(opt.anisotropy >= 0) || !std::isfinite(opt.anisotropy)) throw InvalidInputError("--anisotropy must be >= 0");
+  if (!(opt.adaptive.adaptivity >= 0 && opt.adaptive.adaptivity <= 2))
+    throw InvalidInputError("--adaptive must be in [0, 2]");
+  if (!(opt.adaptive.max_size_ratio >= 1) || !std::isfinite(opt.adaptive.max_size_ratio))
+    throw InvalidInputError("--size-ratio must be a number >= 1");
   if (!(opt.voxel_size >= 0) || !std::isfinite(opt.voxel_size)) throw InvalidInputError("--voxel must be >= 0");
   if (!(opt.time_coefficient > 0) || !std::isfinite(opt.time_coefficient))
     throw InvalidInputError("--t-coef must be a positive number");
@@ -126,6 +130,8 @@ cli::Json make_report(const std::string& cloud_path, const std::vector<std::stri
   j["neighbors_cvt"] = res.neighbors_cvt;
   j["neighbors_fit"] = res.neighbors_fit;
   j["anisotropy"] = opt.anisotropy;
+  j["adaptivity"] = opt.adaptive.adaptivity;
+  j["size_ratio"] = res.size_ratio;
   j["seed"] = opt.seed;
   j["vertices"] = res.mesh.V.rows();
   j["faces"] = res.mesh.F.rows();
@@ -330,6 +336,12 @@ void add_reconstruction_options(CLI::App& app, Settings& s) {
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
   app.add_option("--anisotropy", s.opt.anisotropy, "lambda of the anisotropic lift (p, lambda n); 0 = isotropic")
+      ->capture_default_str();
+  app.add_option("--adaptive", s.opt.adaptive.adaptivity,
+                 "curvature-adaptive sizing: edge length ~ curvature^(-A/2), finer at tips, rims and creases, the "
+                 "vertex count kept (0 = uniform; 1 = the same chord error everywhere)")
+      ->capture_default_str();
+  app.add_option("--size-ratio", s.opt.adaptive.max_size_ratio, "with --adaptive: largest over smallest edge length")
       ->capture_default_str();
   app.add_flag("--denoise", s.opt.denoise, "statistical outlier removal before reconstruction");
   app.add_option("--denoise-k", s.opt.denoise_neighbors, "with --denoise: neighbours of the outlier statistics")

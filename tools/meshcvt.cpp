@@ -67,6 +67,7 @@ struct Settings {
   int sites, iterations, threads;
   unsigned seed;
   double anisotropy = 0.0, tolerance, t_coef;
+  AdaptiveSizingOptions adaptive;
   int quality_every;
   double target_mean, target_min;
   bool quiet = false;
@@ -94,6 +95,13 @@ void add_lloyd_options(CLI::App& app, Settings& s) {
   app.add_option("--anisotropy", s.anisotropy,
                  "lambda of the anisotropic CVT: lift to (p, lambda n) in R^6 after scaling to the unit bounding "
                  "box (paper: 0.05; 0 = isotropic)")
+      ->capture_default_str();
+  app.add_option("--adaptive", s.adaptive.adaptivity,
+                 "curvature-adaptive sizing: edge length ~ curvature^(-A/2), finer where the surface bends, the vertex "
+                 "count kept (0 = uniform; 1 = the same chord error everywhere)")
+      ->capture_default_str();
+  app.add_option("--size-ratio", s.adaptive.max_size_ratio,
+                 "with --adaptive: largest over smallest edge length")
       ->capture_default_str();
   app.add_option("--init", s.init, "initial sites: random (area-uniform) or farthest (farthest-point sampling)")
       ->capture_default_str()
@@ -177,6 +185,9 @@ void check_settings(const Settings& s) {
   if (s.iterations < 0) throw InvalidInputError("--iterations must be >= 0, got " + std::to_string(s.iterations));
   if (!(s.tolerance >= 0) || !std::isfinite(s.tolerance)) throw InvalidInputError("--tolerance must be >= 0");
   if (!(s.anisotropy >= 0) || !std::isfinite(s.anisotropy)) throw InvalidInputError("--anisotropy must be >= 0");
+  if (!(s.adaptive.adaptivity >= 0 && s.adaptive.adaptivity <= 2)) throw InvalidInputError("--adaptive must be in [0, 2]");
+  if (!(s.adaptive.max_size_ratio >= 1) || !std::isfinite(s.adaptive.max_size_ratio))
+    throw InvalidInputError("--size-ratio must be a number >= 1");
   if (!(s.t_coef > 0) || !std::isfinite(s.t_coef)) throw InvalidInputError("--t-coef must be a positive number");
   if (s.threads < 0) throw InvalidInputError("--threads must be >= 0");
   if (!(s.min_vertices_per_site >= 0) || !std::isfinite(s.min_vertices_per_site))
@@ -199,6 +210,7 @@ void check_settings(const Settings& s) {
 RemeshOptions remesh_options(const Settings& s) {
   RemeshOptions remesh;
   remesh.anisotropy = s.anisotropy;
+  remesh.adaptive = s.adaptive;
   remesh.min_vertices_per_site = s.min_vertices_per_site;
   remesh.repair_rounds = s.repair_rounds;
   if (s.repair_rounds == 0) remesh.loop_repair_rounds = 0;  // no repair at all
@@ -263,6 +275,12 @@ void log_input_notes(const RemeshResult& res, const Settings& s) {
     cli::log_line(s.quiet, "refined " + s.mesh_path + " by " + std::to_string(res.refinement_levels) +
                                " midpoint subdivision(s) to " + std::to_string(res.cvt_vertices) +
                                " vertices (--min-vertices-per-site " + std::to_string(s.min_vertices_per_site) + ")");
+  if (s.adaptive.enabled()) {
+    char ratio[32];
+    std::snprintf(ratio, sizeof ratio, "%.2f", res.size_ratio);
+    cli::log_line(s.quiet, std::string("adaptive sizing: largest over smallest edge length ") + ratio +
+                               " (--size-ratio bounds it; 1 = the surface is flat at this spacing)");
+  }
   if (res.degenerate_faces)
     cli::log_line(s.quiet, "warning: " + std::to_string(res.degenerate_faces) + " degenerate faces in " +
                                s.mesh_path + " carry no heat conduction");
@@ -307,6 +325,8 @@ cli::Json make_report(const Settings& s, const TriangleMesh& mesh, int input_gen
   rep["input_genus"] = input_genus;
   rep["sites"] = r.sites.size();
   rep["anisotropy"] = s.anisotropy;
+  rep["adaptivity"] = s.adaptive.adaptivity;
+  rep["size_ratio"] = res.size_ratio;
   rep["seed"] = s.seed;
   rep["iterations"] = f.iterations;
   rep["converged"] = r.converged;

@@ -30,7 +30,7 @@ double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::
 // \throw InvalidInputError on bad sizes or options (see centroidal_voronoi()).
 void validate_cvt_inputs(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const Laplacian& laplacian,
                          const CvtOptions& options, const std::vector<SurfacePoint>& given_sites,
-                         const Eigen::VectorXd& face_metric_area) {
+                         const Eigen::VectorXd& face_metric_area, const Eigen::VectorXd& vertex_density) {
   const int n = static_cast<int>(V.rows());
   validate_mesh(V, F, "centroidal_voronoi: mesh");
   if (laplacian.num_vertices() != n)
@@ -46,6 +46,9 @@ void validate_cvt_inputs(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, c
   if (face_metric_area.size() != 0 && face_metric_area.size() != F.rows())
     throw InvalidInputError("centroidal_voronoi: face_metric_area has " + std::to_string(face_metric_area.size()) +
                             " entries but the mesh has " + std::to_string(F.rows()) + " faces");
+  if (vertex_density.size() != 0 && (vertex_density.size() != n || !vertex_density.allFinite() || !(vertex_density.minCoeff() > 0)))
+    throw InvalidInputError("centroidal_voronoi: vertex_density must have one positive finite value per vertex (" +
+                            std::to_string(n) + "), got " + std::to_string(vertex_density.size()) + " values");
   if (!(options.relaxation >= 1.0 && options.relaxation < 2.0))
     throw InvalidInputError("centroidal_voronoi: relaxation must be in [1, 2), got " + std::to_string(options.relaxation));
   if (options.graph_lloyd_iterations < 0 || options.anderson_depth < 0 || options.quality_patience < 0 || options.quality_start < 0 || !(options.max_inserted_fraction >= 0))
@@ -80,13 +83,16 @@ void validate_cvt_inputs(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, c
       throw InvalidInputError("centroidal_voronoi: initial site " + std::to_string(s) + " is not on a face of the mesh");
 }
 
-// Metric area / Euclidean area per face (empty without a metric).
-Eigen::VectorXd face_scale_of(const Eigen::VectorXd& face_area, const Eigen::VectorXd& face_metric_area) {
+// Weight of a face's area in the centroids' area sources: metric area / Euclidean area (the
+// anisotropic lift) times the face's density (a CVT with density); empty without either.
+Eigen::VectorXd face_scale_of(const CvtSurface& surface, const Eigen::VectorXd& face_metric_area) {
+  const Eigen::VectorXd& face_area = surface.face_area;
   Eigen::VectorXd face_scale;
-  if (face_metric_area.size()) {
-    face_scale.resize(face_area.size());
-    for (Eigen::Index f = 0; f < face_area.size(); ++f)
-      face_scale[f] = face_area[f] > 0 ? face_metric_area[f] / face_area[f] : 0.0;
+  if (face_metric_area.size() == 0 && !surface.has_density()) return face_scale;
+  face_scale.resize(face_area.size());
+  for (Eigen::Index f = 0; f < face_area.size(); ++f) {
+    const double metric = face_metric_area.size() ? face_metric_area[f] : face_area[f];
+    face_scale[f] = face_area[f] > 0 ? metric * surface.face_mass[f] / (face_area[f] * face_area[f]) : 0.0;
   }
   return face_scale;
 }
@@ -223,21 +229,22 @@ Laplacian anisotropic_laplacian(const Eigen::MatrixX3d& V, const Eigen::MatrixX3
 
 CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const Laplacian& laplacian,
                              const CvtOptions& options, const std::vector<SurfacePoint>& given_sites,
-                             const CvtCallback& callback, const Eigen::VectorXd& face_metric_area) {
+                             const CvtCallback& callback, const Eigen::VectorXd& face_metric_area,
+                             const Eigen::VectorXd& vertex_density) {
   const auto start = Clock::now();
-  validate_cvt_inputs(V, F, laplacian, options, given_sites, face_metric_area);
+  validate_cvt_inputs(V, F, laplacian, options, given_sites, face_metric_area, vertex_density);
   std::vector<SurfacePoint> sites = given_sites;
   const bool generate = sites.empty();
   const int ns = generate ? options.sites : static_cast<int>(sites.size());
   const int threads = resolve_threads(options.threads);
   CvtResult result;
-  const CvtSurface surface(V, F);
+  const CvtSurface surface(V, F, vertex_density);
 
   // 1. Start: initial sites, graph and surface Lloyd (not in the anisotropic metric, where
   //    Euclidean cells would pull towards isotropic ones), during the factorisation.
   const bool surface_on = options.surface_lloyd_iterations > 0 && face_metric_area.size() == 0;
   const bool run_start = options.graph_lloyd_iterations > 0 || surface_on;
-  if (generate && !run_start) sites = generated_sites(V, F, options);
+  if (generate && !run_start) sites = generated_sites(V, F, options, vertex_density);
   CvtStartReport report;
   const std::unique_ptr<HeatSolver> solver =
       factor_during_start(surface, laplacian, options, run_start, surface_on, threads, sites, report);
@@ -265,7 +272,7 @@ CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
   // Sites already relaxed by the surface Lloyd are settled: the settled index sets from the start.
   const int rings = result.surface_lloyd_iterations > 0 ? std::min(options.voronoi_rings, options.voronoi_rings_settled)
                                                         : options.voronoi_rings;
-  LloydState lloyd(surface, local, options, face_scale_of(surface.face_area, face_metric_area), spacing, threads,
+  LloydState lloyd(surface, local, options, face_scale_of(surface, face_metric_area), spacing, threads,
                    std::move(sites), std::move(cells), rings);
   CvtQualityControl quality(surface, options, ns, spacing, threads);
 

@@ -15,6 +15,7 @@
 #include <cstdlib>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <random>
 #include <string>
@@ -53,6 +54,9 @@ void check_options(const ReconstructionOptions& o) {
     bad("neighbors = " + std::to_string(o.neighbors) + " (must be in [" + std::to_string(o.min_neighbors) + ", " +
         std::to_string(o.max_neighbors) + "])");
   if (!(o.anisotropy >= 0) || !std::isfinite(o.anisotropy)) bad("anisotropy must be a finite number >= 0");
+  if (!(o.adaptive.adaptivity >= 0 && o.adaptive.adaptivity <= 2)) bad("adaptive.adaptivity must be in [0, 2]");
+  if (!(o.adaptive.max_size_ratio >= 1) || !std::isfinite(o.adaptive.max_size_ratio))
+    bad("adaptive.max_size_ratio must be a finite number >= 1");
   if (!(o.voxel_size >= 0) || !std::isfinite(o.voxel_size)) bad("voxel_size must be a finite number >= 0");
   if (!(o.time_coefficient > 0) || !std::isfinite(o.time_coefficient)) bad("time_coefficient must be > 0");
   if (o.threads < 0) bad("threads must be >= 0");
@@ -449,13 +453,16 @@ void copy_stats(const MesherStats& st, ReconstructionResult& res) {
 }
 
 // What one run of the CVT and the mesher reads: the CVT points, their triangles and Laplacian
-// (metric_area: the lifted metric's face areas, empty when isotropic), the fitted surface, the
-// cloud's frame and its point count.
+// (metric_area: the lifted metric's face areas, empty when isotropic), the adaptive sizing's
+// density of the CVT points and relative sizes (empty and null when uniform), the fitted
+// surface, the cloud's frame and its point count.
 struct MeshingInputs {
   const CvtPoints& cp;
   const Eigen::MatrixX3i& T;
   const Laplacian& lap;
   const Eigen::VectorXd& metric_area;
+  const Eigen::VectorXd& density;
+  const SizingField* sizing;
   const CloudSurfaceProjector& fit;
   const CloudFrame& frame;
   int points;
@@ -478,7 +485,7 @@ void cvt_and_mesh(const MeshingInputs& in, const ReconstructionOptions& options,
         report("cvt", options.iterations > 0 ? static_cast<double>(st.iteration) / options.iterations : 1.0);
         return true;
       },
-      in.metric_area);
+      in.metric_area, in.density);
   res.cvt_seconds = since(t1);
   res.factor_seconds = cvt.factor_seconds;
   res.iterations = static_cast<int>(cvt.iterations.size());
@@ -517,6 +524,7 @@ void cvt_and_mesh(const MeshingInputs& in, const ReconstructionOptions& options,
   if (mopt.split.max_vertices == 0) mopt.split.max_vertices = options.sites + options.sites / 50;
   // Every piece kept gets its share of the vertex count: sized to -n where the dual fell short.
   if (mopt.sizing.target_vertices == 0) mopt.sizing.target_vertices = options.sites;
+  if (in.sizing) mopt.sizing.relative_size = *in.sizing;
   MesherStats stats;
   mesh_from_candidates(mesh, candidates, in.fit, mopt, stats);
   report("mesh", 0.5);
@@ -703,10 +711,23 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
                                                : std::move(pl.laplacian);
   res.laplacian_seconds = since(t0);
   report("laplacian", 1);
+  // The adaptive sizing on the CVT points (adaptive_sizing.h): the CVT's density g⁻⁴
+  // (cells of diameter ∝ ρ^(-1/4)) and the mesher's relative sizes.
+  Eigen::VectorXd density;
+  std::unique_ptr<SizingField> sizing;
+  if (options.adaptive.enabled()) {
+    const Eigen::VectorXd area = lumped_vertex_areas(T, face_areas(cp.PC, T), static_cast<int>(cp.PC.rows()));
+    const Eigen::VectorXd g = relative_sizes(cp.PC, cp.NC, area, std::sqrt(surface_area(cp.PC, T) / options.sites),
+                                             options.adaptive, options.threads);
+    density = g.array().pow(-4.0).matrix();
+    sizing = std::make_unique<SizingField>(cp.PC, g);
+    res.size_ratio = g.maxCoeff() / g.minCoeff();
+    stage.done("adaptive sizing");
+  }
 
   // 3.-5. The CVT, its mesh and the checks; again from other start sites where the mesh is far
   // off the count.
-  const MeshingInputs in{cp, T, lap, metric_area, fit, cloud.frame, n};
+  const MeshingInputs in{cp, T, lap, metric_area, density, sizing.get(), fit, cloud.frame, n};
   res = mesh_with_retries(in, options, report, std::move(res));
   res.total_seconds = since(t_start);
   return res;

@@ -212,13 +212,19 @@ bool has_nonmanifold_edges(const SurfaceDescription& input) { return input.topol
 // Site spacing of `sites` sites on the surface of `mesh`.
 double site_spacing(const TriangleMesh& mesh, int sites) { return std::sqrt(surface_area(mesh.V, mesh.F) / std::max(1, sites)); }
 
+// The CVT's weights (centroidal_voronoi()): the anisotropic lift's face areas and the adaptive
+// sizing's density (empty where not used).
+struct CvtWeights {
+  Eigen::VectorXd face_metric_area, vertex_density;
+};
+
 // Closed-ball repair (RemeshOptions::repair_rounds, loop_repair_rounds): while the dual of out.cvt
 // is not a manifold or a boundary loop of the input lacks cells of its own
 // (sites_for_boundary_loops()),
 // a new site at the farthest point of every cell at a non-manifold spot and on such loops, the sites in no triangle
 // (cells enclosed by another cell, which is then an annulus) dropped, and the CVT again from
 // these sites with a few surface-Lloyd iterations (as after the CVT's own splits).
-void repair_closed_ball(const TriangleMesh& work, const Laplacian& laplacian, const Eigen::VectorXd& metric,
+void repair_closed_ball(const TriangleMesh& work, const Laplacian& laplacian, const CvtWeights& weights,
                         const RemeshOptions& options, const CvtCallback& progress, RemeshResult& out) {
   const int budget = static_cast<int>(options.max_repair_fraction * options.cvt.sites);
   CvtOptions again = options.cvt;
@@ -270,7 +276,8 @@ void repair_closed_ball(const TriangleMesh& work, const Laplacian& laplacian, co
     const int dropped = ns - static_cast<int>(start.size());
     if (added.empty() && dropped == 0) break;
     start.insert(start.end(), added.begin(), added.end());
-    out.cvt = centroidal_voronoi(work.V, work.F, laplacian, round, start, progress, metric);
+    out.cvt = centroidal_voronoi(work.V, work.F, laplacian, round, start, progress, weights.face_metric_area,
+                                 weights.vertex_density);
     out.repair_sites += static_cast<int>(added.size());
     out.repair_dropped_sites += dropped;
     ++out.repair_rounds;
@@ -583,14 +590,15 @@ namespace {
 
 // The CVT of options.cvt from `start` (none: generated sites), its closed-ball repair, and its
 // dual with the checks against the input's topology as out.mesh / out.checks.
-void run_cvt(const TriangleMesh& work, const Laplacian& laplacian, const Eigen::VectorXd& metric,
+void run_cvt(const TriangleMesh& work, const Laplacian& laplacian, const CvtWeights& weights,
              const RemeshOptions& options, const std::vector<SurfacePoint>& start, const CvtCallback& progress,
              RemeshResult& out) {
   auto t = Clock::now();
-  out.cvt = centroidal_voronoi(work.V, work.F, laplacian, options.cvt, start, progress, metric);
+  out.cvt = centroidal_voronoi(work.V, work.F, laplacian, options.cvt, start, progress, weights.face_metric_area,
+                               weights.vertex_density);
   out.stage_seconds.emplace_back("cvt", seconds_since(t));
   t = Clock::now();
-  if (options.cvt.build_dual && !has_nonmanifold_edges(out.input)) repair_closed_ball(work, laplacian, metric, options, progress, out);
+  if (options.cvt.build_dual && !has_nonmanifold_edges(out.input)) repair_closed_ball(work, laplacian, weights, options, progress, out);
   out.stage_seconds.emplace_back("repair", seconds_since(t));
   t = Clock::now();
   out.mesh.V = out.cvt.dual.V;
@@ -689,8 +697,23 @@ int crease_lines_missed(const CreaseStats& c) {
   return c.skipped_lines + c.dropped_crease_lines + (c.undone ? c.lines : 0);
 }
 
+// The adaptive sizing of the CVT's mesh `work` (RemeshOptions::adaptive): the CVT's density in
+// `weights`, the stages' sizing field in `options`, the ratio of the sizes in out.size_ratio.
+void adapt_sizing(const TriangleMesh& work, RemeshOptions& options, CvtWeights& weights, RemeshResult& out) {
+  if (!options.adaptive.enabled()) return;
+  const auto t = Clock::now();
+  const Eigen::VectorXd area = lumped_vertex_areas(work.F, face_areas(work.V, work.F), static_cast<int>(work.V.rows()));
+  const Eigen::VectorXd g = relative_sizes(work.V, vertex_normals(work.V, work.F), area,
+                                           site_spacing(work, options.cvt.sites), options.adaptive, options.cvt.threads);
+  weights.vertex_density = g.array().pow(-4.0).matrix();  // cells of a CVT with density ρ: diameter ∝ ρ^(-1/4)
+  options.mesher.sizing.relative_size = SizingField(work.V, g);
+  out.size_ratio = g.maxCoeff() / g.minCoeff();
+  out.stage_seconds.emplace_back("sizing", seconds_since(t));
+}
+
 // The pipeline of remesh_cvt() on a mesh already in its unit frame.
-RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions& options, const CvtCallback& progress) {
+RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions& given, const CvtCallback& progress) {
+  RemeshOptions options = given;
   const int sites = options.cvt.sites;
   if (sites < 1) throw InvalidInputError("remesh_cvt: the number of sites must be >= 1, got " + std::to_string(sites));
   if (!(options.min_vertices_per_site >= 0) || !std::isfinite(options.min_vertices_per_site))
@@ -723,13 +746,15 @@ RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions&
   out.stage_seconds.emplace_back("refine", seconds_since(t));
 
   t = Clock::now();
-  Eigen::VectorXd metric;
-  const Laplacian laplacian = options.anisotropy > 0 ? anisotropic_laplacian(work->V, work->F, options.anisotropy, &metric)
-                                                     : cotan_laplacian(work->V, work->F);
+  CvtWeights weights;
+  const Laplacian laplacian = options.anisotropy > 0
+                                  ? anisotropic_laplacian(work->V, work->F, options.anisotropy, &weights.face_metric_area)
+                                  : cotan_laplacian(work->V, work->F);
   out.degenerate_faces = static_cast<int>(laplacian.degenerate_faces.size());
   out.stage_seconds.emplace_back("laplacian", seconds_since(t));
+  adapt_sizing(*work, options, weights, out);
 
-  run_cvt(*work, laplacian, metric, options, {}, progress, out);
+  run_cvt(*work, laplacian, weights, options, {}, progress, out);
   // The stages orient every closed piece outward: not for a non-orientable input.
   if (options.post_cvt_stages && options.cvt.build_dual && out.mesh.F.rows() > 0 && !out.input.non_orientable) {
     if (dual_meets_targets(out, options)) {
@@ -741,7 +766,7 @@ RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions&
       RemeshOptions again = options;
       again.cvt.target_phi_min_deg = options.fallback_phi_min_deg;
       RemeshResult first = out;
-      run_cvt(*work, laplacian, metric, again, first.cvt.sites, progress, out);
+      run_cvt(*work, laplacian, weights, again, first.cvt.sites, progress, out);
       if (dual_meets_targets(out, again))
         out.post_cvt_refusal = "not run again: after heat iterations the dual passes every check and meets the targets";
       else if (out.mesh.F.rows() > 0)

@@ -282,6 +282,11 @@ using CvtCallback = std::function<bool(const CvtIterationStats&)>;
 ///   then options.sites is ignored.
 ///   face_metric_area: optional #F areas in the Laplacian's metric (anisotropic lift); the area
 ///   sources of the centroids use them. Empty = the Euclidean areas of (V, F).
+///   vertex_density: optional #V densities ρ > 0 of a CVT with density (adaptive sizing,
+///   adaptive_sizing.h): the cells stay the heat Voronoi cells, the centroids' area sources and
+///   the surface Lloyd's cell means weight each face's area by its density (the mean of its
+///   corners'), so the sites minimise Σ ∫_cell ρ |x − p|² and the cells get a diameter
+///   ∝ ρ^(-1/4); the generated start follows it (initial_sites()). Empty = uniform.
 /// Each iteration: per site a localized point-source diffusion over its cell and
 /// `voronoi_rings` rings of neighbouring cells → heat field → (exact) tessellation → per cell an
 /// area-source diffusion (eq. 10–11) localized to the cell and `centroid_rings` rings → hottest
@@ -292,7 +297,8 @@ using CvtCallback = std::function<bool(const CvtIterationStats&)>;
 CvtResult centroidal_voronoi(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const Laplacian& laplacian,
                              const CvtOptions& options = {}, const std::vector<SurfacePoint>& initial_sites = {},
                              const CvtCallback& callback = {},
-                             const Eigen::VectorXd& face_metric_area = Eigen::VectorXd());
+                             const Eigen::VectorXd& face_metric_area = Eigen::VectorXd(),
+                             const Eigen::VectorXd& vertex_density = Eigen::VectorXd());
 
 /// Laplacian of the anisotropic CVT (paper §7.1, Fig. 9): scales the mesh into the unit
 /// bounding box (largest side 1), lifts each vertex to (p, λ n) ∈ R⁶ (n = area-weighted unit

@@ -18,6 +18,7 @@
 #include <limits>
 #include <vector>
 
+#include "heatcvt/adaptive_sizing.h"
 #include "heatcvt/centroid.h"
 #include "heatcvt/closest_point.h"
 #include "heatcvt/cloud_io.h"

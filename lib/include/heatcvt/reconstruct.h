@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "heatcvt/adaptive_sizing.h"
 #include "heatcvt/cvt.h"
 #include "heatcvt/mesh.h"
 #include "heatcvt/mesher/coverage_repair.h"
@@ -81,6 +82,11 @@ struct ReconstructionOptions {
   static constexpr int min_neighbors = 6;    ///< smallest valid `neighbors`
   static constexpr int max_neighbors = 200;  ///< largest valid `neighbors`
   double anisotropy = 0.0;        ///< λ of the anisotropic lift (paper §7.1); 0 = isotropic. Default 0.
+  /// Curvature-adaptive sizing (adaptive_sizing.h): where adaptive.adaptivity > 0, relative sizes
+  /// g are estimated on the CVT points (their normals, at the uniform site spacing), the CVT runs
+  /// with the density g⁻⁴ (smaller cells where the surface bends: tips, rims, creases) and the
+  /// mesher's sizing follows g; the vertex count stays `sites`. Default uniform (adaptivity 0).
+  AdaptiveSizingOptions adaptive;
   bool denoise = false;           ///< statistical outlier removal before everything. Default false.
   double voxel_size = 0.0;        ///< voxel-grid downsampling (input units); 0 = off. Default 0.
   double time_coefficient = 1.0;  ///< t = C·h̄². Default 1.
@@ -204,6 +210,7 @@ struct ReconstructionResult {
   int neighbors_cvt = 0, neighbors_fit = 0;
   double laplacian_seconds = 0, factor_seconds = 0, cvt_seconds = 0, total_seconds = 0;
   int iterations = 0;              ///< Lloyd iterations run
+  double size_ratio = 1;           ///< largest over smallest relative size of the adaptive sizing (1 = uniform)
   double min_angle_deg = 0;        ///< φmin: smallest interior angle over all triangles
   double mean_min_angle_deg = 0;   ///< φm: mean over triangles of their smallest angle
   double boundary_min_angle_deg = 180;  ///< φmin of the triangles with an edge on the boundary (180: none)

@@ -6,7 +6,8 @@
 ///     1. describe the input surface (topology, genus, orientability)        describe_surface()
 ///     2. refine it by midpoint subdivision while it has fewer than
 ///        min_vertices_per_site vertices per site (the surface is unchanged)  midpoint_subdivide()
-///     3. cotan Laplacian (or the anisotropic lifted one)                      laplacian.h, cvt.h
+///     3. cotan Laplacian (or the anisotropic lifted one), and the relative
+///        sizes of the adaptive sizing (curvature)                              laplacian.h, adaptive_sizing.h
 ///     4. heat CVT (Lloyd iteration, localized solves) and its dual            centroidal_voronoi()
 ///     5. closed-ball repair: while the dual is not a manifold, a new site in
 ///        every cell at a non-manifold spot and the CVT again from all sites  repair rounds below
@@ -19,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "heatcvt/adaptive_sizing.h"
 #include "heatcvt/cvt.h"
 #include "heatcvt/dual_mesh.h"
 #include "heatcvt/mesh.h"
@@ -71,6 +73,12 @@ struct RemeshOptions {
   }();
   /// λ of the anisotropic lift (p, λn) (paper §7.1, Fig. 9: 0.05); 0 = isotropic. Default 0.
   double anisotropy = 0.0;
+  /// Curvature-adaptive sizing (adaptive_sizing.h): where adaptive.adaptivity > 0, relative sizes
+  /// g are estimated on the (refined) input at the uniform site spacing, the CVT runs with the
+  /// density g⁻⁴ (smaller cells where the surface bends) and the post-CVT stages' sizing follows
+  /// g (mesher.sizing.relative_size); the vertex count stays cvt.sites. The quality targets and
+  /// the coverage rules keep their uniform spacing. Default uniform (adaptivity 0).
+  AdaptiveSizingOptions adaptive;
   /// Refine the input by midpoint subdivision (1-to-4, the surface is unchanged) until it has at
   /// least this many vertices per site, so the heat diffusion resolves every cell; 0 = never refine
   /// (then cvt.sites ≤ #V is required). Default 8. Measured with meshcvt's defaults on
@@ -222,6 +230,7 @@ struct RemeshResult {
   int iterations = 0;                ///< heat Lloyd iterations run (last CVT)
   bool converged = false;            ///< stopped by the tolerance (last CVT)
   int refinement_levels = 0;         ///< midpoint subdivisions of the input before the CVT
+  double size_ratio = 1;             ///< largest over smallest relative size of the adaptive sizing (1 = uniform)
   int cvt_vertices = 0;              ///< vertices of the mesh the CVT ran on
   int degenerate_faces = 0;          ///< faces without heat conduction (Laplacian::degenerate_faces)
   /// Face pairs of the input that intersect each other, counted only where `mesh` fails its

@@ -37,22 +37,31 @@ std::vector<SurfacePoint> in_spatial_order(const Eigen::MatrixX3d& V, const Eige
 }
 
 std::vector<SurfacePoint> generated_sites(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
-                                          const CvtOptions& options) {
-  std::vector<SurfacePoint> sites = initial_sites(V, F, options.sites, options.initialization, options.seed);
+                                          const CvtOptions& options, const Eigen::VectorXd& vertex_density) {
+  std::vector<SurfacePoint> sites =
+      initial_sites(V, F, options.sites, options.initialization, options.seed, vertex_density);
   return options.spatial_site_order ? in_spatial_order(V, F, std::move(sites)) : sites;
 }
 
 std::vector<SurfacePoint> initial_sites(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, int count,
-                                        CvtInitialization method, std::uint32_t seed) {
+                                        CvtInitialization method, std::uint32_t seed,
+                                        const Eigen::VectorXd& vertex_density) {
   if (count < 1) throw InvalidInputError("initial_sites: the number of sites must be >= 1, got " + std::to_string(count));
   validate_mesh(V, F, "initial_sites: mesh");
+  const bool dense = vertex_density.size() > 0;
+  if (dense && (vertex_density.size() != V.rows() || !vertex_density.allFinite() || !(vertex_density.minCoeff() > 0)))
+    throw InvalidInputError("initial_sites: vertex_density must have one positive finite value per vertex");
+  // Cells of a CVT with density ρ have a diameter ∝ ρ^(-1/4): sites per area ∝ ρ^(1/2).
+  const auto face_density = [&](Eigen::Index f) {
+    return dense ? (vertex_density[F(f, 0)] + vertex_density[F(f, 1)] + vertex_density[F(f, 2)]) / 3.0 : 1.0;
+  };
   std::mt19937 rng(seed);
   std::vector<SurfacePoint> sites;
   if (method == CvtInitialization::random) {
     const Eigen::VectorXd area = face_areas(V, F);
     std::vector<double> cdf(area.size());
     double acc = 0;
-    for (Eigen::Index f = 0; f < area.size(); ++f) cdf[f] = (acc += area[f]);
+    for (Eigen::Index f = 0; f < area.size(); ++f) cdf[f] = (acc += area[f] * std::sqrt(face_density(f)));
     if (!(acc > 0)) throw InvalidInputError("initial_sites: the mesh has zero area");
     std::uniform_real_distribution<double> uni(0.0, 1.0);
     for (int s = 0; s < count; ++s) {
@@ -67,8 +76,13 @@ std::vector<SurfacePoint> initial_sites(const Eigen::MatrixX3d& V, const Eigen::
     }
     return sites;
   }
-  // farthest-point sampling on the edge graph
-  const EdgeGraph g = edge_graph(V, F);
+  // farthest-point sampling on the edge graph; with a density, edges measured in units of the
+  // local cell diameter (length × the mean of ρ^(1/4) at its ends)
+  EdgeGraph g = edge_graph(V, F);
+  if (dense)
+    for (int v = 0; v < g.num_vertices(); ++v)
+      for (int e = g.off[v]; e < g.off[v + 1]; ++e)
+        g.len[e] *= 0.5 * (std::pow(vertex_density[v], 0.25) + std::pow(vertex_density[g.nbr[e]], 0.25));
   const int n = static_cast<int>(V.rows());
   std::vector<std::vector<int>> vf = vertex_faces(n, F);
   if (count > n) throw InvalidInputError("initial_sites: more sites than vertices");
@@ -276,7 +290,8 @@ struct FaceMoments {
 // share a label belong to it; the others are clipped exactly (face_clipper.h) by the Euclidean
 // bisector planes of their corner labels: u_i = −|x − p_i|² differs from a linear function on the
 // face by a term common to all sites, so u_i − u_j is linear, as the heat differences of eq. 20 are.
-// `whole_moment`: area · centroid of face f (the first moment when one cell holds the face).
+// `area`: the face's mass (its area times its density, CvtSurface::face_mass); `whole_moment`:
+// mass · centroid of face f (the first moment when one cell holds the face).
 // `fns`, `pieces`, `scratch`: per-thread work space.
 void restricted_face_moments(const std::vector<Eigen::Vector3d>& X, const Eigen::MatrixX3i& F, int f, double area,
                              const Eigen::Vector3d& whole_moment, const std::vector<int>& label,
@@ -403,7 +418,7 @@ std::vector<SurfacePoint> surface_lloyd(const CvtSurface& surface, std::vector<S
   std::vector<FaceMoments> moments(nf);
   std::vector<Eigen::Vector3d> whole_moment(nf);
   for (int f = 0; f < nf; ++f)
-    whole_moment[f] = surface.face_area[f] * (X[F(f, 0)] + X[F(f, 1)] + X[F(f, 2)]) / 3.0;
+    whole_moment[f] = surface.face_mass[f] * (X[F(f, 0)] + X[F(f, 1)] + X[F(f, 2)]) / 3.0;
   for (int it = 0; it < options.iterations; ++it) {
     // Parallel loops write per-vertex / per-face / per-site results that are then combined
     // serially in index order: the same result for every thread count.
@@ -415,7 +430,7 @@ std::vector<SurfacePoint> surface_lloyd(const CvtSurface& surface, std::vector<S
     std::fill(mass.begin(), mass.end(), 0.0);
     double energy = 0;
     for (int v = 0; v < n; ++v)
-      if (label[v] >= 0) energy += surface.vertex_area[v] * key[v];
+      if (label[v] >= 0) energy += surface.vertex_area[v] * (surface.has_density() ? surface.vertex_density[v] : 1.0) * key[v];
 #pragma omp parallel num_threads(threads)
     {
       std::vector<FaceFunction> fns;
@@ -423,7 +438,7 @@ std::vector<SurfacePoint> surface_lloyd(const CvtSurface& surface, std::vector<S
       FaceClipScratch scratch;
 #pragma omp for schedule(dynamic, 1024)
       for (int f = 0; f < nf; ++f)
-        restricted_face_moments(X, F, f, surface.face_area[f], whole_moment[f], label, P, moments[f], fns, pieces,
+        restricted_face_moments(X, F, f, surface.face_mass[f], whole_moment[f], label, P, moments[f], fns, pieces,
                                 scratch);
     }
     for (int f = 0; f < nf; ++f)
@@ -491,7 +506,7 @@ CvtStartReport cvt_start(const CvtSurface& surface, const CvtOptions& options, b
                          std::vector<SurfacePoint>& sites, const std::function<int()>& threads_now) {
   CvtStartReport report;
   const Eigen::MatrixX3i& F = surface.F;
-  if (sites.empty()) sites = generated_sites(surface.V, F, options);
+  if (sites.empty()) sites = generated_sites(surface.V, F, options, surface.vertex_density);
   const int ns = static_cast<int>(sites.size());
   const auto tg = Clock::now();
   if (options.graph_lloyd_iterations > 0) {

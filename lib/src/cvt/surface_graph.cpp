@@ -102,8 +102,13 @@ SurfacePoint project_local(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
   return cur;
 }
 
-CvtSurface::CvtSurface(const Eigen::MatrixX3d& V_, const Eigen::MatrixX3i& F_)
+CvtSurface::CvtSurface(const Eigen::MatrixX3d& V_, const Eigen::MatrixX3i& F_, const Eigen::VectorXd& density)
     : V(V_), F(F_), graph(edge_graph(V_, F_)), vfaces(vertex_faces(static_cast<int>(V_.rows()), F_)),
-      face_area(face_areas(V_, F_)), vertex_area(lumped_vertex_areas(F_, face_area, static_cast<int>(V_.rows()))) {}
+      face_area(face_areas(V_, F_)), vertex_area(lumped_vertex_areas(F_, face_area, static_cast<int>(V_.rows()))),
+      face_mass(face_area), vertex_density(density) {
+  if (density.size() == 0) return;
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    face_mass[f] *= (density[F(f, 0)] + density[F(f, 1)] + density[F(f, 2)]) / 3.0;
+}
 
 }  // namespace heatcvt

@@ -20,17 +20,29 @@ namespace {
 constexpr double kDegree = M_PI / 180.0;
 
 struct Edge {
-  double length;
-  int a, b;  // a→b is a half-edge of a face
+  double length;  // over the relative size at the midpoint (IsotropicRemeshOptions::relative_size)
+  int a, b;       // a→b is a half-edge of a face
 };
 
+// The relative target size at x (1 without a sizing field).
+double relative_size_at(const IsotropicRemeshOptions& o, const Eigen::Vector3d& x) {
+  return o.relative_size ? o.relative_size(x) : 1.0;
+}
+
+// Length of the segment x–y over the relative size at its midpoint.
+double relative_length(const IsotropicRemeshOptions& o, const Eigen::Vector3d& x, const Eigen::Vector3d& y) {
+  const double length = (x - y).norm();
+  return o.relative_size ? length / o.relative_size(0.5 * (x + y)) : length;
+}
+
 // Every undirected edge once: the half-edge a→b with a < b, or the border half-edge.
-std::vector<Edge> mesh_edges(const WorkingMesh& mesh) {
+std::vector<Edge> mesh_edges(const WorkingMesh& mesh, const IsotropicRemeshOptions& o) {
   std::vector<Edge> edges;
   for (const MeshFace& f : mesh.faces())
     for (int k = 0; k < 3; ++k) {
       const int a = f[k], b = f[(k + 1) % 3];
-      if (a < b || !mesh.has_half_edge(b, a)) edges.push_back({(mesh.V.row(a) - mesh.V.row(b)).norm(), a, b});
+      if (a < b || !mesh.has_half_edge(b, a))
+        edges.push_back({relative_length(o, mesh.V.row(a).transpose(), mesh.V.row(b).transpose()), a, b});
     }
   return edges;
 }
@@ -72,7 +84,7 @@ bool split_keeps_facing(const WorkingMesh& mesh, int a, int b, int c, const Eige
 // (< 0: no limit).
 int split_edges(WorkingMesh& mesh, const SurfaceProjector& surface, const IsotropicRemeshOptions& o,
                 const std::vector<char>& frozen, double limit, int budget) {
-  std::vector<Edge> edges = mesh_edges(mesh);
+  std::vector<Edge> edges = mesh_edges(mesh, o);
   sort_edges(edges, true);
   // The splits are chosen on the mesh as it is, then the new vertices added at once (no copy of
   // the vertex arrays per split) and the faces edited.
@@ -89,6 +101,7 @@ int split_edges(WorkingMesh& mesh, const SurfaceProjector& surface, const Isotro
     Split s{a, b, third_vertex(mesh.face(f1), a, b), f2 >= 0 ? third_vertex(mesh.face(f2), a, b) : -1, f1, f2,
             mesh.anchor[a], {}, {}};
     const Eigen::Vector3d mid = 0.5 * (mesh.V.row(a) + mesh.V.row(b)).transpose();
+    const double length = (mesh.V.row(a) - mesh.V.row(b)).norm();
     // A border edge of a surface with a known border gets its new vertex on that border.
     // Where the border point is beyond the face's opposite vertex (a corner of the border far
     // from the edge), the new vertex goes part of the way to it, onto the surface;
@@ -99,8 +112,8 @@ int split_edges(WorkingMesh& mesh, const SurfaceProjector& surface, const Isotro
     if (on_border) {
       max_offset = o.max_border_split_offset;
       s.pos = at;
-      if ((at - mid).norm() > max_offset * e.length) {
-        at = mid + max_offset * e.length * (at - mid).normalized();
+      if ((at - mid).norm() > max_offset * length) {
+        at = mid + max_offset * length * (at - mid).normalized();
         surface.project(at, s.hint, s.pos, s.nrm);
       }
       for (double t : {0.5, 0.25, 0.0}) {
@@ -110,7 +123,7 @@ int split_edges(WorkingMesh& mesh, const SurfaceProjector& surface, const Isotro
     } else {
       surface.project(mid, s.hint, s.pos, s.nrm);
     }
-    if (!s.pos.allFinite() || !s.nrm.allFinite() || !((s.pos - mid).norm() <= max_offset * e.length)) continue;
+    if (!s.pos.allFinite() || !s.nrm.allFinite() || !((s.pos - mid).norm() <= max_offset * length)) continue;
     if (!split_keeps_facing(mesh, a, b, s.c, s.pos, o) || (f2 >= 0 && !split_keeps_facing(mesh, b, a, s.d, s.pos, o)))
       continue;
     touched[f1] = 1;
@@ -173,7 +186,7 @@ class Collapser {
   }
 
   int run(double limit, int budget) {
-    std::vector<Edge> edges = mesh_edges(mesh_);
+    std::vector<Edge> edges = mesh_edges(mesh_, o_);
     sort_edges(edges, false);
     int done = 0;
     for (const Edge& e : edges) {
@@ -307,7 +320,8 @@ class Collapser {
       const Eigen::Vector3d new_n = (p[1] - p[0]).cross(p[2] - p[0]);
       if (!(new_n.norm() > 0) || !(old_n.norm() > 0) || new_n.normalized().dot(old_n.normalized()) < min_cos) return false;
       for (int q = 0; q < 3; ++q)
-        if ((h[q] == a || h[q] == b) && !((p[(q + 1) % 3] - pos).norm() <= long_limit_ && (p[(q + 2) % 3] - pos).norm() <= long_limit_))
+        if ((h[q] == a || h[q] == b) && !(relative_length(o_, p[(q + 1) % 3], pos) <= long_limit_ &&
+                                          relative_length(o_, p[(q + 2) % 3], pos) <= long_limit_))
           return false;
     }
     mesh_.V.row(keep) = pos.transpose();
@@ -437,11 +451,15 @@ int fill_notches(WorkingMesh& mesh, const IsotropicRemeshOptions& o, const std::
 }
 
 // Edge length of equilateral triangles that give the target count on the mesh's area
-// (V ≈ 2A / (√3 L²)).
+// (V ≈ 2A / (√3 L²)); with a sizing field, the uniform length L whose local lengths L·g give it
+// (each face's area counted over g² at its centroid).
 double target_length(const WorkingMesh& mesh, const IsotropicRemeshOptions& o) {
   double area = 0;
-  for (const MeshFace& f : mesh.faces())
-    area += 0.5 * (mesh.V.row(f[1]) - mesh.V.row(f[0])).cross(mesh.V.row(f[2]) - mesh.V.row(f[0])).norm();
+  for (const MeshFace& f : mesh.faces()) {
+    const double a = 0.5 * (mesh.V.row(f[1]) - mesh.V.row(f[0])).cross(mesh.V.row(f[2]) - mesh.V.row(f[0])).norm();
+    const double g = relative_size_at(o, (mesh.V.row(f[0]) + mesh.V.row(f[1]) + mesh.V.row(f[2])).transpose() / 3.0);
+    area += a / (g * g);
+  }
   return o.target_vertices > 0 ? std::sqrt(2.0 * area / (std::sqrt(3.0) * o.target_vertices)) : 0.0;
 }
 

@@ -16,9 +16,14 @@ enum class CvtInitialization;
 struct CvtOptions;
 
 /// Initial sites: area-uniform random points (seeded) or farthest-point sampling (graph geodesics).
-/// \throw InvalidInputError if count < 1 (or > #V for farthest-point sampling).
+/// With `vertex_density` (#V values ρ > 0, a CVT with density: cells of diameter ∝ ρ^(-1/4)) the
+/// random points are drawn in proportion to area × ρ^(1/2) and the farthest points measure each
+/// edge by its length × ρ^(1/4), so the start is already spread as the density asks.
+/// \throw InvalidInputError if count < 1 (or > #V for farthest-point sampling), or a density of
+/// the wrong size, not finite or not positive.
 std::vector<SurfacePoint> initial_sites(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, int count,
-                                        CvtInitialization method, std::uint32_t seed);
+                                        CvtInitialization method, std::uint32_t seed,
+                                        const Eigen::VectorXd& vertex_density = Eigen::VectorXd());
 
 /// The sites sorted by the Morton code of their positions (spatial_order.h): neighbouring cells
 /// get neighbouring site numbers (CvtOptions::spatial_site_order).
@@ -26,9 +31,10 @@ std::vector<SurfacePoint> in_spatial_order(const Eigen::MatrixX3d& V, const Eige
                                            std::vector<SurfacePoint> sites);
 
 /// The generated start sites of a CVT run: initial_sites() with the options' count, method and
-/// seed, in_spatial_order() when options.spatial_site_order.
+/// seed (and `vertex_density`), in_spatial_order() when options.spatial_site_order.
 std::vector<SurfacePoint> generated_sites(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
-                                          const CvtOptions& options);
+                                          const CvtOptions& options,
+                                          const Eigen::VectorXd& vertex_density = Eigen::VectorXd());
 
 /// Graph Lloyd (CvtOptions::graph_lloyd_iterations): cells = graph_voronoi() of the sources,
 /// new source = the vertex of the cell closest to the cell's area-weighted mean position
@@ -69,7 +75,8 @@ struct SurfaceLloydOptions {
 };
 
 /// Cheap surface Lloyd on the input mesh (CvtOptions::surface_lloyd_iterations): cells =
-/// restricted_labels(), centroid = mean position of the restricted cell (faces on cell borders
+/// restricted_labels(), centroid = mean position of the restricted cell, weighted by the surface's
+/// density where it has one (CvtSurface::face_mass) (faces on cell borders
 /// clipped exactly by the Euclidean bisector planes with face_clipper.h, as eq. 20 clips by
 /// heat), projected onto the surface by a greedy walk from the cell's vertex closest to it, with
 /// over-relaxation ω (safeguarded by the lumped CVT energy Σ a_v |x_v − p_label(v)|²). Sites whose

@@ -41,14 +41,23 @@ SurfacePoint project_local(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
                            const Eigen::Vector3d& p, int max_steps = 256, double min_gain = 1e-12);
 
 /// The surface data every CVT step reads: the mesh (by reference: it must outlive this), its
-/// edge graph, faces per vertex, face areas and lumped vertex areas.
+/// edge graph, faces per vertex, face areas and lumped vertex areas, and the CVT's density.
 struct CvtSurface {
-  CvtSurface(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F);
+  /// `vertex_density`: optional #V densities ρ > 0 of a CVT with density (empty = uniform); a
+  /// face's density is the mean of its corners'.
+  CvtSurface(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F,
+             const Eigen::VectorXd& vertex_density = Eigen::VectorXd());
   const Eigen::MatrixX3d& V;
   const Eigen::MatrixX3i& F;
   EdgeGraph graph;
   std::vector<std::vector<int>> vfaces;
   Eigen::VectorXd face_area, vertex_area;
+  /// face_area × the face's density: the mass of a face in the centroids (= face_area without
+  /// a density).
+  Eigen::VectorXd face_mass;
+  /// The #V densities given (empty = uniform).
+  Eigen::VectorXd vertex_density;
+  bool has_density() const { return vertex_density.size() > 0; }
   int num_vertices() const { return static_cast<int>(V.rows()); }
 };
 

@@ -17,7 +17,9 @@
 #include "heatcvt/mesher/tips.h"
 #include "heatcvt/mesher/working_mesh.h"
 
+#include <Eigen/Core>
 #include <cmath>
+#include <functional>
 
 namespace heatcvt {
 
@@ -69,6 +71,11 @@ struct IsotropicRemeshOptions {
   /// A mesh that meets the shape targets and whose count is off by at most this fraction of the
   /// target only has its count adjusted (no remeshing rounds). Default 0.05.
   double reshape_count_error = 0.05;
+  /// The target edge length at a point of the surface as a multiple of the uniform one
+  /// (adaptive_sizing.h: SizingField); empty = uniform. Where given, edges are split, collapsed
+  /// and ordered by their length over this factor at their midpoint, and the uniform length is
+  /// the one whose local lengths give the target count. Default empty.
+  std::function<double(const Eigen::Vector3d&)> relative_size;
   /// Split, collapse, flip and relax rounds; the target edge length is corrected after each
   /// round by the ratio of the vertex count to the target. Default 8.
   int rounds = 8;

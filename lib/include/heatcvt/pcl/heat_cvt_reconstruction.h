@@ -106,6 +106,16 @@ class HeatCVTReconstruction : public pcl::SurfaceReconstruction<PointT> {
   void setAnisotropy(double lambda) { options_.anisotropy = lambda; }
   double getAnisotropy() const { return options_.anisotropy; }
 
+  /// Curvature-adaptive sizing (heatcvt/adaptive_sizing.h): edge length ∝ κ^(-A/2) of the
+  /// largest curvature κ, A in [0, 2] (0 = uniform, 1 = the same chord error everywhere), the
+  /// largest over the smallest edge length at most `max_size_ratio` (≥ 1); the vertex count
+  /// stays the sites asked for. Default 0 and 3.
+  void setAdaptivity(double adaptivity, double max_size_ratio = 3.0) {
+    options_.adaptive.adaptivity = adaptivity;
+    options_.adaptive.max_size_ratio = max_size_ratio;
+  }
+  double getAdaptivity() const { return options_.adaptive.adaptivity; }
+
   /// Threads (OpenMP); 0 = all hardware threads. The mesh does not depend on it. Default 0.
   void setNumberOfThreads(int threads) { options_.threads = threads; }
   int getNumberOfThreads() const { return options_.threads; }

@@ -1,0 +1,83 @@
+#pragma once
+/// \file adaptive_sizing.h
+/// Curvature-adaptive sizing: a relative target edge length g per point of a surface, smaller
+/// where the surface bends, scaled so that a mesh following it keeps the vertex count asked for.
+///
+/// The rule: with κ the largest normal curvature at a point, a chord of length ℓ deviates from
+/// the surface by about ℓ²κ/8, so ℓ ∝ κ^(-1/2) makes that error the same everywhere. The sizing
+/// takes g ∝ κ^(-a/2) with the adaptivity a ∈ [0, 1] (0 = uniform, 1 = equal chord error),
+/// bounds the ratio of the largest to the smallest size, smooths it over a few site spacings and
+/// scales it so that ∫ g⁻² dA equals the area (equilateral triangles of edge ℓ·g then give the
+/// uniform count).
+///
+/// The CVT reaches it through a density ρ = g⁻⁴ (cells of a CVT with density ρ on a surface have a
+/// diameter ∝ ρ^(-1/4): centroidal_voronoi()'s vertex_density), the mesher's sizing stage through
+/// g itself (IsotropicRemeshOptions::relative_size).
+#include <Eigen/Core>
+#include <memory>
+
+namespace heatcvt {
+
+class PointIndex;
+
+/// Options of relative_sizes().
+struct AdaptiveSizingOptions {
+  /// The exponent a of g ∝ κ^(-a/2): 0 = uniform sizing (every g = 1), 1 = the same chord error
+  /// everywhere. Default 0.
+  double adaptivity = 0.0;
+  /// Largest over smallest relative size (the curvatures are clamped to a range that gives at
+  /// most this ratio). Default 3.
+  double max_size_ratio = 3.0;
+  /// Radius of the curvature estimate, in uniform site spacings sqrt(area / sites): the tips and
+  /// rims a mesh at this spacing must follow are about that wide. Default 0.5.
+  double radius_spacings = 0.5;
+  /// Radius of the smoothing of the sizes (the area-weighted mean of log g within it), in uniform
+  /// site spacings: wider than the curvature's, so the sizes change over a few cells and the
+  /// triangles between fine and coarse regions keep their shape (at 1,000 vertices, armadillo's
+  /// remesh lost 2.8° of φm to the uniform one with 0.5, 0.8° with 1.5; docs/benchmarks.md).
+  /// Default 1.5.
+  double smoothing_spacings = 1.5;
+  /// A point's curvature: this quantile of the normal curvatures towards its neighbours within
+  /// the radius. 0.75 gives the curvature of a sphere exactly and 0.85 of the larger principal
+  /// curvature of a cylinder, without following the noisiest neighbour. Default 0.75.
+  double curvature_quantile = 0.75;
+  /// The finest size goes to the curvatures at and above this quantile over the points (a few
+  /// noisy or degenerate points do not set the scale of all the others). Default 0.99.
+  double curvature_cap_quantile = 0.99;
+  bool enabled() const { return adaptivity > 0; }
+};
+
+/// Curvature estimate per point: the `quantile` of |(n_j − n_i)·(p_j − p_i)| / |p_j − p_i|² over
+/// the points j within `radius` of p_i (the normal curvature along p_j − p_i: 1/R on a sphere of
+/// radius R); 0 where a point has no neighbour within the radius. A neighbour's normal facing
+/// away from n_i is turned first, so the normals need not be oriented.
+///   P #P by 3 positions, N #P by 3 unit normals; index: a PointIndex of P.
+/// Parallel over points; the result does not depend on the thread count.
+Eigen::VectorXd curvature_estimate(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N, const PointIndex& index,
+                                   double radius, double quantile, int threads = 0);
+
+/// Relative sizes g (#P, all 1 when !options.enabled()) of the points P with unit normals N and
+/// areas `weight` (a mesh's lumped vertex areas), for a uniform site spacing `spacing`
+/// (see the file comment). Σ weight·g⁻² = Σ weight; max g / min g ≤ max_size_ratio.
+/// \throw InvalidInputError on mismatched sizes, a non-positive spacing or total weight, or
+///        options out of range (adaptivity outside [0, 2], max_size_ratio < 1, a non-positive
+///        radius, quantiles outside [0, 1]).
+Eigen::VectorXd relative_sizes(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N, const Eigen::VectorXd& weight,
+                               double spacing, const AdaptiveSizingOptions& options, int threads = 0);
+
+/// The relative size at any point of space: that of the nearest of the points it was built on.
+/// Safe for concurrent queries; cheap to copy (the index is shared).
+class SizingField {
+ public:
+  /// P #P by 3 (P.rows() ≥ 1), sizes #P positive values.
+  /// \throw InvalidInputError on mismatched sizes, no point or a non-positive size.
+  SizingField(const Eigen::MatrixX3d& P, const Eigen::VectorXd& sizes);
+  double operator()(const Eigen::Vector3d& x) const;
+  const Eigen::VectorXd& sizes() const { return *sizes_; }
+
+ private:
+  std::shared_ptr<const PointIndex> index_;
+  std::shared_ptr<const Eigen::VectorXd> sizes_;
+};
+
+}  // namespace heatcvt

@@ -1,0 +1,118 @@
+// Curvature-adaptive relative sizes. See adaptive_sizing.h.
+#include "heatcvt/adaptive_sizing.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "heatcvt/errors.h"
+#include "heatcvt/parallel.h"
+#include "heatcvt/point_index.h"
+
+namespace heatcvt {
+namespace {
+
+// The q-quantile of `values` (reordered): the element of rank floor(q · (size − 1)).
+double quantile_of(std::vector<double>& values, double q) {
+  if (values.empty()) return 0.0;
+  const size_t k = static_cast<size_t>(std::floor(q * static_cast<double>(values.size() - 1)));
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+  return values[k];
+}
+
+void validate_sizing_inputs(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N, const Eigen::VectorXd& weight,
+                            double spacing, const AdaptiveSizingOptions& o) {
+  if (N.rows() != P.rows() || weight.size() != P.rows())
+    throw InvalidInputError("relative_sizes: " + std::to_string(P.rows()) + " points but " + std::to_string(N.rows()) +
+                            " normals and " + std::to_string(weight.size()) + " weights");
+  if (!(spacing > 0) || !std::isfinite(spacing)) throw InvalidInputError("relative_sizes: the spacing must be > 0");
+  if (!(o.adaptivity >= 0 && o.adaptivity <= 2))
+    throw InvalidInputError("relative_sizes: adaptivity must be in [0, 2], got " + std::to_string(o.adaptivity));
+  if (!(o.max_size_ratio >= 1) || !std::isfinite(o.max_size_ratio))
+    throw InvalidInputError("relative_sizes: max_size_ratio must be >= 1, got " + std::to_string(o.max_size_ratio));
+  if (!(o.radius_spacings > 0) || !std::isfinite(o.radius_spacings) || !(o.smoothing_spacings >= 0) ||
+      !std::isfinite(o.smoothing_spacings))
+    throw InvalidInputError("relative_sizes: radius_spacings must be > 0 and smoothing_spacings >= 0");
+  if (!(o.curvature_quantile >= 0 && o.curvature_quantile <= 1) ||
+      !(o.curvature_cap_quantile >= 0 && o.curvature_cap_quantile <= 1))
+    throw InvalidInputError("relative_sizes: the curvature quantiles must be in [0, 1]");
+  if (!weight.allFinite() || !(weight.minCoeff() >= 0) || !(weight.sum() > 0))
+    throw InvalidInputError("relative_sizes: the weights must be >= 0 with a positive sum");
+}
+
+}  // namespace
+
+Eigen::VectorXd curvature_estimate(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N, const PointIndex& index,
+                                   double radius, double quantile, int threads) {
+  const int n = static_cast<int>(P.rows());
+  Eigen::VectorXd kappa = Eigen::VectorXd::Zero(n);
+#pragma omp parallel num_threads(resolve_threads(threads))
+  {
+    std::vector<double> normal_curvature;
+#pragma omp for schedule(dynamic, 256)
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector3d p = P.row(i).transpose(), ni = N.row(i).transpose();
+      normal_curvature.clear();
+      for (int j : index.within(p, radius)) {
+        const Eigen::Vector3d d = P.row(j).transpose() - p;
+        const double d2 = d.squaredNorm();
+        if (j == i || !(d2 > 0)) continue;
+        // Unoriented normals (a cloud's) are turned to agree with n_i first.
+        const Eigen::Vector3d nj = N.row(j).dot(ni) < 0 ? Eigen::Vector3d(-N.row(j).transpose()) : Eigen::Vector3d(N.row(j).transpose());
+        normal_curvature.push_back(std::abs((nj - ni).dot(d)) / d2);
+      }
+      kappa[i] = quantile_of(normal_curvature, quantile);
+    }
+  }
+  return kappa;
+}
+
+Eigen::VectorXd relative_sizes(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N, const Eigen::VectorXd& weight,
+                               double spacing, const AdaptiveSizingOptions& o, int threads) {
+  validate_sizing_inputs(P, N, weight, spacing, o);
+  const int n = static_cast<int>(P.rows());
+  Eigen::VectorXd g = Eigen::VectorXd::Ones(n);
+  if (!o.enabled() || n == 0) return g;
+  const PointIndex index(P);
+  const double radius = o.radius_spacings * spacing;
+  const Eigen::VectorXd kappa = curvature_estimate(P, N, index, radius, o.curvature_quantile, threads);
+  std::vector<double> sorted(kappa.data(), kappa.data() + n);
+  const double cap = quantile_of(sorted, o.curvature_cap_quantile);
+  if (!(cap > 0)) return g;  // flat everywhere: uniform
+  // Curvatures clamped to [cap · ratio^(-2/a), cap]: g = κ^(-a/2) then spans at most the ratio.
+  const double floor = cap * std::pow(o.max_size_ratio, -2.0 / o.adaptivity);
+  Eigen::VectorXd log_g(n);
+  for (int i = 0; i < n; ++i) log_g[i] = -0.5 * o.adaptivity * std::log(std::clamp(kappa[i], floor, cap));
+  // Smoothed (area-weighted mean of log g over smoothing_spacings): the gradation a mesh at this
+  // spacing can follow. A mean stays within the range, so the ratio bound holds.
+  const double smooth_radius = o.smoothing_spacings * spacing;
+#pragma omp parallel for schedule(dynamic, 256) num_threads(resolve_threads(threads))
+  for (int i = 0; i < n; ++i) {
+    double sum = 0, mass = 0;
+    for (int j : index.within(P.row(i).transpose(), smooth_radius)) sum += weight[j] * log_g[j], mass += weight[j];
+    g[i] = std::exp(mass > 0 ? sum / mass : log_g[i]);
+  }
+  // Scaled so that Σ w g⁻² = Σ w: the vertex count of the uniform sizing.
+  double inverse_square = 0;
+  for (int i = 0; i < n; ++i) inverse_square += weight[i] / (g[i] * g[i]);
+  g *= std::sqrt(inverse_square / weight.sum());
+  return g;
+}
+
+SizingField::SizingField(const Eigen::MatrixX3d& P, const Eigen::VectorXd& sizes) {
+  if (P.rows() == 0 || sizes.size() != P.rows())
+    throw InvalidInputError("SizingField: " + std::to_string(P.rows()) + " points and " + std::to_string(sizes.size()) +
+                            " sizes (need as many, at least one)");
+  if (!sizes.allFinite() || !(sizes.minCoeff() > 0)) throw InvalidInputError("SizingField: the sizes must be > 0");
+  index_ = std::make_shared<const PointIndex>(P);
+  sizes_ = std::make_shared<const Eigen::VectorXd>(sizes);
+}
+
+double SizingField::operator()(const Eigen::Vector3d& x) const {
+  double distance = 0;
+  const int i = index_->nearest(x, distance);
+  return i >= 0 ? (*sizes_)[i] : 1.0;
+}
+
+}  // namespace heatcvt

@@ -1,0 +1,207 @@
+// Curvature-adaptive sizing (adaptive_sizing.h): the curvature estimate on shapes of known
+// curvature, the relative sizes' normalisation and ratio bound, the CVT with density (cells
+// smaller where the density is higher) and meshcvt's adaptive remesh of an ellipsoid (finer at the
+// tips, closer to the input at the same vertex count, still a valid manifold), and cloud2mesh's
+// reconstruction of a cloud sampled from it.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "heatcvt/adaptive_sizing.h"
+#include "heatcvt/closest_point.h"
+#include "heatcvt/cvt.h"
+#include "heatcvt/cvt/surface_graph.h"
+#include "heatcvt/errors.h"
+#include "heatcvt/laplacian.h"
+#include "heatcvt/mesh.h"
+#include "heatcvt/point_index.h"
+#include "heatcvt/reconstruct.h"
+#include "heatcvt/remesh.h"
+#include "test_support.h"
+
+using namespace heatcvt;
+
+namespace {
+
+// Prolate ellipsoid with semi-axes (3, 1, 1): largest curvature 3 at the tips (x = ±3), 1 around
+// the middle (x = 0), every vertex on the exact surface.
+TriangleMesh ellipsoid() {
+  TriangleMesh m = test::icosphere(5);
+  m.V.col(0) *= 3.0;
+  return m;
+}
+
+Eigen::VectorXd vertex_areas(const TriangleMesh& m) {
+  return lumped_vertex_areas(m.F, face_areas(m.V, m.F), static_cast<int>(m.V.rows()));
+}
+
+// Largest distance from the vertices of `input` to the surface of `mesh`.
+double distance_from_input(const TriangleMesh& input, const TriangleMesh& mesh) {
+  const ClosestPointTree tree(mesh.V, mesh.F);
+  double worst = 0;
+  for (Eigen::Index i = 0; i < input.V.rows(); ++i) {
+    const Eigen::Vector3d p = input.V.row(i).transpose();
+    worst = std::max(worst, (position(mesh.V, mesh.F, tree.closest(p)) - p).norm());
+  }
+  return worst;
+}
+
+// Mean length of the edges of `mesh` whose midpoint has |x| in [lo, hi).
+double mean_edge_length(const TriangleMesh& mesh, double lo, double hi) {
+  double sum = 0;
+  int count = 0;
+  for (Eigen::Index f = 0; f < mesh.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d a = mesh.V.row(mesh.F(f, k)).transpose(), b = mesh.V.row(mesh.F(f, (k + 1) % 3)).transpose();
+      const double x = std::abs(0.5 * (a.x() + b.x()));
+      if (x >= lo && x < hi) sum += (a - b).norm(), ++count;
+    }
+  EXPECT_GT(count, 0) << "no edge with |x| in [" << lo << ", " << hi << ")";
+  return count ? sum / count : 0.0;
+}
+
+}  // namespace
+
+TEST(AdaptiveSizing, CurvatureOfASphereIsItsInverseRadiusAndOfAPlaneZero) {
+  TriangleMesh sphere = test::icosphere(4);
+  sphere.V *= 2.0;
+  const Eigen::MatrixX3d N = vertex_normals(sphere.V, sphere.F);
+  const PointIndex index(sphere.V);
+  const Eigen::VectorXd k = curvature_estimate(sphere.V, N, index, 0.4, 0.75);
+  for (Eigen::Index i = 0; i < k.size(); ++i) EXPECT_NEAR(k[i], 0.5, 0.025) << "vertex " << i;
+
+  const TriangleMesh plane = test::grid(20);
+  const Eigen::MatrixX3d up = vertex_normals(plane.V, plane.F);
+  const Eigen::VectorXd flat = curvature_estimate(plane.V, up, PointIndex(plane.V), 0.12, 0.75);
+  EXPECT_LT(flat.cwiseAbs().maxCoeff(), 1e-9);
+}
+
+TEST(AdaptiveSizing, RelativeSizesKeepTheCountWithinTheRatioAndShrinkAtTheTips) {
+  const TriangleMesh e = ellipsoid();
+  const Eigen::MatrixX3d N = vertex_normals(e.V, e.F);
+  const Eigen::VectorXd w = vertex_areas(e);
+  const double spacing = std::sqrt(surface_area(e.V, e.F) / 400);
+  AdaptiveSizingOptions o;
+  EXPECT_EQ(relative_sizes(e.V, N, w, spacing, o), Eigen::VectorXd::Ones(e.V.rows())) << "adaptivity 0 is uniform";
+  o.adaptivity = 1;
+  const Eigen::VectorXd g = relative_sizes(e.V, N, w, spacing, o);
+  double inverse_square = 0;
+  for (Eigen::Index i = 0; i < g.size(); ++i) inverse_square += w[i] / (g[i] * g[i]);
+  EXPECT_NEAR(inverse_square / w.sum(), 1.0, 1e-12) << "the count of the uniform sizing";
+  EXPECT_LE(g.maxCoeff() / g.minCoeff(), o.max_size_ratio * (1 + 1e-12));
+  // g ∝ κ^(-1/2): the tips (κ = 3) get about 1/√3 of the middle's (κ = 1) size.
+  double tip = 0, middle = 0;
+  int tips = 0, middles = 0;
+  for (Eigen::Index i = 0; i < g.size(); ++i) {
+    if (std::abs(e.V(i, 0)) > 2.9) tip += g[i], ++tips;
+    if (std::abs(e.V(i, 0)) < 0.1) middle += g[i], ++middles;
+  }
+  ASSERT_GT(tips, 0);
+  ASSERT_GT(middles, 0);
+  EXPECT_NEAR((tip / tips) / (middle / middles), 1 / std::sqrt(3.0), 0.1);
+
+  // The same sizes for every thread count.
+  for (int threads : test::kThreadCounts) EXPECT_EQ(relative_sizes(e.V, N, w, spacing, o, threads), g);
+}
+
+TEST(AdaptiveSizing, BadOptionsAreRefused) {
+  const TriangleMesh e = ellipsoid();
+  const Eigen::MatrixX3d N = vertex_normals(e.V, e.F);
+  const Eigen::VectorXd w = vertex_areas(e);
+  for (const auto& set : std::vector<void (*)(AdaptiveSizingOptions&)>{
+           [](AdaptiveSizingOptions& o) { o.adaptivity = -1; }, [](AdaptiveSizingOptions& o) { o.adaptivity = NAN; },
+           [](AdaptiveSizingOptions& o) { o.max_size_ratio = 0.5; }, [](AdaptiveSizingOptions& o) { o.radius_spacings = 0; },
+           [](AdaptiveSizingOptions& o) { o.smoothing_spacings = -1; },
+           [](AdaptiveSizingOptions& o) { o.curvature_quantile = 1.5; }}) {
+    AdaptiveSizingOptions o;
+    o.adaptivity = 1;
+    set(o);
+    EXPECT_THROW(relative_sizes(e.V, N, w, 0.1, o), InvalidInputError);
+  }
+  AdaptiveSizingOptions o;
+  EXPECT_THROW(relative_sizes(e.V, N, w, 0.0, o), InvalidInputError);
+  EXPECT_THROW(relative_sizes(e.V, N.topRows(3), w, 0.1, o), InvalidInputError);
+  EXPECT_THROW(SizingField(e.V, Eigen::VectorXd::Zero(e.V.rows())), InvalidInputError);
+}
+
+// A CVT with density ρ has cells of area ∝ ρ^(-1/2): with ρ 16 times higher on one half of a
+// sphere, the cells there are about 4 times smaller.
+TEST(AdaptiveSizing, ACvtWithDensityHasSmallerCellsWhereTheDensityIsHigher) {
+  const test::UnitSphere s = test::unit_area_sphere(4);
+  const Eigen::Index n = s.mesh.V.rows();
+  Eigen::VectorXd density(n);
+  const double r = std::sqrt(1.0 / (4 * M_PI));
+  for (Eigen::Index v = 0; v < n; ++v) density[v] = std::exp(std::log(16.0) * 0.5 * (1 + std::tanh(4 * s.mesh.V(v, 2) / r)));
+  CvtOptions o = fast_cvt_options(200);
+  const CvtResult r1 = centroidal_voronoi(s.mesh.V, s.mesh.F, s.laplacian, o, {}, {}, Eigen::VectorXd(), density);
+  double high = 0, low = 0;
+  int highs = 0, lows = 0;
+  for (Eigen::Index c = 0; c < r1.positions.rows(); ++c) {
+    const double z = r1.positions(c, 2) / r;
+    if (z > 0.5) high += r1.diagram.cell_area[c], ++highs;
+    if (z < -0.5) low += r1.diagram.cell_area[c], ++lows;
+  }
+  ASSERT_GT(highs, 0);
+  ASSERT_GT(lows, 0);
+  const double ratio = (high / highs) / (low / lows);
+  EXPECT_GT(ratio, 0.25 / 1.5);
+  EXPECT_LT(ratio, 0.25 * 1.5);
+  EXPECT_GT(highs, 2 * lows) << "the denser half gets more sites";
+
+  // Wrong densities are refused.
+  Eigen::VectorXd bad = density;
+  bad[0] = 0;
+  EXPECT_THROW(centroidal_voronoi(s.mesh.V, s.mesh.F, s.laplacian, o, {}, {}, Eigen::VectorXd(), bad), InvalidInputError);
+  EXPECT_THROW(centroidal_voronoi(s.mesh.V, s.mesh.F, s.laplacian, o, {}, {}, Eigen::VectorXd(), density.head(5)),
+               InvalidInputError);
+}
+
+// meshcvt's remesh of the ellipsoid at 400 vertices, uniform and adaptive (adaptivity 1): both
+// valid closed manifolds of genus 0 with the count; the adaptive one has shorter edges at the
+// tips relative to the middle and lies closer to the input.
+TEST(AdaptiveSizing, RemeshOfAnEllipsoidIsFinerAtTheTipsAndCloserToTheInput) {
+  const TriangleMesh e = ellipsoid();
+  RemeshOptions o;
+  o.cvt.sites = 400;
+  const RemeshResult uniform = remesh_cvt(e, o);
+  o.adaptive.adaptivity = 1;
+  const RemeshResult adaptive = remesh_cvt(e, o);
+  for (const RemeshResult* r : {&uniform, &adaptive}) {
+    EXPECT_TRUE(r->checks.ok()) << r->checks.summary();
+    EXPECT_NEAR(static_cast<double>(r->mesh.V.rows()), 400.0, 8.0);
+    EXPECT_GE(r->quality.min_angle_deg, 25.0);
+    EXPECT_GE(r->quality.mean_min_angle_deg, 50.0);
+  }
+  EXPECT_EQ(uniform.size_ratio, 1.0);
+  EXPECT_GT(adaptive.size_ratio, 1.5);
+  const double uniform_ratio = mean_edge_length(uniform.mesh, 2.4, 3.1) / mean_edge_length(uniform.mesh, 0, 0.6);
+  const double adaptive_ratio = mean_edge_length(adaptive.mesh, 2.4, 3.1) / mean_edge_length(adaptive.mesh, 0, 0.6);
+  EXPECT_LT(adaptive_ratio, 0.8 * uniform_ratio);
+  EXPECT_LT(distance_from_input(e, adaptive.mesh), 0.8 * distance_from_input(e, uniform.mesh));
+}
+
+// cloud2mesh's reconstruction of 40,000 points sampled from the ellipsoid at 400 vertices,
+// uniform and adaptive: the same properties as the remesh above, on the point path.
+TEST(AdaptiveSizing, ReconstructionOfAnEllipsoidCloudIsFinerAtTheTipsAndCloserToTheSurface) {
+  const TriangleMesh e = ellipsoid();
+  const Eigen::MatrixX3d P = sample_surface(e.V, e.F, 40000, 3);
+  ReconstructionOptions o;
+  o.sites = 400;
+  const ReconstructionResult uniform = reconstruct_surface(P, o);
+  o.adaptive.adaptivity = 1;
+  const ReconstructionResult adaptive = reconstruct_surface(P, o);
+  for (const ReconstructionResult* r : {&uniform, &adaptive}) {
+    EXPECT_TRUE(r->validation.ok()) << r->validation.summary();
+    EXPECT_NEAR(static_cast<double>(r->mesh.V.rows()), 400.0, 8.0);
+    EXPECT_GE(r->min_angle_deg, 25.0);
+    EXPECT_GE(r->mean_min_angle_deg, 50.0);
+  }
+  EXPECT_EQ(uniform.size_ratio, 1.0);
+  EXPECT_GT(adaptive.size_ratio, 1.5);
+  const double uniform_ratio = mean_edge_length(uniform.mesh, 2.4, 3.1) / mean_edge_length(uniform.mesh, 0, 0.6);
+  const double adaptive_ratio = mean_edge_length(adaptive.mesh, 2.4, 3.1) / mean_edge_length(adaptive.mesh, 0, 0.6);
+  EXPECT_LT(adaptive_ratio, 0.8 * uniform_ratio);
+  EXPECT_LT(distance_from_input(e, adaptive.mesh), 0.8 * distance_from_input(e, uniform.mesh));
+}
