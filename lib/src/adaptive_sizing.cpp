@@ -6,7 +6,9 @@
 #include <string>
 #include <vector>
 
+#include "heatcvt/cvt/surface_graph.h"
 #include "heatcvt/errors.h"
+#include "heatcvt/mesh.h"
 #include "heatcvt/parallel.h"
 #include "heatcvt/point_index.h"
 
@@ -113,6 +115,21 @@ double SizingField::operator()(const Eigen::Vector3d& x) const {
   double distance = 0;
   const int i = index_->nearest(x, distance);
   return i >= 0 ? (*sizes_)[i] : 1.0;
+}
+
+}  // namespace heatcvt
+
+namespace heatcvt {
+
+SurfaceSizing surface_sizing(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const Eigen::MatrixX3d& N, int sites,
+                             const AdaptiveSizingOptions& options, int threads) {
+  if (sites < 1) throw InvalidInputError("surface_sizing: sites must be >= 1, got " + std::to_string(sites));
+  const Eigen::VectorXd face_area = face_areas(V, F);
+  if (!(face_area.sum() > 0)) throw InvalidInputError("surface_sizing: the surface has no area");
+  const Eigen::VectorXd area = lumped_vertex_areas(F, face_area, static_cast<int>(V.rows()));
+  const Eigen::VectorXd g = relative_sizes(V, N, area, std::sqrt(face_area.sum() / sites), options, threads);
+  // Cells of a CVT with density ρ have a diameter ∝ ρ^(-1/4): ρ = g⁻⁴ gives cells of size ∝ g.
+  return {g.array().pow(-4.0).matrix(), SizingField(V, g), g.maxCoeff() / g.minCoeff()};
 }
 
 }  // namespace heatcvt

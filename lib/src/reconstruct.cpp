@@ -453,16 +453,14 @@ void copy_stats(const MesherStats& st, ReconstructionResult& res) {
 }
 
 // What one run of the CVT and the mesher reads: the CVT points, their triangles and Laplacian
-// (metric_area: the lifted metric's face areas, empty when isotropic), the adaptive sizing's
-// density of the CVT points and relative sizes (empty and null when uniform), the fitted
-// surface, the cloud's frame and its point count.
+// (metric_area: the lifted metric's face areas, empty when isotropic), the adaptive sizing of the
+// CVT points (null when uniform), the fitted surface, the cloud's frame and its point count.
 struct MeshingInputs {
   const CvtPoints& cp;
   const Eigen::MatrixX3i& T;
   const Laplacian& lap;
   const Eigen::VectorXd& metric_area;
-  const Eigen::VectorXd& density;
-  const SizingField* sizing;
+  const SurfaceSizing* sizing;
   const CloudSurfaceProjector& fit;
   const CloudFrame& frame;
   int points;
@@ -485,7 +483,7 @@ void cvt_and_mesh(const MeshingInputs& in, const ReconstructionOptions& options,
         report("cvt", options.iterations > 0 ? static_cast<double>(st.iteration) / options.iterations : 1.0);
         return true;
       },
-      in.metric_area, in.density);
+      in.metric_area, in.sizing ? in.sizing->density : Eigen::VectorXd());
   res.cvt_seconds = since(t1);
   res.factor_seconds = cvt.factor_seconds;
   res.iterations = static_cast<int>(cvt.iterations.size());
@@ -524,7 +522,7 @@ void cvt_and_mesh(const MeshingInputs& in, const ReconstructionOptions& options,
   if (mopt.split.max_vertices == 0) mopt.split.max_vertices = options.sites + options.sites / 50;
   // Every piece kept gets its share of the vertex count: sized to -n where the dual fell short.
   if (mopt.sizing.target_vertices == 0) mopt.sizing.target_vertices = options.sites;
-  if (in.sizing) mopt.sizing.relative_size = *in.sizing;
+  if (in.sizing) mopt.sizing.relative_size = in.sizing->field;
   MesherStats stats;
   mesh_from_candidates(mesh, candidates, in.fit, mopt, stats);
   report("mesh", 0.5);
@@ -711,23 +709,18 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
                                                : std::move(pl.laplacian);
   res.laplacian_seconds = since(t0);
   report("laplacian", 1);
-  // The adaptive sizing on the CVT points (adaptive_sizing.h): the CVT's density g⁻⁴
-  // (cells of diameter ∝ ρ^(-1/4)) and the mesher's relative sizes.
-  Eigen::VectorXd density;
-  std::unique_ptr<SizingField> sizing;
+  // The adaptive sizing on the CVT points (adaptive_sizing.h): the CVT's density and the
+  // mesher's relative sizes.
+  std::unique_ptr<SurfaceSizing> sizing;
   if (options.adaptive.enabled()) {
-    const Eigen::VectorXd area = lumped_vertex_areas(T, face_areas(cp.PC, T), static_cast<int>(cp.PC.rows()));
-    const Eigen::VectorXd g = relative_sizes(cp.PC, cp.NC, area, std::sqrt(surface_area(cp.PC, T) / options.sites),
-                                             options.adaptive, options.threads);
-    density = g.array().pow(-4.0).matrix();
-    sizing = std::make_unique<SizingField>(cp.PC, g);
-    res.size_ratio = g.maxCoeff() / g.minCoeff();
+    sizing = std::make_unique<SurfaceSizing>(surface_sizing(cp.PC, T, cp.NC, options.sites, options.adaptive, options.threads));
+    res.size_ratio = sizing->ratio;
     stage.done("adaptive sizing");
   }
 
   // 3.-5. The CVT, its mesh and the checks; again from other start sites where the mesh is far
   // off the count.
-  const MeshingInputs in{cp, T, lap, metric_area, density, sizing.get(), fit, cloud.frame, n};
+  const MeshingInputs in{cp, T, lap, metric_area, sizing.get(), fit, cloud.frame, n};
   res = mesh_with_retries(in, options, report, std::move(res));
   res.total_seconds = since(t_start);
   return res;

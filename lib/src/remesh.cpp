@@ -702,12 +702,11 @@ int crease_lines_missed(const CreaseStats& c) {
 void adapt_sizing(const TriangleMesh& work, RemeshOptions& options, CvtWeights& weights, RemeshResult& out) {
   if (!options.adaptive.enabled()) return;
   const auto t = Clock::now();
-  const Eigen::VectorXd area = lumped_vertex_areas(work.F, face_areas(work.V, work.F), static_cast<int>(work.V.rows()));
-  const Eigen::VectorXd g = relative_sizes(work.V, vertex_normals(work.V, work.F), area,
-                                           site_spacing(work, options.cvt.sites), options.adaptive, options.cvt.threads);
-  weights.vertex_density = g.array().pow(-4.0).matrix();  // cells of a CVT with density ρ: diameter ∝ ρ^(-1/4)
-  options.mesher.sizing.relative_size = SizingField(work.V, g);
-  out.size_ratio = g.maxCoeff() / g.minCoeff();
+  SurfaceSizing sizing = surface_sizing(work.V, work.F, vertex_normals(work.V, work.F), options.cvt.sites,
+                                        options.adaptive, options.cvt.threads);
+  weights.vertex_density = std::move(sizing.density);
+  options.mesher.sizing.relative_size = sizing.field;
+  out.size_ratio = sizing.ratio;
   out.stage_seconds.emplace_back("sizing", seconds_since(t));
 }
 

@@ -80,4 +80,18 @@ class SizingField {
   std::shared_ptr<const Eigen::VectorXd> sizes_;
 };
 
+/// The adaptive sizing of a triangulated surface for a number of sites: what the CVT and the
+/// mesher read (RemeshOptions::adaptive, ReconstructionOptions::adaptive).
+struct SurfaceSizing {
+  Eigen::VectorXd density;  ///< #V densities g⁻⁴ for centroidal_voronoi()'s vertex_density
+  SizingField field;        ///< g at any point, for IsotropicRemeshOptions::relative_size
+  double ratio = 1;         ///< largest over smallest g
+};
+
+/// relative_sizes() of the vertices of (V, F) (a mesh, or a cloud's point triangles) with unit
+/// normals N, weighted by their lumped areas, at the spacing sqrt(area / sites).
+/// \throw InvalidInputError as relative_sizes(), or on sites < 1 or a surface without area.
+SurfaceSizing surface_sizing(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const Eigen::MatrixX3d& N, int sites,
+                             const AdaptiveSizingOptions& options, int threads = 0);
+
 }  // namespace heatcvt
