@@ -64,17 +64,34 @@ double mean_edge_length(const TriangleMesh& mesh, double lo, double hi) {
 
 }  // namespace
 
-TEST(AdaptiveSizing, CurvatureOfASphereIsItsInverseRadiusAndOfAPlaneZero) {
+TEST(AdaptiveSizing, CurvatureIsTheLargerPrincipalCurvatureOnASphereACylinderAndAPlane) {
   TriangleMesh sphere = test::icosphere(4);
   sphere.V *= 2.0;
-  const Eigen::MatrixX3d N = vertex_normals(sphere.V, sphere.F);
+  const Eigen::MatrixX3d N = sphere.V.rowwise().normalized();
   const PointIndex index(sphere.V);
-  const Eigen::VectorXd k = curvature_estimate(sphere.V, N, index, 0.4, 0.75);
+  const Eigen::VectorXd k = curvature_estimate(sphere.V, N, index, 0.4, 1.0);
   for (Eigen::Index i = 0; i < k.size(); ++i) EXPECT_NEAR(k[i], 0.5, 0.025) << "vertex " << i;
+
+  // A cylinder of radius 0.5 (principal curvatures 2 and 0) with unoriented normals: the
+  // largest normal curvature is 2, a lower quantile less.
+  TriangleMesh cylinder = test::grid(60);
+  Eigen::MatrixX3d radial(cylinder.V.rows(), 3);
+  for (Eigen::Index i = 0; i < cylinder.V.rows(); ++i) {
+    const double a = 2 * M_PI * cylinder.V(i, 0), z = cylinder.V(i, 1);
+    cylinder.V.row(i) = Eigen::RowVector3d(0.5 * std::cos(a), 0.5 * std::sin(a), z);
+    radial.row(i) = (i % 2 ? 1.0 : -1.0) * Eigen::RowVector3d(std::cos(a), std::sin(a), 0);
+  }
+  const PointIndex cylinder_index(cylinder.V);
+  const Eigen::VectorXd largest = curvature_estimate(cylinder.V, radial, cylinder_index, 0.15, 1.0);
+  const Eigen::VectorXd median = curvature_estimate(cylinder.V, radial, cylinder_index, 0.15, 0.5);
+  for (Eigen::Index i = 0; i < cylinder.V.rows(); ++i) {
+    EXPECT_NEAR(largest[i], 2.0, 0.1) << "vertex " << i;
+    EXPECT_LT(median[i], 0.8 * largest[i]) << "vertex " << i;
+  }
 
   const TriangleMesh plane = test::grid(20);
   const Eigen::MatrixX3d up = vertex_normals(plane.V, plane.F);
-  const Eigen::VectorXd flat = curvature_estimate(plane.V, up, PointIndex(plane.V), 0.12, 0.75);
+  const Eigen::VectorXd flat = curvature_estimate(plane.V, up, PointIndex(plane.V), 0.12, 1.0);
   EXPECT_LT(flat.cwiseAbs().maxCoeff(), 1e-9);
 }
 
@@ -114,6 +131,16 @@ TEST(AdaptiveSizing, RelativeSizesKeepTheCountWithinTheRatioAndShrinkAtTheTips) 
   }
 }
 
+// A torus has the same larger principal curvature (1/r) all over: one size everywhere, though
+// its mean and Gaussian curvatures vary from the outer to the inner side.
+TEST(AdaptiveSizing, ATorusGetsOneSizeAllOver) {
+  const TriangleMesh t = test::torus(120, 60, 1.0, 0.4);
+  AdaptiveSizingOptions o;
+  o.adaptivity = 1;
+  const SurfaceSizing sizing = surface_sizing(t.V, t.F, vertex_normals(t.V, t.F), 500, o);
+  EXPECT_LT(sizing.ratio, 1.1);
+}
+
 TEST(AdaptiveSizing, BadOptionsAreRefused) {
   const TriangleMesh e = ellipsoid();
   const Eigen::MatrixX3d N = vertex_normals(e.V, e.F);
@@ -122,6 +149,7 @@ TEST(AdaptiveSizing, BadOptionsAreRefused) {
            [](AdaptiveSizingOptions& o) { o.adaptivity = -1; }, [](AdaptiveSizingOptions& o) { o.adaptivity = NAN; },
            [](AdaptiveSizingOptions& o) { o.max_size_ratio = 0.5; }, [](AdaptiveSizingOptions& o) { o.radius_spacings = 0; },
            [](AdaptiveSizingOptions& o) { o.smoothing_spacings = -1; },
+           [](AdaptiveSizingOptions& o) { o.min_pair_fraction = 1; },
            [](AdaptiveSizingOptions& o) { o.curvature_quantile = 1.5; }}) {
     AdaptiveSizingOptions o;
     o.adaptivity = 1;

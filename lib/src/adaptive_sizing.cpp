@@ -36,6 +36,8 @@ void validate_sizing_inputs(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N
   if (!(o.radius_spacings > 0) || !std::isfinite(o.radius_spacings) || !(o.smoothing_spacings >= 0) ||
       !std::isfinite(o.smoothing_spacings))
     throw InvalidInputError("relative_sizes: radius_spacings must be > 0 and smoothing_spacings >= 0");
+  if (!(o.min_pair_fraction >= 0 && o.min_pair_fraction < 1))
+    throw InvalidInputError("relative_sizes: min_pair_fraction must be in [0, 1)");
   if (!(o.curvature_quantile >= 0 && o.curvature_quantile <= 1) ||
       !(o.curvature_cap_quantile >= 0 && o.curvature_cap_quantile <= 1))
     throw InvalidInputError("relative_sizes: the curvature quantiles must be in [0, 1]");
@@ -46,9 +48,10 @@ void validate_sizing_inputs(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N
 }  // namespace
 
 Eigen::VectorXd curvature_estimate(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N, const PointIndex& index,
-                                   double radius, double quantile, int threads) {
+                                   double radius, double quantile, double min_distance, int threads) {
   const int n = static_cast<int>(P.rows());
   Eigen::VectorXd kappa = Eigen::VectorXd::Zero(n);
+  const double inner2 = min_distance * min_distance;
 #pragma omp parallel num_threads(resolve_threads(threads))
   {
     std::vector<double> normal_curvature;
@@ -59,7 +62,7 @@ Eigen::VectorXd curvature_estimate(const Eigen::MatrixX3d& P, const Eigen::Matri
       for (int j : index.within(p, radius)) {
         const Eigen::Vector3d d = P.row(j).transpose() - p;
         const double d2 = d.squaredNorm();
-        if (j == i || !(d2 > 0)) continue;
+        if (j == i || !(d2 > 0) || d2 < inner2) continue;
         // Unoriented normals (a cloud's) are turned to agree with n_i first.
         const Eigen::Vector3d nj = N.row(j).dot(ni) < 0 ? Eigen::Vector3d(-N.row(j).transpose()) : Eigen::Vector3d(N.row(j).transpose());
         normal_curvature.push_back(std::abs((nj - ni).dot(d)) / d2);
@@ -78,7 +81,8 @@ Eigen::VectorXd relative_sizes(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d
   if (!o.enabled() || n == 0) return g;
   const PointIndex index(P);
   const double radius = o.radius_spacings * spacing;
-  const Eigen::VectorXd kappa = curvature_estimate(P, N, index, radius, o.curvature_quantile, threads);
+  const Eigen::VectorXd kappa =
+      curvature_estimate(P, N, index, radius, o.curvature_quantile, o.min_pair_fraction * radius, threads);
   std::vector<double> sorted(kappa.data(), kappa.data() + n);
   const double cap = quantile_of(sorted, o.curvature_cap_quantile);
   if (!(cap > 0)) return g;  // flat everywhere: uniform

@@ -38,9 +38,18 @@ struct AdaptiveSizingOptions {
   /// Default 1.5.
   double smoothing_spacings = 1.5;
   /// A point's curvature: this quantile of the normal curvatures towards its neighbours within
-  /// the radius. 0.75 gives the curvature of a sphere exactly and 0.85 of the larger principal
-  /// curvature of a cylinder, without following the noisiest neighbour. Default 0.75.
-  double curvature_quantile = 0.75;
+  /// the radius. 1 (the largest) is the larger principal curvature in magnitude, the one the
+  /// chord error follows: a torus gets one size all over. 0.75 gives the curvature of a sphere
+  /// but 0.85 of a cylinder's, and sizes that vary over a torus; at 1,000 vertices of the shared
+  /// meshes its remeshes lay farther from the input on the tori and knots than the uniform ones
+  /// (docs/benchmarks.md). Default 1.
+  double curvature_quantile = 1.0;
+  /// ... over the neighbours at least this fraction of the radius away: an error δ of a normal
+  /// (a cloud's normals are estimated) changes a normal curvature by about δ / distance, so the
+  /// nearest neighbours would decide the largest one. On an ellipsoid (3, 1, 1) sampled by 40,000
+  /// points the sizes then span the √3 that the curvatures ask for (1.72–1.76 over five samplings;
+  /// 1.55–1.59 with every neighbour). Default 0.7.
+  double min_pair_fraction = 0.7;
   /// The finest size goes to the curvatures at and above this quantile over the points (a few
   /// noisy or degenerate points do not set the scale of all the others). Default 0.99.
   double curvature_cap_quantile = 0.99;
@@ -48,20 +57,20 @@ struct AdaptiveSizingOptions {
 };
 
 /// Curvature estimate per point: the `quantile` of |(n_j − n_i)·(p_j − p_i)| / |p_j − p_i|² over
-/// the points j within `radius` of p_i (the normal curvature along p_j − p_i: 1/R on a sphere of
-/// radius R); 0 where a point has no neighbour within the radius. A neighbour's normal facing
+/// the points j within `radius` of p_i and at least `min_distance` from it (the normal curvature
+/// along p_j − p_i: 1/R on a sphere of radius R); 0 where a point has no such neighbour. A neighbour's normal facing
 /// away from n_i is turned first, so the normals need not be oriented.
 ///   P #P by 3 positions, N #P by 3 unit normals; index: a PointIndex of P.
 /// Parallel over points; the result does not depend on the thread count.
 Eigen::VectorXd curvature_estimate(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N, const PointIndex& index,
-                                   double radius, double quantile, int threads = 0);
+                                   double radius, double quantile, double min_distance = 0, int threads = 0);
 
 /// Relative sizes g (#P, all 1 when !options.enabled()) of the points P with unit normals N and
 /// areas `weight` (a mesh's lumped vertex areas), for a uniform site spacing `spacing`
 /// (see the file comment). Σ weight·g⁻² = Σ weight; max g / min g ≤ max_size_ratio.
 /// \throw InvalidInputError on mismatched sizes, a non-positive spacing or total weight, or
 ///        options out of range (adaptivity outside [0, 2], max_size_ratio < 1, a non-positive
-///        radius, quantiles outside [0, 1]).
+///        radius, quantiles outside [0, 1], min_pair_fraction outside [0, 1)).
 Eigen::VectorXd relative_sizes(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N, const Eigen::VectorXd& weight,
                                double spacing, const AdaptiveSizingOptions& options, int threads = 0);
 
