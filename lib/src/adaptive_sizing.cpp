@@ -131,9 +131,21 @@ SurfaceSizing surface_sizing(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
   const Eigen::VectorXd face_area = face_areas(V, F);
   if (!(face_area.sum() > 0)) throw InvalidInputError("surface_sizing: the surface has no area");
   const Eigen::VectorXd area = lumped_vertex_areas(F, face_area, static_cast<int>(V.rows()));
-  const Eigen::VectorXd g = relative_sizes(V, N, area, std::sqrt(face_area.sum() / sites), options, threads);
+  const double spacing = std::sqrt(face_area.sum() / sites);
+  double edge_sum = 0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) edge_sum += (V.row(F(f, k)) - V.row(F(f, (k + 1) % 3))).norm();
+  AdaptiveSizingOptions o = options;
+  o.radius_spacings = std::max(o.radius_spacings, 1.5 * edge_sum / (3.0 * F.rows()) / spacing);
+  const Eigen::VectorXd g = relative_sizes(V, N, area, spacing, o, threads);
+  return {SizingField(V, g), g.maxCoeff() / g.minCoeff()};
+}
+
+Eigen::VectorXd SurfaceSizing::density_at(const Eigen::MatrixX3d& P) const {
   // Cells of a CVT with density ρ have a diameter ∝ ρ^(-1/4): ρ = g⁻⁴ gives cells of size ∝ g.
-  return {g.array().pow(-4.0).matrix(), SizingField(V, g), g.maxCoeff() / g.minCoeff()};
+  Eigen::VectorXd density(P.rows());
+  for (Eigen::Index i = 0; i < P.rows(); ++i) density[i] = std::pow(field(P.row(i).transpose()), -4.0);
+  return density;
 }
 
 }  // namespace heatcvt

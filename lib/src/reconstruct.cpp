@@ -483,7 +483,7 @@ void cvt_and_mesh(const MeshingInputs& in, const ReconstructionOptions& options,
         report("cvt", options.iterations > 0 ? static_cast<double>(st.iteration) / options.iterations : 1.0);
         return true;
       },
-      in.metric_area, in.sizing ? in.sizing->density : Eigen::VectorXd());
+      in.metric_area, in.sizing ? in.sizing->density_at(in.cp.PC) : Eigen::VectorXd());
   res.cvt_seconds = since(t1);
   res.factor_seconds = cvt.factor_seconds;
   res.iterations = static_cast<int>(cvt.iterations.size());

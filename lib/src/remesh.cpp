@@ -697,14 +697,16 @@ int crease_lines_missed(const CreaseStats& c) {
   return c.skipped_lines + c.dropped_crease_lines + (c.undone ? c.lines : 0);
 }
 
-// The adaptive sizing of the CVT's mesh `work` (RemeshOptions::adaptive): the CVT's density in
-// `weights`, the stages' sizing field in `options`, the ratio of the sizes in out.size_ratio.
-void adapt_sizing(const TriangleMesh& work, RemeshOptions& options, CvtWeights& weights, RemeshResult& out) {
+// The adaptive sizing of the input (RemeshOptions::adaptive, on its own vertices and normals):
+// the CVT's density on the vertices of its refinement `work` in `weights`, the stages' sizing
+// field in `options`, the ratio of the sizes in out.size_ratio.
+void adapt_sizing(const TriangleMesh& input, const TriangleMesh& work, RemeshOptions& options, CvtWeights& weights,
+                  RemeshResult& out) {
   if (!options.adaptive.enabled()) return;
   const auto t = Clock::now();
-  SurfaceSizing sizing = surface_sizing(work.V, work.F, vertex_normals(work.V, work.F), options.cvt.sites,
-                                        options.adaptive, options.cvt.threads);
-  weights.vertex_density = std::move(sizing.density);
+  const SurfaceSizing sizing = surface_sizing(input.V, input.F, vertex_normals(input.V, input.F), options.cvt.sites,
+                                              options.adaptive, options.cvt.threads);
+  weights.vertex_density = sizing.density_at(work.V);
   options.mesher.sizing.relative_size = sizing.field;
   out.size_ratio = sizing.ratio;
   out.stage_seconds.emplace_back("sizing", seconds_since(t));
@@ -751,7 +753,7 @@ RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions&
                                   : cotan_laplacian(work->V, work->F);
   out.degenerate_faces = static_cast<int>(laplacian.degenerate_faces.size());
   out.stage_seconds.emplace_back("laplacian", seconds_since(t));
-  adapt_sizing(*work, options, weights, out);
+  adapt_sizing(mesh, *work, options, weights, out);
 
   run_cvt(*work, laplacian, weights, options, {}, progress, out);
   // The stages orient every closed piece outward: not for a non-orientable input.

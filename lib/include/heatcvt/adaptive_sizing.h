@@ -92,13 +92,18 @@ class SizingField {
 /// The adaptive sizing of a triangulated surface for a number of sites: what the CVT and the
 /// mesher read (RemeshOptions::adaptive, ReconstructionOptions::adaptive).
 struct SurfaceSizing {
-  Eigen::VectorXd density;  ///< #V densities g⁻⁴ for centroidal_voronoi()'s vertex_density
-  SizingField field;        ///< g at any point, for IsotropicRemeshOptions::relative_size
-  double ratio = 1;         ///< largest over smallest g
+  SizingField field;  ///< g at any point, for IsotropicRemeshOptions::relative_size
+  double ratio = 1;   ///< largest over smallest g
+  /// The densities g⁻⁴ at the rows of P, for centroidal_voronoi()'s vertex_density (the vertices
+  /// the CVT runs on: the surface's own, or those of its refinement).
+  Eigen::VectorXd density_at(const Eigen::MatrixX3d& P) const;
 };
 
 /// relative_sizes() of the vertices of (V, F) (a mesh, or a cloud's point triangles) with unit
-/// normals N, weighted by their lumped areas, at the spacing sqrt(area / sites).
+/// normals N, weighted by their lumped areas, at the spacing sqrt(area / sites). The curvature's
+/// radius is at least 1.5 mean edge lengths of (V, F), so that every vertex of a mesh coarser
+/// than the sites has neighbours to measure it by (the sizes of a coarse mesh come from its own
+/// vertices and smooth normals, not from the flat faces of its refinement).
 /// \throw InvalidInputError as relative_sizes(), or on sites < 1 or a surface without area.
 SurfaceSizing surface_sizing(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const Eigen::MatrixX3d& N, int sites,
                              const AdaptiveSizingOptions& options, int threads = 0);
