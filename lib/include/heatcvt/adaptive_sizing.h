@@ -101,9 +101,10 @@ struct SurfaceSizing {
 
 /// relative_sizes() of the vertices of (V, F) (a mesh, or a cloud's point triangles) with unit
 /// normals N, weighted by their lumped areas, at the spacing sqrt(area / sites). The curvature's
-/// radius is at least 1.5 mean edge lengths of (V, F), so that every vertex of a mesh coarser
-/// than the sites has neighbours to measure it by (the sizes of a coarse mesh come from its own
-/// vertices and smooth normals, not from the flat faces of its refinement).
+/// radius is at least 1.5 mean edge lengths of (V, F) (its inner distance unchanged), so that
+/// every vertex of a mesh coarser than the sites has its one-ring to measure it by (the sizes of
+/// a coarse mesh come from its own vertices and smooth normals, not from the flat faces of its
+/// refinement).
 /// \throw InvalidInputError as relative_sizes(), or on sites < 1 or a surface without area.
 SurfaceSizing surface_sizing(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const Eigen::MatrixX3d& N, int sites,
                              const AdaptiveSizingOptions& options, int threads = 0);
