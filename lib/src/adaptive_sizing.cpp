@@ -64,8 +64,9 @@ Eigen::VectorXd curvature_estimate(const Eigen::MatrixX3d& P, const Eigen::Matri
         const double d2 = d.squaredNorm();
         if (j == i || !(d2 > 0) || d2 < inner2) continue;
         // Unoriented normals (a cloud's) are turned to agree with n_i first.
-        const Eigen::Vector3d nj = N.row(j).dot(ni) < 0 ? Eigen::Vector3d(-N.row(j).transpose()) : Eigen::Vector3d(N.row(j).transpose());
-        normal_curvature.push_back(std::abs((nj - ni).dot(d)) / d2);
+        const Eigen::Vector3d nj = N.row(j).transpose();
+        const Eigen::Vector3d turned = nj.dot(ni) < 0 ? Eigen::Vector3d(-nj) : nj;
+        normal_curvature.push_back(std::abs((turned - ni).dot(d)) / d2);
       }
       kappa[i] = quantile_of(normal_curvature, quantile);
     }
@@ -120,10 +121,6 @@ double SizingField::operator()(const Eigen::Vector3d& x) const {
   const int i = index_->nearest(x, distance);
   return i >= 0 ? (*sizes_)[i] : 1.0;
 }
-
-}  // namespace heatcvt
-
-namespace heatcvt {
 
 SurfaceSizing surface_sizing(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const Eigen::MatrixX3d& N, int sites,
                              const AdaptiveSizingOptions& options, int threads) {
