@@ -36,6 +36,9 @@ void validate_sizing_inputs(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N
   if (!(o.radius_spacings > 0) || !std::isfinite(o.radius_spacings) || !(o.smoothing_spacings >= 0) ||
       !std::isfinite(o.smoothing_spacings))
     throw InvalidInputError("relative_sizes: radius_spacings must be > 0 and smoothing_spacings >= 0");
+  if (!(o.thin_part_spacings >= 0) || !std::isfinite(o.thin_part_spacings) ||
+      !(o.thin_part_angle_deg >= 0 && o.thin_part_angle_deg <= 90))
+    throw InvalidInputError("relative_sizes: thin_part_spacings must be >= 0 and thin_part_angle_deg in [0, 90]");
   if (!(o.min_pair_fraction >= 0 && o.min_pair_fraction < 1))
     throw InvalidInputError("relative_sizes: min_pair_fraction must be in [0, 1)");
   if (!(o.curvature_quantile >= 0 && o.curvature_quantile <= 1) ||
@@ -43,6 +46,53 @@ void validate_sizing_inputs(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N
     throw InvalidInputError("relative_sizes: the curvature quantiles must be in [0, 1]");
   if (!weight.allFinite() || !(weight.minCoeff() >= 0) || !(weight.sum() > 0))
     throw InvalidInputError("relative_sizes: the weights must be >= 0 with a positive sum");
+}
+
+// The points on a thin part: another point within `radius` lies along both points' normal lines
+// (the segment within `angle_deg` of each normal, either way: the other side of the part, whatever
+// the orientation of the normals). Empty where radius is 0.
+std::vector<char> thin_parts(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N, const PointIndex& index,
+                             double radius, double angle_deg, int threads) {
+  const int n = static_cast<int>(P.rows());
+  std::vector<char> thin(radius > 0 ? n : 0, 0);
+  if (!(radius > 0)) return thin;
+  const double min_cos = std::cos(angle_deg * M_PI / 180.0);
+#pragma omp parallel for schedule(dynamic, 256) num_threads(resolve_threads(threads))
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d p = P.row(i).transpose();
+    for (int j : index.within(p, radius)) {
+      const Eigen::Vector3d d = P.row(j).transpose() - p;
+      const double length = d.norm();
+      if (j == i || !(length > 0)) continue;
+      if (std::abs(N.row(i).dot(d)) >= min_cos * length && std::abs(N.row(j).dot(d)) >= min_cos * length) {
+        thin[i] = 1;
+        break;
+      }
+    }
+  }
+  return thin;
+}
+
+// Scales g so that Σ w g⁻² = Σ w (the vertex count of the uniform sizing), with the points marked
+// in `capped` at most 1: those above are set to 1 and the others scaled again, until none is above
+// (each round caps more points, so at most n rounds; a few in practice).
+void scale_to_uniform_count(Eigen::VectorXd& g, const Eigen::VectorXd& weight, const std::vector<char>& capped) {
+  const Eigen::Index n = g.size();
+  std::vector<char> fixed(n, 0);
+  for (Eigen::Index round = 0; round <= n; ++round) {
+    double free_inverse = 0, fixed_inverse = 0;
+    for (Eigen::Index i = 0; i < n; ++i) (fixed[i] ? fixed_inverse : free_inverse) += weight[i] / (g[i] * g[i]);
+    const double target = weight.sum() - fixed_inverse;  // Σ w g⁻² the free points must give
+    if (!(free_inverse > 0) || !(target > 0)) return;
+    const double s = std::sqrt(free_inverse / target);
+    bool changed = false;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (fixed[i]) continue;
+      g[i] *= s;
+      if (!capped.empty() && capped[i] && g[i] > 1) g[i] = 1, fixed[i] = 1, changed = true;
+    }
+    if (!changed) return;
+  }
 }
 
 }  // namespace
@@ -100,10 +150,7 @@ Eigen::VectorXd relative_sizes(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d
     for (int j : index.within(P.row(i).transpose(), smooth_radius)) sum += weight[j] * log_g[j], mass += weight[j];
     g[i] = std::exp(mass > 0 ? sum / mass : log_g[i]);
   }
-  // Scaled so that Σ w g⁻² = Σ w: the vertex count of the uniform sizing.
-  double inverse_square = 0;
-  for (int i = 0; i < n; ++i) inverse_square += weight[i] / (g[i] * g[i]);
-  g *= std::sqrt(inverse_square / weight.sum());
+  scale_to_uniform_count(g, weight, thin_parts(P, N, index, o.thin_part_spacings * spacing, o.thin_part_angle_deg, threads));
   return g;
 }
 

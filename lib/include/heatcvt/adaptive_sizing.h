@@ -8,7 +8,7 @@
 /// takes g ∝ κ^(-a/2) with the adaptivity a ∈ [0, 1] (0 = uniform, 1 = equal chord error),
 /// bounds the ratio of the largest to the smallest size, smooths it over a few site spacings and
 /// scales it so that ∫ g⁻² dA equals the area (equilateral triangles of edge ℓ·g then give the
-/// uniform count).
+/// uniform count), with thin parts kept at or below the uniform size.
 ///
 /// The CVT reaches it through a density ρ = g⁻⁴ (cells of a CVT with density ρ on a surface have a
 /// diameter ∝ ρ^(-1/4): centroidal_voronoi()'s vertex_density), the mesher's sizing stage through
@@ -50,6 +50,17 @@ struct AdaptiveSizingOptions {
   /// points the sizes then span the √3 that the curvatures ask for (1.72–1.76 over five samplings;
   /// 1.55–1.59 with every neighbour). Default 0.7.
   double min_pair_fraction = 0.7;
+  /// Thin parts (an ear, a fin, a plate, a finger thinner than this many uniform site spacings):
+  /// a point with another point of the surface within this radius such that the segment between
+  /// them is within thin_part_angle_deg of both points' normal lines (the other side of the part)
+  /// gets no size above the uniform one. Coarser cells there (up to about twice the uniform size)
+  /// would span the part's thickness and the dual would open it or join its sides: armadillo's
+  /// clean 50k cloud at 3,000 sites had two holes at the ears without the cap, one with a radius
+  /// of 1.5 spacings, none with 3 (docs/benchmarks.md). The sizes of the other points are scaled
+  /// up to keep the count. 0 = off. Default 3.
+  double thin_part_spacings = 3.0;
+  /// See thin_part_spacings. Default 60°.
+  double thin_part_angle_deg = 60.0;
   /// The finest size goes to the curvatures at and above this quantile over the points (a few
   /// noisy or degenerate points do not set the scale of all the others). Default 0.99.
   double curvature_cap_quantile = 0.99;
@@ -67,10 +78,12 @@ Eigen::VectorXd curvature_estimate(const Eigen::MatrixX3d& P, const Eigen::Matri
 
 /// Relative sizes g (#P, all 1 when !options.enabled()) of the points P with unit normals N and
 /// areas `weight` (a mesh's lumped vertex areas), for a uniform site spacing `spacing`
-/// (see the file comment). Σ weight·g⁻² = Σ weight; max g / min g ≤ max_size_ratio.
+/// (see the file comment). Σ weight·g⁻² = Σ weight; max g / min g ≤ max_size_ratio where no
+/// thin part is capped (the cap can widen the ratio by the factor the other sizes grow by).
 /// \throw InvalidInputError on mismatched sizes, a non-positive spacing or total weight, or
 ///        options out of range (adaptivity outside [0, 2], max_size_ratio < 1, a non-positive
-///        radius, quantiles outside [0, 1], min_pair_fraction outside [0, 1)).
+///        radius, quantiles outside [0, 1], min_pair_fraction outside [0, 1), a negative
+///        thin_part_spacings or thin_part_angle_deg outside [0, 90]).
 Eigen::VectorXd relative_sizes(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N, const Eigen::VectorXd& weight,
                                double spacing, const AdaptiveSizingOptions& options, int threads = 0);
 
