@@ -5,7 +5,7 @@
 ///
 /// The rule: with κ the largest normal curvature at a point, a chord of length ℓ deviates from
 /// the surface by about ℓ²κ/8, so ℓ ∝ κ^(-1/2) makes that error the same everywhere. The sizing
-/// takes g ∝ κ^(-a/2) with the adaptivity a ∈ [0, 1] (0 = uniform, 1 = equal chord error),
+/// takes g ∝ κ^(-a/2) with the adaptivity a ∈ [0, 2] (0 = uniform, 1 = equal chord error),
 /// bounds the ratio of the largest to the smallest size, smooths it over a few site spacings and
 /// scales it so that ∫ g⁻² dA equals the area (equilateral triangles of edge ℓ·g then give the
 /// uniform count), with thin parts kept at or below the uniform size.
@@ -69,8 +69,8 @@ struct AdaptiveSizingOptions {
 
 /// Curvature estimate per point: the `quantile` of |(n_j − n_i)·(p_j − p_i)| / |p_j − p_i|² over
 /// the points j within `radius` of p_i and at least `min_distance` from it (the normal curvature
-/// along p_j − p_i: 1/R on a sphere of radius R); 0 where a point has no such neighbour. A neighbour's normal facing
-/// away from n_i is turned first, so the normals need not be oriented.
+/// along p_j − p_i: 1/R on a sphere of radius R); 0 where a point has no such neighbour. A
+/// neighbour's normal facing away from n_i is turned first, so the normals need not be oriented.
 ///   P #P by 3 positions, N #P by 3 unit normals; index: a PointIndex of P.
 /// Parallel over points; the result does not depend on the thread count.
 Eigen::VectorXd curvature_estimate(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N, const PointIndex& index,
