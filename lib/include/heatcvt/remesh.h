@@ -74,7 +74,8 @@ struct RemeshOptions {
   /// λ of the anisotropic lift (p, λn) (paper §7.1, Fig. 9: 0.05); 0 = isotropic. Default 0.
   double anisotropy = 0.0;
   /// Curvature-adaptive sizing (adaptive_sizing.h): where adaptive.adaptivity > 0, relative sizes
-  /// g are estimated on the (refined) input at the uniform site spacing, the CVT runs with the
+  /// g are estimated on the input's own vertices (not its refinement) at the uniform site
+  /// spacing (surface_sizing()), the CVT on the refined input runs with the
   /// density g⁻⁴ (smaller cells where the surface bends) and the post-CVT stages' sizing follows
   /// g (mesher.sizing.relative_size); the vertex count stays cvt.sites. The quality targets and
   /// the coverage rules keep their uniform spacing. Default uniform (adaptivity 0).
