@@ -279,7 +279,7 @@ void log_input_notes(const RemeshResult& res, const Settings& s) {
     char ratio[32];
     std::snprintf(ratio, sizeof ratio, "%.2f", res.size_ratio);
     cli::log_line(s.quiet, std::string("adaptive sizing: largest over smallest edge length ") + ratio +
-                               " (--size-ratio bounds it; 1 = the surface is flat at this spacing)");
+                               " (--size-ratio bounds it; 1 = one size all over)");
   }
   if (res.degenerate_faces)
     cli::log_line(s.quiet, "warning: " + std::to_string(res.degenerate_faces) + " degenerate faces in " +
