@@ -176,13 +176,10 @@ SurfaceSizing surface_sizing(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& 
   if (!(face_area.sum() > 0)) throw InvalidInputError("surface_sizing: the surface has no area");
   const Eigen::VectorXd area = lumped_vertex_areas(F, face_area, static_cast<int>(V.rows()));
   const double spacing = std::sqrt(face_area.sum() / sites);
-  double edge_sum = 0;
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) edge_sum += (V.row(F(f, k)) - V.row(F(f, (k + 1) % 3))).norm();
   // The radius reaches at least 1.5 mean edge lengths; the inner distance of the pairs stays
   // that of the options' radius, so the one-ring of a coarse mesh is measured.
   AdaptiveSizingOptions o = options;
-  o.radius_spacings = std::max(o.radius_spacings, 1.5 * edge_sum / (3.0 * F.rows()) / spacing);
+  o.radius_spacings = std::max(o.radius_spacings, 1.5 * mean_edge_length(V, F) / spacing);
   o.min_pair_fraction = options.min_pair_fraction * options.radius_spacings / o.radius_spacings;
   const Eigen::VectorXd g = relative_sizes(V, N, area, spacing, o, threads);
   return {SizingField(V, g), g.maxCoeff() / g.minCoeff()};

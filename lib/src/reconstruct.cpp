@@ -461,6 +461,7 @@ struct MeshingInputs {
   const Laplacian& lap;
   const Eigen::VectorXd& metric_area;
   const SurfaceSizing* sizing;
+  const Eigen::VectorXd& density;  // the sizing's density at the CVT points (empty when uniform)
   const CloudSurfaceProjector& fit;
   const CloudFrame& frame;
   int points;
@@ -483,7 +484,7 @@ void cvt_and_mesh(const MeshingInputs& in, const ReconstructionOptions& options,
         report("cvt", options.iterations > 0 ? static_cast<double>(st.iteration) / options.iterations : 1.0);
         return true;
       },
-      in.metric_area, in.sizing ? in.sizing->density_at(in.cp.PC) : Eigen::VectorXd());
+      in.metric_area, in.density);
   res.cvt_seconds = since(t1);
   res.factor_seconds = cvt.factor_seconds;
   res.iterations = static_cast<int>(cvt.iterations.size());
@@ -712,15 +713,17 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   // The adaptive sizing on the CVT points (adaptive_sizing.h): the CVT's density and the
   // mesher's relative sizes.
   std::unique_ptr<SurfaceSizing> sizing;
+  Eigen::VectorXd density;  // read once: the count retries rerun the CVT with it
   if (options.adaptive.enabled()) {
     sizing = std::make_unique<SurfaceSizing>(surface_sizing(cp.PC, T, cp.NC, options.sites, options.adaptive, options.threads));
+    density = sizing->density_at(cp.PC);
     res.size_ratio = sizing->ratio;
     stage.done("adaptive sizing");
   }
 
   // 3.-5. The CVT, its mesh and the checks; again from other start sites where the mesh is far
   // off the count.
-  const MeshingInputs in{cp, T, lap, metric_area, sizing.get(), fit, cloud.frame, n};
+  const MeshingInputs in{cp, T, lap, metric_area, sizing.get(), density, fit, cloud.frame, n};
   res = mesh_with_retries(in, options, report, std::move(res));
   res.total_seconds = since(t_start);
   return res;
