@@ -712,9 +712,24 @@ void adapt_sizing(const TriangleMesh& input, const TriangleMesh& work, RemeshOpt
   out.stage_seconds.emplace_back("sizing", seconds_since(t));
 }
 
-// The pipeline of remesh_cvt() on a mesh already in its unit frame.
-RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions& given, const CvtCallback& progress) {
-  RemeshOptions options = given;
+// What the stages and a fallback CVT run on (cvt_of_input()): the input, its refinement
+// for the CVT, the Laplacian and the weights, the options with the adaptive sizing in them.
+struct CvtInput {
+  const TriangleMesh& mesh;
+  TriangleMesh refined;
+  bool is_refined = false;
+  Laplacian laplacian;
+  CvtWeights weights;
+  RemeshOptions options;
+
+  const TriangleMesh& work() const { return is_refined ? refined : mesh; }
+};
+
+// The first part of remesh_cvt() on a mesh already in its unit frame: the input described and
+// refined where it has too few vertices per site, its Laplacian, the adaptive sizing, and the CVT
+// with its closed-ball repair (run_cvt()): `out` holds the dual, `in` what the rest runs on.
+void cvt_of_input(CvtInput& in, const CvtCallback& progress, RemeshResult& out) {
+  RemeshOptions& options = in.options;
   const int sites = options.cvt.sites;
   if (sites < 1) throw InvalidInputError("remesh_cvt: the number of sites must be >= 1, got " + std::to_string(sites));
   if (!(options.min_vertices_per_site >= 0) || !std::isfinite(options.min_vertices_per_site))
@@ -723,20 +738,18 @@ RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions&
       !(options.max_repair_fraction >= 0))
     throw InvalidInputError(
         "remesh_cvt: max_refinement_levels, repair_rounds, repair_iterations and max_repair_fraction must be >= 0");
-  RemeshResult out;
   auto t = Clock::now();
-  out.input = describe_surface(mesh);
+  out.input = describe_surface(in.mesh);
 
   // Enough resolution under every cell: midpoint subdivision keeps the surface and its topology.
-  TriangleMesh refined;
-  const TriangleMesh* work = &mesh;
   while (options.min_vertices_per_site > 0 && out.refinement_levels < options.max_refinement_levels &&
-         static_cast<double>(work->V.rows()) < options.min_vertices_per_site * sites) {
-    refined = midpoint_subdivide(*work);
-    work = &refined;
+         static_cast<double>(in.work().V.rows()) < options.min_vertices_per_site * sites) {
+    in.refined = midpoint_subdivide(in.work());
+    in.is_refined = true;
     ++out.refinement_levels;
   }
-  out.cvt_vertices = static_cast<int>(work->V.rows());
+  const TriangleMesh& work = in.work();
+  out.cvt_vertices = static_cast<int>(work.V.rows());
   if (sites > out.cvt_vertices)
     throw InvalidInputError("remesh_cvt: " + std::to_string(sites) + " sites exceed the " +
                             std::to_string(out.cvt_vertices) + " vertices of the input" +
@@ -747,15 +760,24 @@ RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions&
   out.stage_seconds.emplace_back("refine", seconds_since(t));
 
   t = Clock::now();
-  CvtWeights weights;
-  const Laplacian laplacian = options.anisotropy > 0
-                                  ? anisotropic_laplacian(work->V, work->F, options.anisotropy, &weights.face_metric_area)
-                                  : cotan_laplacian(work->V, work->F);
-  out.degenerate_faces = static_cast<int>(laplacian.degenerate_faces.size());
+  in.laplacian = options.anisotropy > 0
+                     ? anisotropic_laplacian(work.V, work.F, options.anisotropy, &in.weights.face_metric_area)
+                     : cotan_laplacian(work.V, work.F);
+  out.degenerate_faces = static_cast<int>(in.laplacian.degenerate_faces.size());
   out.stage_seconds.emplace_back("laplacian", seconds_since(t));
-  adapt_sizing(mesh, *work, options, weights, out);
+  adapt_sizing(in.mesh, work, options, in.weights, out);
 
-  run_cvt(*work, laplacian, weights, options, {}, progress, out);
+  run_cvt(work, in.laplacian, in.weights, options, {}, progress, out);
+}
+
+// The rest of remesh_cvt() after cvt_of_input(), with `given` options for the stages: the post-CVT
+// stages on the dual in `out` (and, where their result is refused, heat iterations and the stages
+// again), the creases, the explanations of failed checks and the figures.
+void stages_of_input(const CvtInput& in, const RemeshOptions& given, const CvtCallback& progress, RemeshResult& out) {
+  RemeshOptions options = given;
+  options.mesher.sizing.relative_size = in.options.mesher.sizing.relative_size;
+  const TriangleMesh& mesh = in.mesh;
+  const int sites = options.cvt.sites;
   // The stages orient every closed piece outward: not for a non-orientable input.
   if (options.post_cvt_stages && options.cvt.build_dual && out.mesh.F.rows() > 0 && !out.input.non_orientable) {
     if (dual_meets_targets(out, options)) {
@@ -767,7 +789,7 @@ RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions&
       RemeshOptions again = options;
       again.cvt.target_phi_min_deg = options.fallback_phi_min_deg;
       RemeshResult first = out;
-      run_cvt(*work, laplacian, weights, again, first.cvt.sites, progress, out);
+      run_cvt(in.work(), in.laplacian, in.weights, again, first.cvt.sites, progress, out);
       if (dual_meets_targets(out, again))
         out.post_cvt_refusal = "not run again: after heat iterations the dual passes every check and meets the targets";
       else if (out.mesh.F.rows() > 0)
@@ -790,7 +812,6 @@ RemeshResult remesh_in_unit_frame(const TriangleMesh& mesh, const RemeshOptions&
   out.sites = out.cvt.sites;
   for (SurfacePoint& p : out.sites)
     for (int level = 0; level < out.refinement_levels; ++level) p = subdivision_parent(p);
-  return out;
 }
 
 }  // namespace
@@ -801,22 +822,37 @@ RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options, 
   // the unit of length; positions are returned in the input's coordinates.
   TriangleMesh unit = mesh;
   const NormalizationFrame frame = normalize_positions(unit.V);
-  RemeshResult out = remesh_in_unit_frame(unit, options, progress);
+  CvtInput in{unit, {}, false, {}, {}, options};
+  RemeshResult dual;
+  cvt_of_input(in, progress, dual);
+  RemeshResult out = dual;
+  stages_of_input(in, options, progress, out);
   // The coverage repair's retry with dragged rings and the run with the tips of a lower defect
-  // held leave the crease recovery another start: where it then misses crease lines, the run
-  // without those retries is taken if it misses fewer, passes every check and meets every
-  // target (count, φmin, φm) that the first passes and meets.
+  // held leave the crease recovery another start: where it then misses crease lines, the stages
+  // without those retries (on the same CVT) are taken if they miss fewer, pass every check and
+  // meet every target (count, φmin, φm) that the first result passes and meets.
   const bool retried =
       out.coverage_ring_dragged || (out.tips_held_deg > 0 && out.tips_held_deg == options.tip_defect_retry_deg);
   if (retried && crease_lines_missed(out.creases) > 0) {
     RemeshOptions alone = options;
     alone.coverage_retry_ring_drag = 0;
     alone.tip_defect_retry_deg = 0;
-    RemeshResult again = remesh_in_unit_frame(unit, alone, progress);
+    const std::size_t cvt_stages = dual.stage_seconds.size();
+    RemeshResult again = std::move(dual);
+    const auto t = Clock::now();
+    stages_of_input(in, alone, progress, again);
     const IsotropicRemeshOptions& targets = options.mesher.sizing;
     if (crease_lines_missed(again.creases) < crease_lines_missed(out.creases) && !check_lost(out.checks, again.checks) &&
-        targets_met(again, options.cvt.sites, targets).covers(targets_met(out, options.cvt.sites, targets)))
+        targets_met(again, options.cvt.sites, targets).covers(targets_met(out, options.cvt.sites, targets))) {
+      // The report times every stage run: the first stages', then the kept ones'.
+      std::vector<std::pair<std::string, double>> times = std::move(out.stage_seconds);
+      times.insert(times.end(), again.stage_seconds.begin() + static_cast<std::ptrdiff_t>(cvt_stages),
+                   again.stage_seconds.end());
       out = std::move(again);
+      out.stage_seconds = std::move(times);
+    } else {
+      out.stage_seconds.emplace_back("stages without the retries, not kept", seconds_since(t));
+    }
   }
   for (Eigen::MatrixX3d* V : {&out.mesh.V, &out.cvt.positions, &out.cvt.diagram.V, &out.cvt.dual.V})
     if (V->rows() > 0) restore_frame(*V, frame);
