@@ -373,6 +373,7 @@ class CreaseRecovery {
     for (int l : kept)
       for (int end : {lines_.lines[l].front(), lines_.lines[l].back()})
         if (lines_.corner[end] && std::find(ends.begin(), ends.end(), end) == ends.end()) ends.push_back(end);
+    crossing_ = crossing_face_pairs(mesh_);
     if (!snap_corners(ends, crossing_before, corner_vertex)) return;
     for (int l : kept)
       for (int end : {lines_.lines[l].front(), lines_.lines[l].back()})
@@ -381,7 +382,7 @@ class CreaseRecovery {
       const Transaction line = begin();
       if (lines_.border[l]) recover_border_line(l, corner_vertex);
       else recover_line(l, corner_vertex);
-      if (self_intersecting_pairs(mesh_) > crossing_before) undo(line), ++stats.skipped_lines;
+      if (crosses_more_since(line, crossing_before)) undo(line), ++stats.skipped_lines;
       else ++stats.lines;
     }
   }
@@ -392,7 +393,7 @@ class CreaseRecovery {
   bool snap_corners(const std::vector<int>& ends, long crossing_before, std::map<int, int>& corner_vertex) {
     const Transaction all = begin();
     for (int end : ends) corner_vertex[end] = snap_corner(end);
-    if (self_intersecting_pairs(mesh_) <= crossing_before) {
+    if (!crosses_more_since(all, crossing_before)) {
       stats.corners = static_cast<int>(ends.size());
       return true;
     }
@@ -402,7 +403,7 @@ class CreaseRecovery {
     for (int end : ends) {
       const Transaction one = begin();
       const int v = snap_corner(end);
-      if (v >= 0 && self_intersecting_pairs(mesh_) > crossing_before) undo(one), corner_vertex[end] = -1;
+      if (v >= 0 && crosses_more_since(one, crossing_before)) undo(one), corner_vertex[end] = -1;
       else corner_vertex[end] = v, kept += v >= 0;
     }
     stats.corners = kept;
@@ -719,6 +720,17 @@ class CreaseRecovery {
     CreaseStats stats;
   };
   Transaction begin() const { return {mesh_.checkpoint(), taken_, line_edges_, paths_.size(), stats}; }
+
+  // Whether the mesh has more than `limit` crossing face pairs after the edits since `t`, whose
+  // state's pairs are crossing_: only the faces the edits made or moved are checked
+  // (crossing_face_pairs_after()). Where it has not, crossing_ becomes the pairs of the mesh now;
+  // where it has, the caller undoes `t` and crossing_ holds for the state restored.
+  bool crosses_more_since(const Transaction& t, long limit) {
+    std::vector<FacePair> now = crossing_face_pairs_after(mesh_, t.mesh, crossing_);
+    if (static_cast<long>(now.size()) > limit) return true;
+    crossing_ = std::move(now);
+    return false;
+  }
   void undo(const Transaction& t) {
     mesh_.rollback(t.mesh, true);
     taken_ = t.taken;
@@ -777,6 +789,7 @@ class CreaseRecovery {
   std::vector<int> next_, prev_;    // along the output's border (−1 off it, −2 pinched)
   std::map<int, std::vector<int>> corner_lines_;  // output vertices that a corner took: the lines ending there
   std::set<std::pair<int, int>> line_edges_;
+  std::vector<FacePair> crossing_;  // the crossing face pairs of the mesh as recover_lines() last checked it
   // A recovered line (or a run of joined samples of a line with gaps): its edge path of output
   // vertices and their arc lengths along the line.
   struct LinePath {
