@@ -15,6 +15,7 @@
 #include "heatcvt/heat_solver.h"
 #include "heatcvt/laplacian.h"
 #include "heatcvt/mesh_io.h"
+#include "heatcvt/remesh.h"
 #include "heatcvt/subdivision.h"
 #include "heatcvt/validate.h"
 #include "test_support.h"
@@ -429,6 +430,40 @@ TEST(CvtAcceleration, QualityPatienceStopsWhenTheMeanAngleStalls) {
   ASSERT_GE(best_before, 0.0) << "no evaluation before the patience window";
   for (size_t i = window; i < evaluated.size(); ++i)
     EXPECT_LE(evaluated[i], best_before + 0.02) << "evaluation " << i << " improved: the run was not stalled";
+}
+
+TEST(CvtAcceleration, QualityPatienceAlsoEndsSplitsAtSpotsTheCvtCannotResolve) {
+  // A range-scan fragment (Redwood, Open3D) with holes and pieces smaller than a cell at 3,000
+  // sites, with meshcvt's CVT options: every evaluation finds non-manifold spots around them and
+  // splits cells there, while φm falls. The splits stop once φm has not improved for
+  // quality_patience evaluations, and the next evaluation ends the run (so its dual is an
+  // evaluated one): the run does not go on splitting to the iteration cap.
+  TriangleMesh m = read_mesh(test::data_path("meshes/redwood_frag_115_open3d.ply"));
+  CvtOptions o = RemeshOptions().cvt;
+  o.sites = 3000;
+  ASSERT_GT(o.quality_patience, 0);
+  ASSERT_TRUE(o.split_nonmanifold_cells);
+  CvtResult r = centroidal_voronoi(m.V, m.F, cotan_laplacian(m.V, m.F), o);
+  // The evaluation at which the patience runs out, by the rule of cvt.h (the start's evaluation
+  // is the first best).
+  double best = r.start_phi_mean_deg;
+  int since_best = 0;
+  std::size_t exhausted = r.iterations.size();
+  for (std::size_t i = 0; i < r.iterations.size() && exhausted == r.iterations.size(); ++i) {
+    const CvtIterationStats& s = r.iterations[i];
+    if (s.phi_mean_deg < 0) continue;
+    if (s.phi_mean_deg > best + o.tuning.patience_gain_deg) best = s.phi_mean_deg, since_best = 0;
+    else if (++since_best >= o.quality_patience) exhausted = i;
+  }
+  std::printf("[ info ] redwood fragment, 3000 sites: %zu iterations, patience out at iteration %d, %d sites inserted\n",
+              r.iterations.size(), exhausted < r.iterations.size() ? r.iterations[exhausted].iteration : -1,
+              r.inserted_sites);
+  ASSERT_LT(exhausted, r.iterations.size()) << "φm kept improving: the patience never ran out";
+  ASSERT_GT(r.iterations[exhausted].inserted_sites, 0) << "precondition: cells were still split when it ran out";
+  EXPECT_TRUE(r.stalled);
+  EXPECT_EQ(r.iterations.back().inserted_sites, 0);
+  EXPECT_LE(r.iterations.back().iteration, r.iterations[exhausted].iteration + o.quality_every);
+  EXPECT_LT(static_cast<int>(r.iterations.size()), o.iterations);
 }
 
 TEST(CvtAcceleration, SurfaceLloydStartIsCloserToCentroidalThanGraphLloyd) {

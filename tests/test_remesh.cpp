@@ -367,14 +367,14 @@ TEST(RemeshCvt, EachLoopOfTheStagesResultRunsAlongItsOwnLoopOfTheInput) {
   for (int l = 0; l < input_loops; ++l) EXPECT_EQ(matched[static_cast<std::size_t>(l)], 1) << "input loop " << l;
 }
 
-// armadillo_remeshed_14k at 300 sites: the closed-ball splits and repairs give a valid dual of
-// far more vertices than asked for (its fingers and ears are thinner than a cell). The stages
+// armadillo at 300 sites: the closed-ball splits and repairs give a valid dual of far more
+// vertices than asked for (its fingers and ears are thinner than a cell). The stages
 // size it to the count, rounding those parts off; with the coverage comparison applied anyway
 // (far_count_error infinite) that result is refused and the dual is the output, more than 25 %
 // off the count. By default the stages' result is kept: every check, the count within 2 %,
 // φmin ≥ 30°.
 TEST(RemeshCvt, ADualFarOffTheCountGivesWayToTheStagesResultAtTheCount) {
-  const TriangleMesh input = read_mesh(test::data_path("meshes/armadillo_remeshed_14k.obj"));
+  const TriangleMesh input = read_mesh(test::data_path("meshes/armadillo.obj"));
   RemeshOptions compared = remesh_options(300);
   compared.far_count_error = std::numeric_limits<double>::infinity();
   compared.tip_defect_deg = 0;  // no second run with the tips held, whose result covers the tips

@@ -75,6 +75,8 @@ class CvtQualityControl {
   bool patience_exhausted() const {
     return options_.quality_patience > 0 && evaluations_since_best_ >= options_.quality_patience;
   }
+  /// No more cells split from here on (split_nonmanifold_cells): the next evaluation adds no site.
+  void stop_splitting() { split_enabled_ = false; }
 
  private:
   int budget(const CvtResult& result) const;
