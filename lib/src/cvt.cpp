@@ -196,11 +196,11 @@ void heat_iterations(const CvtOptions& options, double spacing, LloydState& lloy
       return;
     }
     const bool go_on = callback ? callback(st) : true;
-    // (only right after an evaluation that added no site: the result's dual is then an evaluated
-    // one; where the evaluation split cells, the splitting stops and the next evaluation ends the
-    // run: splits that go on while φm does not improve are at spots the CVT cannot resolve, such
-    // as a hole or a piece of the input smaller than a cell, which later stages take over: the
-    // remesh's closed-ball repair, the mesher's extraction)
+    // The stall ends the run only right after an evaluation that added no site, so that the
+    // result's dual is an evaluated one. Where the evaluation split cells, the splitting stops
+    // instead and the next evaluation ends the run: splits that go on while φm does not improve
+    // are at spots the CVT cannot resolve (a hole or a piece of the input smaller than a cell),
+    // which later stages take over (the remesh's closed-ball repair, the mesher's extraction).
     if (quality.patience_exhausted() && st.phi_mean_deg >= 0) {
       if (st.inserted_sites == 0) {
         result.stalled = true;

@@ -206,7 +206,8 @@ struct CvtOptions {
   double max_inserted_fraction = 0.25;
   /// Convergence test on the quality (needs quality_every > 0): stop when φm has not improved by
   /// more than tuning.patience_gain_deg over this many consecutive evaluations (result.stalled).
-  /// 0 = off. Default 0.
+  /// Where the evaluation at which the patience runs out split cells (split_nonmanifold_cells),
+  /// the splitting stops and the next evaluation ends the run. 0 = off. Default 0.
   int quality_patience = 0;
   /// With quality_every: the first evaluation happens only after this many iterations. Default 0.
   int quality_start = 0;
