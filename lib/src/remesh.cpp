@@ -770,12 +770,11 @@ void cvt_of_input(CvtInput& in, const CvtCallback& progress, RemeshResult& out) 
   run_cvt(work, in.laplacian, in.weights, options, {}, progress, out);
 }
 
-// The rest of remesh_cvt() after cvt_of_input(), with `given` options for the stages: the post-CVT
-// stages on the dual in `out` (and, where their result is refused, heat iterations and the stages
-// again), the creases, the explanations of failed checks and the figures.
-void stages_of_input(const CvtInput& in, const RemeshOptions& given, const CvtCallback& progress, RemeshResult& out) {
-  RemeshOptions options = given;
-  options.mesher.sizing.relative_size = in.options.mesher.sizing.relative_size;
+// The rest of remesh_cvt() after cvt_of_input(), with `options` (in.options, or a variant of it)
+// for the stages: the post-CVT stages on the dual in `out` (and, where their result is refused,
+// heat iterations and the stages again), the creases, the explanations of failed checks and the
+// figures.
+void stages_of_input(const CvtInput& in, const RemeshOptions& options, const CvtCallback& progress, RemeshResult& out) {
   const TriangleMesh& mesh = in.mesh;
   const int sites = options.cvt.sites;
   // The stages orient every closed piece outward: not for a non-orientable input.
@@ -826,7 +825,7 @@ RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options, 
   RemeshResult dual;
   cvt_of_input(in, progress, dual);
   RemeshResult out = dual;
-  stages_of_input(in, options, progress, out);
+  stages_of_input(in, in.options, progress, out);
   // The coverage repair's retry with dragged rings and the run with the tips of a lower defect
   // held leave the crease recovery another start: where it then misses crease lines, the stages
   // without those retries (on the same CVT) are taken if they miss fewer, pass every check and
@@ -834,7 +833,7 @@ RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options, 
   const bool retried =
       out.coverage_ring_dragged || (out.tips_held_deg > 0 && out.tips_held_deg == options.tip_defect_retry_deg);
   if (retried && crease_lines_missed(out.creases) > 0) {
-    RemeshOptions alone = options;
+    RemeshOptions alone = in.options;  // with the adaptive sizing's field, where there is one
     alone.coverage_retry_ring_drag = 0;
     alone.tip_defect_retry_deg = 0;
     const std::size_t cvt_stages = dual.stage_seconds.size();
