@@ -88,6 +88,41 @@ TEST(DualSurface, RepairsADualWithAFinAndAMissingFace) {
   expect_valid_closed(r, 0, 200);
 }
 
+// A cancellation query (SurfaceMesherOptions::cancelled) is asked after every stage and before
+// each of the sizing's steps. One that never fires leaves the result as it is without one; one
+// that fires at its k-th call stops the stages there with StagesCancelled, which is no Error.
+TEST(DualSurface, StopsWithStagesCancelledWhenTheQueryFires) {
+  const TriangleMesh s = test::icosphere(4);
+  CvtResult cvt;
+  (void)dual_of_cvt(s, 300, &cvt);
+  const MeshSurfaceProjector surface(s.V, s.F);
+  SurfaceMesherOptions mo;
+  mo.threads = 2;
+  mo.sizing.target_vertices = 400;  // so that the sizing remeshes
+  const DualSurfaceResult plain = mesh_dual_surface(cvt.dual.V, cvt.dual.F, surface, mo);
+  int asked = 0;
+  mo.cancelled = [&] {
+    ++asked;
+    return false;
+  };
+  const DualSurfaceResult queried = mesh_dual_surface(cvt.dual.V, cvt.dual.F, surface, mo);
+  ASSERT_GT(asked, static_cast<int>(queried.stats.stage_seconds.size())) << "the sizing's steps must ask too";
+  EXPECT_TRUE(queried.mesh.V == plain.mesh.V);
+  EXPECT_TRUE(queried.mesh.F == plain.mesh.F);
+  for (const int fire_at : {1, asked / 2, asked}) {
+    int calls = 0;
+    mo.cancelled = [&] { return ++calls >= fire_at; };
+    try {
+      (void)mesh_dual_surface(cvt.dual.V, cvt.dual.F, surface, mo);
+      ADD_FAILURE() << "no StagesCancelled at call " << fire_at;
+    } catch (const Error&) {
+      ADD_FAILURE() << "an Error instead of StagesCancelled at call " << fire_at;
+    } catch (const StagesCancelled&) {
+    }
+    EXPECT_EQ(calls, fire_at);
+  }
+}
+
 TEST(DualSurface, RejectsFacesOutOfRange) {
   const TriangleMesh s = test::icosphere(2);
   const MeshSurfaceProjector surface(s.V, s.F);

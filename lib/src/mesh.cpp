@@ -76,12 +76,19 @@ std::vector<std::vector<int>> vertex_neighbors(int num_vertices, const Eigen::Ma
 }
 
 std::vector<std::pair<int, int>> boundary_edges(const Eigen::MatrixX3i& F) {
-  std::map<std::pair<int, int>, int> faces_of_edge;
+  // Every face's edges as (smaller, larger) pairs, sorted: an edge of one face occurs once.
+  std::vector<std::pair<int, int>> edges;
+  edges.reserve(static_cast<std::size_t>(3 * F.rows()));
   for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) ++faces_of_edge[std::minmax(F(f, k), F(f, (k + 1) % 3))];
+    for (int k = 0; k < 3; ++k) edges.push_back(std::minmax(F(f, k), F(f, (k + 1) % 3)));
+  std::sort(edges.begin(), edges.end());
   std::vector<std::pair<int, int>> border;
-  for (const auto& [edge, faces] : faces_of_edge)
-    if (faces == 1) border.push_back(edge);
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i + 1;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    if (j - i == 1) border.push_back(edges[i]);
+    i = j;
+  }
   return border;
 }
 

@@ -1,12 +1,18 @@
 #include "heatcvt/remesh.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <functional>
+#include <future>
 #include <limits>
 #include <map>
+#include <memory>
+#include <mutex>
 #include <set>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -18,6 +24,7 @@
 #include "heatcvt/mesher/coverage_repair.h"
 #include "heatcvt/mesher/projector.h"
 #include "heatcvt/normalize.h"
+#include "heatcvt/parallel.h"
 #include "heatcvt/subdivision.h"
 
 namespace heatcvt {
@@ -483,12 +490,101 @@ bool retry_with_ring_drag(const Eigen::MatrixX3d& samples, double spacing, const
   return true;
 }
 
+// The input as the post-CVT stages and the crease recovery read it: the mesh, its projector
+// (closest points, normals, border) and the vertices of its faces (face_vertices(), the samples
+// of the coverage checks). The last two are built on first use, once per remesh, and shared by
+// every run of the stages, also by runs on other threads (they are read only).
+class InputSurface {
+ public:
+  explicit InputSurface(const TriangleMesh& m) : mesh(m) {}
+  const TriangleMesh& mesh;
+  const MeshSurfaceProjector& projector() const {
+    build();
+    return *projector_;
+  }
+  const Eigen::MatrixX3d& samples() const {
+    build();
+    return samples_;
+  }
+
+ private:
+  void build() const {
+    std::call_once(built_, [this] {
+      projector_ = std::make_unique<MeshSurfaceProjector>(mesh.V, mesh.F);
+      samples_ = face_vertices(mesh);
+    });
+  }
+  mutable std::once_flag built_;
+  mutable std::unique_ptr<MeshSurfaceProjector> projector_;
+  mutable Eigen::MatrixX3d samples_;
+};
+
+// Results of run_post_cvt_stages() as a run without the coverage repair's retry with dragged rings
+// (RemeshOptions::coverage_retry_ring_drag = 0) leaves them, kept for the runs of remesh_cvt()'s
+// crease retry, which differ from the first runs only by that retry: the same dual, the same
+// tips held (mesher tips' min_defect_deg) and the same CVT target give the same result.
+// Read and written by the runs on every thread. The runs leave the CVT's result as it was, so it
+// is not kept: find() gives `after` with before.cvt.
+class StageRunMemo {
+ public:
+  void record(const RemeshResult& before, const RemeshOptions& options, const RemeshResult& after, bool kept) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    if (find_locked(before, options)) return;
+    entries_.push_back({before.cvt.dual.V, before.cvt.dual.F, key(options), after, kept});
+    entries_.back().after.cvt = CvtResult{};
+  }
+  // The recorded result of a run from `before` with `options`; false where there is none.
+  bool find(const RemeshResult& before, const RemeshOptions& options, RemeshResult& after, bool& kept) const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    const Entry* e = find_locked(before, options);
+    if (!e) return false;
+    after = e->after;
+    after.cvt = before.cvt;
+    kept = e->kept;
+    return true;
+  }
+
+ private:
+  using Key = std::pair<double, double>;  // tips held, CVT's target φmin
+  struct Entry {
+    Eigen::MatrixX3d V;
+    Eigen::MatrixX3i F;
+    Key key;
+    RemeshResult after;
+    bool kept = false;
+  };
+  static Key key(const RemeshOptions& o) { return {o.mesher.polish.tips.min_defect_deg, o.cvt.target_phi_min_deg}; }
+  const Entry* find_locked(const RemeshResult& before, const RemeshOptions& options) const {
+    for (const Entry& e : entries_)
+      if (e.key == key(options) && e.V.rows() == before.cvt.dual.V.rows() && e.F.rows() == before.cvt.dual.F.rows() &&
+          e.V == before.cvt.dual.V && e.F == before.cvt.dual.F)
+        return &e;
+    return nullptr;
+  }
+  mutable std::mutex mutex_;
+  std::vector<Entry> entries_;
+};
+
 // The shared post-CVT stages on out.cvt.dual with the input mesh as the projector (the refined
 // mesh is the same surface). Their result replaces out.mesh unless it fails a check that the dual
 // passed (the stages, made for clouds, may open or fill a thin handle): then the dual is kept and
-// out.post_cvt_kept is false. Returns out.post_cvt_kept.
-bool run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options, RemeshResult& out) {
-  const MeshSurfaceProjector surface(input.V, input.F);
+// out.post_cvt_kept is false. Returns out.post_cvt_kept. With `memo`, a run without the retry
+// with dragged rings that was run before is taken from it, and every run records its result
+// without that retry there.
+bool run_post_cvt_stages(const InputSurface& in, const RemeshOptions& options, RemeshResult& out,
+                         StageRunMemo* memo = nullptr) {
+  if (memo && !(options.coverage_retry_ring_drag > 0)) {
+    RemeshResult found;
+    bool kept = false;
+    if (memo->find(out, options, found, kept)) {
+      found.stage_seconds = std::move(out.stage_seconds);
+      found.stage_seconds.emplace_back("post-CVT stages, the same run as before", 0.0);
+      out = std::move(found);
+      return kept;
+    }
+  }
+  const TriangleMesh& input = in.mesh;
+  const MeshSurfaceProjector& surface = in.projector();
   SurfaceMesherOptions mo = options.mesher;
   mo.threads = options.cvt.threads;
   if (mo.sizing.target_vertices == 0) mo.sizing.target_vertices = options.cvt.sites;
@@ -500,6 +596,7 @@ bool run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options
   DualSurfaceResult post;
   try {
     post = mesh_dual_surface(out.cvt.dual.V, out.cvt.dual.F, surface, mo);
+    throw_if_cancelled(mo.cancelled);
   } catch (const Error& e) {  // nothing extracted (a dual of very few sites): the dual stays
     out.post_cvt_kept = false;
     out.post_cvt_refusal = std::string("nothing extracted: ") + e.what();
@@ -509,36 +606,47 @@ bool run_post_cvt_stages(const TriangleMesh& input, const RemeshOptions& options
   // the mesher validates its result as an open surface; the checks below use the input's topology
   for (const auto& stage : out.mesher.stage_seconds)
     if (stage.first != "validate") out.stage_seconds.push_back(stage);
-  const Eigen::MatrixX3d samples = face_vertices(input);
+  const Eigen::MatrixX3d& samples = in.samples();
   const double spacing = site_spacing(input, options.cvt.sites);
   const TriangleMesh unrepaired = options.coverage_retry_ring_drag > 0 ? post.mesh : TriangleMesh{};
   cover_input(samples, spacing, surface, options, post.mesh, out);
+  throw_if_cancelled(mo.cancelled);
   const auto t = Clock::now();
   ValidationReport checks = check_result(post.mesh, out.input, true);
   bool for_coverage = false;
   std::string refusal = post_cvt_refusal(samples, spacing, post.mesh, checks, options, out, &for_coverage);
   double check_seconds = seconds_since(t);
+  // The result kept or refused: out.mesh and out.checks are the stages' where it is kept.
+  const auto finish = [](RemeshResult& r, const std::string& refused, TriangleMesh&& mesh, ValidationReport&& report) {
+    r.post_cvt_kept = refused.empty();
+    if (!r.post_cvt_kept) r.post_cvt_refusal = "result not kept: " + refused;
+    if (r.post_cvt_kept) {
+      r.mesh = std::move(mesh);
+      r.checks = std::move(report);
+    }
+  };
+  if (memo) {
+    RemeshResult without_retry = out;
+    finish(without_retry, refusal, TriangleMesh(post.mesh), ValidationReport(checks));
+    memo->record(out, options, without_retry, without_retry.post_cvt_kept);
+  }
   if (for_coverage && retry_with_ring_drag(samples, spacing, surface, options, unrepaired, post.mesh, checks, out,
                                             check_seconds))
     refusal.clear();
-  out.post_cvt_kept = refusal.empty();
-  if (!out.post_cvt_kept) out.post_cvt_refusal = "result not kept: " + refusal;
-  if (out.post_cvt_kept) {
-    out.mesh = std::move(post.mesh);
-    out.checks = std::move(checks);
-  }
+  finish(out, refusal, std::move(post.mesh), std::move(checks));
   out.stage_seconds.emplace_back("post-CVT checks", check_seconds);
   return out.post_cvt_kept;
 }
 
 // Sharp creases of the input kept as lines of out.mesh (mesher/creases.h). The result replaces
 // out.mesh only where it fails no check that out.mesh passed.
-void keep_creases(const TriangleMesh& input, const RemeshOptions& options, RemeshResult& out) {
+void keep_creases(const InputSurface& in, const RemeshOptions& options, RemeshResult& out) {
+  const TriangleMesh& input = in.mesh;
   if (!options.creases.enabled || out.mesh.F.rows() == 0 || out.input.non_orientable) return;
   const CreaseLines lines = detect_creases(input.V, input.F, options.creases, site_spacing(input, options.cvt.sites));
   if (lines.lines.empty()) return;
   const auto t = Clock::now();
-  const MeshSurfaceProjector surface(input.V, input.F);
+  const MeshSurfaceProjector& surface = in.projector();
   WorkingMesh work = working_mesh_of(out.mesh, surface);
   CreaseOptions co = options.creases;
   co.threads = options.cvt.threads;
@@ -548,7 +656,7 @@ void keep_creases(const TriangleMesh& input, const RemeshOptions& options, Remes
     ValidationReport checks = check_result(result, out.input, true);
     // Snapping a tip's vertex onto a short crease near it would cut the tip off.
     std::string refusal;
-    const Eigen::MatrixX3d samples = face_vertices(input);
+    const Eigen::MatrixX3d& samples = in.samples();
     if (farthest_input_vertex(samples, result) > options.max_crease_gap_growth * farthest_input_vertex(samples, out.mesh))
       refusal = "an input vertex would be farther from the output";
     if (const MeshCheck* lost = check_lost(out.checks, checks)) refusal = "it would fail " + lost->name;
@@ -619,39 +727,105 @@ bool improves_on(const RemeshResult& after, const RemeshResult& before, int site
          triangle_quality(before.mesh.V, before.mesh.F).min_angle_deg;
 }
 
-// One more run of the stages on `dual` (the state before the stages) with the vertices whose angle
-// defect exceeds `defect_deg` held (mesher/tips.h). Its result replaces `out` where it is kept,
-// improves on it (improves_on()) and reaches every input vertex within
-// RemeshOptions::max_tip_run_gap site spacings. Returns whether it replaced `out`.
-bool replace_with_tips_held(const TriangleMesh& input, const RemeshOptions& options, double defect_deg,
-                            const RemeshResult& dual, RemeshResult& out) {
+// A run of the post-CVT stages on `dual` (the state before the stages) with the vertices whose
+// angle defect exceeds `defect_deg` held (mesher/tips.h): its result, with only its own stage
+// times, and whether the stages' result was kept. `cancelled` (optional) may stop it
+// (SurfaceMesherOptions::cancelled).
+struct TipsHeldRun {
+  RemeshResult result;
+  bool kept = false;
+};
+
+TipsHeldRun run_with_tips_held(const InputSurface& input, const RemeshOptions& options, double defect_deg,
+                               const RemeshResult& dual, StageRunMemo* memo,
+                               const CancelQuery& cancelled = {}) {
   RemeshOptions with_tips = options;
+  with_tips.mesher.cancelled = cancelled;
   with_tips.mesher.polish.tips.min_defect_deg = defect_deg;
   with_tips.mesher.sizing.tips.min_defect_deg = defect_deg;
-  RemeshResult held = dual;
-  held.stage_seconds = out.stage_seconds;
-  const double spacing = site_spacing(input, options.cvt.sites);
-  if (!run_post_cvt_stages(input, with_tips, held) || !improves_on(held, out, options.cvt.sites, options.mesher.sizing) ||
-      farthest_input_vertex(face_vertices(input), held.mesh) > options.max_tip_run_gap * spacing) {
-    out.stage_seconds = std::move(held.stage_seconds);
-    return false;
-  }
-  out = std::move(held);
-  out.tips_held_deg = defect_deg;
-  return true;
+  TipsHeldRun run{dual, false};
+  run.result.stage_seconds.clear();
+  run.kept = run_post_cvt_stages(input, with_tips, run.result, memo);
+  return run;
 }
+
+// The result of run_with_tips_held() replaces `out` where it is kept, improves on it
+// (improves_on()) and reaches every input vertex within RemeshOptions::max_tip_run_gap site
+// spacings. Its stage times are added to out's either way. Returns whether it replaced `out`.
+bool replace_with_tips_held(const InputSurface& input, const RemeshOptions& options, double defect_deg,
+                            TipsHeldRun&& held, RemeshResult& out) {
+  std::vector<std::pair<std::string, double>> times = std::move(out.stage_seconds);
+  times.insert(times.end(), held.result.stage_seconds.begin(), held.result.stage_seconds.end());
+  const double spacing = site_spacing(input.mesh, options.cvt.sites);
+  const bool replaces = held.kept && improves_on(held.result, out, options.cvt.sites, options.mesher.sizing) &&
+                        farthest_input_vertex(input.samples(), held.result.mesh) <= options.max_tip_run_gap * spacing;
+  if (replaces) {
+    out = std::move(held.result);
+    out.tips_held_deg = defect_deg;
+  }
+  out.stage_seconds = std::move(times);
+  return replaces;
+}
+
+// The runs with tips held of run_stages() (run_with_tips_held(), one per defect in order) on a
+// thread of their own, started before the first run of the stages: they depend only on the dual,
+// not on the first result; whether they are used does. Once the object is destroyed, a run not yet
+// started is skipped and the one under way stops after its current stage.
+class TipsHeldAhead {
+ public:
+  TipsHeldAhead(const InputSurface& input, const RemeshOptions& options, const std::vector<double>& defects,
+                const RemeshResult& dual, StageRunMemo* memo)
+      : promised_(defects.size()) {
+    for (std::promise<TipsHeldRun>& p : promised_) results_.push_back(p.get_future());
+    thread_ = std::thread([&input, &options, defects, &dual, memo, this] {
+      for (std::size_t i = 0; i < defects.size() && !stop_; ++i) {
+        try {
+          promised_[i].set_value(run_with_tips_held(input, options, defects[i], dual, memo, [this] { return stop_.load(); }));
+        } catch (...) {
+          promised_[i].set_exception(std::current_exception());
+        }
+      }
+    });
+  }
+  TipsHeldAhead(const TipsHeldAhead&) = delete;
+  TipsHeldAhead& operator=(const TipsHeldAhead&) = delete;
+  ~TipsHeldAhead() {
+    stop_ = true;
+    thread_.join();
+  }
+  // The run of the i-th defect, once it is done.
+  TipsHeldRun get(std::size_t i) { return results_[i].get(); }
+
+ private:
+  std::vector<std::promise<TipsHeldRun>> promised_;
+  std::vector<std::future<TipsHeldRun>> results_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
 
 // The post-CVT stages (run_post_cvt_stages()); where their result is refused or misses a target,
 // once more on the same dual with the tips of thin parts held (RemeshOptions::tip_defect_deg),
 // and where that result does not replace it or still misses a target, once more with the tips
 // of a lower defect held (RemeshOptions::tip_defect_retry_deg): replace_with_tips_held().
-// Returns whether a result of the stages is the output.
-bool run_stages(const TriangleMesh& input, const RemeshOptions& options, RemeshResult& out) {
+// With more than one thread (RemeshOptions::cvt.threads) the runs with tips held go ahead beside
+// the first run (TipsHeldAhead), whose stages are mostly serial; the same results are used in the
+// same order, so the output does not depend on the thread count. Every run goes through `memo`
+// (run_post_cvt_stages()). Returns whether a result of the stages is the output.
+bool run_stages(const InputSurface& input, const RemeshOptions& options, RemeshResult& out, StageRunMemo* memo) {
   const RemeshResult dual = out;  // before the stages
-  bool kept = run_post_cvt_stages(input, options, out);
+  std::vector<double> defects;
   for (const double defect : {options.tip_defect_deg, options.tip_defect_retry_deg}) {
-    if (!(defect > 0) || (kept && targets_met(out, options.cvt.sites, options.mesher.sizing).all())) break;
-    if (replace_with_tips_held(input, options, defect, dual, out)) kept = true;
+    if (!(defect > 0)) break;
+    defects.push_back(defect);
+  }
+  std::unique_ptr<TipsHeldAhead> ahead;
+  if (!defects.empty() && resolve_threads(options.cvt.threads) > 1)
+    ahead = std::make_unique<TipsHeldAhead>(input, options, defects, dual, memo);
+  bool kept = run_post_cvt_stages(input, options, out, memo);
+  for (std::size_t i = 0; i < defects.size(); ++i) {
+    if (kept && targets_met(out, options.cvt.sites, options.mesher.sizing).all()) break;
+    TipsHeldRun held = ahead ? ahead->get(i) : run_with_tips_held(input, options, defects[i], dual, memo);
+    if (replace_with_tips_held(input, options, defects[i], std::move(held), out)) kept = true;
   }
   return kept;
 }
@@ -773,15 +947,17 @@ void cvt_of_input(CvtInput& in, const CvtCallback& progress, RemeshResult& out) 
 // The rest of remesh_cvt() after cvt_of_input(), with `options` (in.options, or a variant of it)
 // for the stages: the post-CVT stages on the dual in `out` (and, where their result is refused,
 // heat iterations and the stages again), the creases, the explanations of failed checks and the
-// figures.
-void stages_of_input(const CvtInput& in, const RemeshOptions& options, const CvtCallback& progress, RemeshResult& out) {
+// figures. The stages read the input through `surface`; their runs are recorded in, and where run
+// before taken from, `memo`.
+void stages_of_input(const CvtInput& in, const InputSurface& surface, StageRunMemo* memo, const RemeshOptions& options,
+                     const CvtCallback& progress, RemeshResult& out) {
   const TriangleMesh& mesh = in.mesh;
   const int sites = options.cvt.sites;
   // The stages orient every closed piece outward: not for a non-orientable input.
   if (options.post_cvt_stages && options.cvt.build_dual && out.mesh.F.rows() > 0 && !out.input.non_orientable) {
     if (dual_meets_targets(out, options)) {
       out.post_cvt_refusal = "not run: the dual of the closed input passes every check and meets the targets";
-    } else if (!run_stages(mesh, options, out) && options.fallback_phi_min_deg > options.cvt.target_phi_min_deg) {
+    } else if (!run_stages(surface, options, out, memo) && options.fallback_phi_min_deg > options.cvt.target_phi_min_deg) {
       // Their result refused: the dual is the output, so heat iterations until its own φmin
       // reaches the fallback target, then the stages again on the new dual; the second result
       // replaces the first where it is better (improves_on()).
@@ -792,7 +968,7 @@ void stages_of_input(const CvtInput& in, const RemeshOptions& options, const Cvt
       if (dual_meets_targets(out, again))
         out.post_cvt_refusal = "not run again: after heat iterations the dual passes every check and meets the targets";
       else if (out.mesh.F.rows() > 0)
-        run_stages(mesh, again, out);
+        run_stages(surface, again, out, memo);
       if (!improves_on(out, first, sites, options.mesher.sizing)) {
         first.stage_seconds = std::move(out.stage_seconds);
         out = std::move(first);
@@ -802,7 +978,7 @@ void stages_of_input(const CvtInput& in, const RemeshOptions& options, const Cvt
   if (options.post_cvt_stages && options.cvt.build_dual && !out.post_cvt_kept && out.post_cvt_refusal.empty())
     out.post_cvt_refusal = out.input.non_orientable ? "not run: the input is not orientable (the stages orient every piece)"
                                                     : "not run: the dual has no triangle";
-  if (options.cvt.build_dual && options.post_cvt_stages) keep_creases(mesh, options, out);
+  if (options.cvt.build_dual && options.post_cvt_stages) keep_creases(surface, options, out);
   explain_self_intersections(mesh, out);
   explain_short_loops(mesh, options, out);
   out.quality = triangle_quality(out.mesh.V, out.mesh.F);
@@ -825,7 +1001,9 @@ RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options, 
   RemeshResult dual;
   cvt_of_input(in, progress, dual);
   RemeshResult out = dual;
-  stages_of_input(in, in.options, progress, out);
+  const InputSurface surface(unit);
+  StageRunMemo memo;  // the retry below repeats runs of the first stages
+  stages_of_input(in, surface, &memo, in.options, progress, out);
   // The coverage repair's retry with dragged rings and the run with the tips of a lower defect
   // held leave the crease recovery another start: where it then misses crease lines, the stages
   // without those retries (on the same CVT) are taken if they miss fewer, pass every check and
@@ -839,7 +1017,7 @@ RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options, 
     const std::size_t cvt_stages = dual.stage_seconds.size();
     RemeshResult again = std::move(dual);
     const auto t = Clock::now();
-    stages_of_input(in, alone, progress, again);
+    stages_of_input(in, surface, &memo, alone, progress, again);
     const IsotropicRemeshOptions& targets = options.mesher.sizing;
     if (crease_lines_missed(again.creases) < crease_lines_missed(out.creases) && !check_lost(out.checks, again.checks) &&
         targets_met(again, options.cvt.sites, targets).covers(targets_met(out, options.cvt.sites, targets))) {

@@ -770,6 +770,7 @@ class Sizer {
   // step out. Returns what the kept run changed (0 if none).
   template <class Step>
   int attempt(Step step) {
+    throw_if_cancelled(o_.cancelled);
     for (int tries = 0; tries < 3; ++tries) {
       const WorkingMesh::Checkpoint before = mesh_.checkpoint();
       const MesherStats stats_before = stats_;

@@ -18,18 +18,22 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Times consecutive stages into stats.stage_seconds.
+// Times consecutive stages into stats.stage_seconds; after each one, throws StagesCancelled where
+// `cancelled` (SurfaceMesherOptions::cancelled) says the result is no longer needed.
 class StageTimer {
  public:
-  explicit StageTimer(MesherStats& stats) : stats_(stats), t_(Clock::now()) {}
+  StageTimer(MesherStats& stats, const CancelQuery& cancelled)
+      : stats_(stats), cancelled_(cancelled), t_(Clock::now()) {}
   void done(const char* name) {
     const auto now = Clock::now();
     stats_.stage_seconds.emplace_back(name, std::chrono::duration<double>(now - t_).count());
     t_ = now;
+    throw_if_cancelled(cancelled_);
   }
 
  private:
   MesherStats& stats_;
+  const CancelQuery& cancelled_;
   Clock::time_point t_;
 };
 
@@ -104,7 +108,7 @@ bool changes_topology(const WorkingMesh& mesh, const Eigen::MatrixX3i& F) {
 
 void extract_from_candidates(WorkingMesh& mesh, const DualCandidates& candidates, const SurfaceProjector& surface,
                              const SurfaceMesherOptions& options, MesherStats& stats) {
-  StageTimer timer(stats);
+  StageTimer timer(stats, options.cancelled);
   stats.candidate_triangles = static_cast<int>(candidates.coherent.size());
   stats.rejected_triangles += extract_manifold(mesh, candidates.coherent);
   stats.removed_triangles += make_vertices_manifold(mesh, options.manifold);
@@ -127,7 +131,7 @@ void polish_extracted(WorkingMesh& mesh, const SurfaceProjector& surface, const 
   polish.threads = options.threads;
   EdgeSplitOptions split = options.split;
   split.threads = options.threads;
-  StageTimer timer(stats);
+  StageTimer timer(stats, options.cancelled);
   BorderGrowthOptions borders = options.borders;
   borders.threads = options.threads;
   const TopologyGuard guard(mesh, options.keep_topology, stats);
@@ -173,6 +177,7 @@ bool size_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, const Surface
                MesherStats& stats) {
   IsotropicRemeshOptions sizing = options.sizing;
   sizing.threads = options.threads;
+  sizing.cancelled = options.cancelled;
   sizing.keep_topology = options.keep_topology;
   sizing.min_piece_faces = options.min_piece_faces;
   sizing.min_piece_vertex_fraction = options.min_piece_vertex_fraction;
@@ -208,7 +213,7 @@ bool size_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, const Surface
 
 TriangleMesh finish_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, const SurfaceMesherOptions& options,
                          MesherStats& stats) {
-  StageTimer timer(stats);
+  StageTimer timer(stats, options.cancelled);
   stats.removed_triangles +=
       remove_small_pieces(mesh, options.min_piece_faces, options.min_piece_vertex_fraction, &stats.pieces_removed);
   stats.sized = size_mesh(mesh, surface, options, stats);
@@ -241,7 +246,7 @@ TriangleMesh finish_mesh(WorkingMesh& mesh, const SurfaceProjector& surface, con
 DualSurfaceResult mesh_dual_surface(const Eigen::MatrixX3d& sites, const Eigen::MatrixX3i& dual_faces,
                                     const SurfaceProjector& surface, const SurfaceMesherOptions& options) {
   DualSurfaceResult out;
-  StageTimer timer(out.stats);
+  StageTimer timer(out.stats, options.cancelled);
   const int ns = static_cast<int>(sites.rows());
   if (!sites.allFinite()) throw InvalidInputError("mesh_dual_surface: a site has a NaN or infinite coordinate");
   if (dual_faces.size() > 0 && (dual_faces.minCoeff() < 0 || dual_faces.maxCoeff() >= ns))
@@ -271,7 +276,7 @@ DualSurfaceResult mesh_dual_surface(const Eigen::MatrixX3d& sites, const Eigen::
   }
   polish_extracted(mesh, surface, options, out.stats);
   out.mesh = finish_mesh(mesh, surface, options, out.stats);
-  StageTimer finish_timer(out.stats);
+  StageTimer finish_timer(out.stats, options.cancelled);
   ValidationOptions vo;
   vo.require_closed = false;
   out.validation = validate_triangle_mesh(out.mesh.V, out.mesh.F, vo);

@@ -8,6 +8,7 @@
 /// of the meshed surface in proportion to area (every piece gets its share), and the angle polish
 /// that follows starts from near-equilateral triangles, on the border too.
 #include "heatcvt/mesher/angle_polish.h"
+#include "heatcvt/mesher/cancellation.h"
 #include "heatcvt/mesher/edge_flips.h"
 #include "heatcvt/mesher/mesh_checks.h"
 #include "heatcvt/mesher/mesher_stats.h"
@@ -191,6 +192,9 @@ struct IsotropicRemeshOptions {
   double min_piece_vertex_fraction = 0.01;
   FlipOptions flips;         ///< flip rules (max_passes and valence_mode are set per call)
   int threads = 0;           ///< 0 = all cores; results do not depend on it. Default 0.
+  /// Asked before each of the sizing's steps: where it returns true, size_to_target() stops with
+  /// StagesCancelled (mesher/cancellation.h). Default none.
+  CancelQuery cancelled;
 };
 
 /// Vertex count, shape and border of a mesh, as the sizing's targets measure them.

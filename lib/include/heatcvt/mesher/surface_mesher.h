@@ -11,6 +11,7 @@
 
 #include "heatcvt/mesh.h"
 #include "heatcvt/mesher/border_growth.h"
+#include "heatcvt/mesher/cancellation.h"
 #include "heatcvt/mesher/compaction.h"
 #include "heatcvt/mesher/dual_candidates.h"
 #include "heatcvt/mesher/edge_split.h"
@@ -72,6 +73,10 @@ struct SurfaceMesherOptions {
   /// Worker threads of the parallel stages (overrides polish.threads and split.threads);
   /// 0 = all cores. Results do not depend on it. Default 0.
   int threads = 0;
+  /// Asked after each stage and by the sizing (overrides sizing.cancelled): where it returns true
+  /// the stages stop with StagesCancelled (mesher/cancellation.h; remesh_cvt() stops a run it
+  /// started ahead on another thread once the run turns out unneeded). Default none.
+  CancelQuery cancelled;
 };
 
 /// Runs the stages from manifold extraction to long-edge split on `mesh` (vertices = sites with
@@ -117,7 +122,8 @@ struct DualSurfaceResult {
 /// (elephant.off at 1,000 sites) removes the handle, where −0.3 keeps it; valence-3 removal
 /// (polish.valence3, slivers.valence3; passes = 0 turns it off) drops the sites of tiny cells
 /// (about 3 % of the sites on that dual), which lowers the vertex count below the site count.
-/// \throw InvalidInputError on an index out of range or a non-finite site; Error when no face is left.
+/// \throw InvalidInputError on an index out of range or a non-finite site; Error when no face is
+/// left; StagesCancelled where options.cancelled says so.
 DualSurfaceResult mesh_dual_surface(const Eigen::MatrixX3d& sites, const Eigen::MatrixX3i& dual_faces,
                                     const SurfaceProjector& surface, const SurfaceMesherOptions& options = {});
 
