@@ -12,6 +12,7 @@
 #include <mutex>
 #include <set>
 #include <string>
+#include <system_error>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -819,8 +820,13 @@ bool run_stages(const InputSurface& input, const RemeshOptions& options, RemeshR
     defects.push_back(defect);
   }
   std::unique_ptr<TipsHeldAhead> ahead;
-  if (!defects.empty() && resolve_threads(options.cvt.threads) > 1)
-    ahead = std::make_unique<TipsHeldAhead>(input, options, defects, dual, memo);
+  if (!defects.empty() && resolve_threads(options.cvt.threads) > 1) {
+    try {
+      ahead = std::make_unique<TipsHeldAhead>(input, options, defects, dual, memo);
+    } catch (const std::system_error&) {  // no thread to be had: the runs one after the other
+      ahead.reset();
+    }
+  }
   bool kept = run_post_cvt_stages(input, options, out, memo);
   for (std::size_t i = 0; i < defects.size(); ++i) {
     if (kept && targets_met(out, options.cvt.sites, options.mesher.sizing).all()) break;
