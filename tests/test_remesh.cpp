@@ -285,6 +285,23 @@ TEST(RemeshCvt, ATipCutOffIsReachedAgainWithTheRingDraggedAlong) {
   EXPECT_GE(r.quality.mean_min_angle_deg, 52.0);
 }
 
+// remesh_cvt() of `input` at `sites` sites with meshcvt's options on each of test::kThreadCounts
+// threads; expects the same mesh from each and returns the results.
+std::vector<RemeshResult> remesh_on_every_thread_count(const TriangleMesh& input, int sites, const std::string& name) {
+  std::vector<RemeshResult> results;
+  for (int threads : test::kThreadCounts) {
+    RemeshOptions o = remesh_options(sites);
+    o.cvt.threads = threads;
+    results.push_back(remesh_cvt(input, o));
+  }
+  for (std::size_t i = 1; i < results.size(); ++i) {
+    EXPECT_EQ(results[i].tips_held_deg, results.front().tips_held_deg) << name << ", " << test::kThreadCounts[i];
+    EXPECT_TRUE(results[i].mesh.V == results.front().mesh.V) << name << ", " << test::kThreadCounts[i] << " threads";
+    EXPECT_TRUE(results[i].mesh.F == results.front().mesh.F) << name << ", " << test::kThreadCounts[i] << " threads";
+  }
+  return results;
+}
+
 // With more than one thread the stages' run with the tips held goes ahead on a thread of its own
 // beside their first run, and is stopped where the first result makes it unneeded. The output is
 // the same for every thread count: on bunny_libigl at 1,000 sites that run replaces the first
@@ -292,22 +309,29 @@ TEST(RemeshCvt, ATipCutOffIsReachedAgainWithTheRingDraggedAlong) {
 TEST(RemeshCvt, TheRunWithTheTipsHeldGivesTheSameOutputForAnyThreadCount) {
   for (const auto& [name, held] : {std::pair<const char*, bool>{"meshes/bunny_libigl.off", true},
                                    std::pair<const char*, bool>{"meshes/elephant.off", false}}) {
-    const TriangleMesh input = read_mesh(test::data_path(name));
-    std::vector<RemeshResult> results;
-    for (int threads : test::kThreadCounts) {
-      RemeshOptions o = remesh_options(1000);
-      o.cvt.threads = threads;
-      results.push_back(remesh_cvt(input, o));
-    }
+    const std::vector<RemeshResult> results =
+        remesh_on_every_thread_count(read_mesh(test::data_path(name)), 1000, name);
     ASSERT_TRUE(results.front().post_cvt_kept) << name << ": the stages' result must be the output for the test";
     ASSERT_EQ(results.front().tips_held_deg > 0.0, held) << name << ": the run with the tips held must "
                                                           << (held ? "" : "not ") << "be the output for the test";
-    for (std::size_t i = 1; i < results.size(); ++i) {
-      EXPECT_EQ(results[i].tips_held_deg, results.front().tips_held_deg) << name << ", " << test::kThreadCounts[i];
-      EXPECT_TRUE(results[i].mesh.V == results.front().mesh.V) << name << ", " << test::kThreadCounts[i] << " threads";
-      EXPECT_TRUE(results[i].mesh.F == results.front().mesh.F) << name << ", " << test::kThreadCounts[i] << " threads";
-    }
   }
+}
+
+// bunny_pmp at 1,000 sites: its first result needs the coverage repair's retry with dragged rings
+// and misses a crease line, so remesh_cvt() runs the stages again without the retries (asserted),
+// taking the runs it shares with the first stages from those recorded: on one thread the first
+// stages record no run with the tips held (none was needed), on more the run ahead recorded one.
+// The output is the same for every thread count. (The retry's result is not kept here, nor on any
+// shared mesh at 300, 1,000 or 3,000 sites, so this does not compare the recorded runs with runs
+// made again; the byte comparisons in docs/benchmarks.md do.)
+TEST(RemeshCvt, TheCreaseRetryGivesTheSameOutputForAnyThreadCount) {
+  const std::vector<RemeshResult> results =
+      remesh_on_every_thread_count(read_mesh(test::data_path("meshes/bunny_pmp.off")), 1000, "bunny_pmp");
+  bool retried = false;
+  for (const auto& stage : results.front().stage_seconds)
+    retried |= stage.first == "stages without the retries, not kept" ||
+               stage.first == "post-CVT stages, the same run as before";
+  ASSERT_TRUE(retried) << "the crease retry must run for the test";
 }
 
 // bunny_libigl at 300 sites: the post-CVT stages' first result cuts off more of the tips than the
