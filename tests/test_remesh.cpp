@@ -323,7 +323,7 @@ TEST(RemeshCvt, TheRunWithTheTipsHeldGivesTheSameOutputForAnyThreadCount) {
 // stages record no run with the tips held (none was needed), on more the run ahead recorded one.
 // The output is the same for every thread count. (The retry's result is not kept here, nor on any
 // shared mesh at 300, 1,000 or 3,000 sites, so this does not compare the recorded runs with runs
-// made again; the byte comparisons in docs/benchmarks.md do.)
+// made again.)
 TEST(RemeshCvt, TheCreaseRetryGivesTheSameOutputForAnyThreadCount) {
   const std::vector<RemeshResult> results =
       remesh_on_every_thread_count(read_mesh(test::data_path("meshes/bunny_pmp.off")), 1000, "bunny_pmp");
