@@ -317,6 +317,19 @@ TEST(RemeshCvt, TheRunWithTheTipsHeldGivesTheSameOutputForAnyThreadCount) {
   }
 }
 
+// A caller's cancellation query (options.mesher.cancelled) stops remesh_cvt() with StagesCancelled
+// once the post-CVT stages ask it (bunny_libigl at 1,000 sites, where they run), on one thread and
+// with the runs with the tips held going ahead on another.
+TEST(RemeshCvt, TheCallersCancellationQueryStopsTheStages) {
+  const TriangleMesh input = read_mesh(test::data_path("meshes/bunny_libigl.off"));
+  for (int threads : {1, 2}) {
+    RemeshOptions o = remesh_options(1000);
+    o.cvt.threads = threads;
+    o.mesher.cancelled = [] { return true; };
+    EXPECT_THROW(remesh_cvt(input, o), StagesCancelled) << threads << " threads";
+  }
+}
+
 // bunny_pmp at 1,000 sites: its first result needs the coverage repair's retry with dragged rings
 // and misses a crease line, so remesh_cvt() runs the stages again without the retries (asserted),
 // taking the runs it shares with the first stages from those recorded: on one thread the first

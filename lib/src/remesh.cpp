@@ -525,23 +525,22 @@ class InputSurface {
 // crease retry, which differ from the first runs only by that retry: the same dual, the same
 // tips held (mesher tips' min_defect_deg) and the same CVT target give the same result.
 // Read and written by the runs on every thread. The runs leave the CVT's result as it was, so it
-// is not kept: find() gives `after` with before.cvt.
+// is not kept: what find() gives has an empty `cvt`, which is before.cvt.
 class StageRunMemo {
  public:
-  void record(const RemeshResult& before, const RemeshOptions& options, const RemeshResult& after, bool kept) {
+  void record(const RemeshResult& before, const RemeshOptions& options, RemeshResult after) {
+    after.cvt = CvtResult{};
     const std::lock_guard<std::mutex> lock(mutex_);
-    if (find_locked(before, options)) return;
-    entries_.push_back({before.cvt.dual.V, before.cvt.dual.F, key(options), after, kept});
-    entries_.back().after.cvt = CvtResult{};
+    if (!find_locked(before, options))
+      entries_.push_back({before.cvt.dual.V, before.cvt.dual.F, key(options), std::move(after)});
   }
-  // The recorded result of a run from `before` with `options`; false where there is none.
-  bool find(const RemeshResult& before, const RemeshOptions& options, RemeshResult& after, bool& kept) const {
+  // The recorded result of a run from `before` with `options` (its `cvt` empty); false where
+  // there is none.
+  bool find(const RemeshResult& before, const RemeshOptions& options, RemeshResult& after) const {
     const std::lock_guard<std::mutex> lock(mutex_);
     const Entry* e = find_locked(before, options);
     if (!e) return false;
     after = e->after;
-    after.cvt = before.cvt;
-    kept = e->kept;
     return true;
   }
 
@@ -552,7 +551,6 @@ class StageRunMemo {
     Eigen::MatrixX3i F;
     Key key;
     RemeshResult after;
-    bool kept = false;
   };
   static Key key(const RemeshOptions& o) { return {o.mesher.polish.tips.min_defect_deg, o.cvt.target_phi_min_deg}; }
   const Entry* find_locked(const RemeshResult& before, const RemeshOptions& options) const {
@@ -576,12 +574,12 @@ bool run_post_cvt_stages(const InputSurface& in, const RemeshOptions& options, R
                          StageRunMemo* memo = nullptr) {
   if (memo && !(options.coverage_retry_ring_drag > 0)) {
     RemeshResult found;
-    bool kept = false;
-    if (memo->find(out, options, found, kept)) {
+    if (memo->find(out, options, found)) {
+      found.cvt = std::move(out.cvt);
       found.stage_seconds = std::move(out.stage_seconds);
       found.stage_seconds.emplace_back("post-CVT stages, the same run as before", 0.0);
       out = std::move(found);
-      return kept;
+      return out.post_cvt_kept;
     }
   }
   const TriangleMesh& input = in.mesh;
@@ -627,9 +625,11 @@ bool run_post_cvt_stages(const InputSurface& in, const RemeshOptions& options, R
     }
   };
   if (memo) {
+    CvtResult cvt = std::move(out.cvt);  // not recorded (StageRunMemo): not copied
     RemeshResult without_retry = out;
+    out.cvt = std::move(cvt);
     finish(without_retry, refusal, TriangleMesh(post.mesh), ValidationReport(checks));
-    memo->record(out, options, without_retry, without_retry.post_cvt_kept);
+    memo->record(out, options, std::move(without_retry));
   }
   if (for_coverage && retry_with_ring_drag(samples, spacing, surface, options, unrepaired, post.mesh, checks, out,
                                             check_seconds))
@@ -730,8 +730,8 @@ bool improves_on(const RemeshResult& after, const RemeshResult& before, int site
 
 // A run of the post-CVT stages on `dual` (the state before the stages) with the vertices whose
 // angle defect exceeds `defect_deg` held (mesher/tips.h): its result, with only its own stage
-// times, and whether the stages' result was kept. `cancelled` (optional) may stop it
-// (SurfaceMesherOptions::cancelled).
+// times, and whether the stages' result was kept. `cancelled` (optional) may stop it, as may the
+// caller's options.mesher.cancelled (SurfaceMesherOptions::cancelled).
 struct TipsHeldRun {
   RemeshResult result;
   bool kept = false;
@@ -741,7 +741,10 @@ TipsHeldRun run_with_tips_held(const InputSurface& input, const RemeshOptions& o
                                const RemeshResult& dual, StageRunMemo* memo,
                                const CancelQuery& cancelled = {}) {
   RemeshOptions with_tips = options;
-  with_tips.mesher.cancelled = cancelled;
+  if (cancelled)
+    with_tips.mesher.cancelled = [caller = options.mesher.cancelled, cancelled] {
+      return cancelled() || (caller && caller());
+    };
   with_tips.mesher.polish.tips.min_defect_deg = defect_deg;
   with_tips.mesher.sizing.tips.min_defect_deg = defect_deg;
   TipsHeldRun run{dual, false};

@@ -268,7 +268,8 @@ struct RemeshResult {
 ///   mesh V #V by 3, F #F by 3 (valid triangle mesh).
 ///   progress: called after every heat Lloyd iteration (return false to stop), as centroidal_voronoi().
 /// \throw InvalidInputError (invalid mesh, cvt.sites < 1, more sites than the refined input's
-///        vertices, bad CvtOptions, λ < 0, ...); SolverError.
+///        vertices, bad CvtOptions, λ < 0, ...); SolverError; StagesCancelled where
+///        options.mesher.cancelled returns true (mesher/cancellation.h).
 RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options = {},
                         const CvtCallback& progress = {});
 
