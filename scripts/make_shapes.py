@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """Writes meshes built from formulas into a directory, as inputs for bench_remesh --dir that no
 file of ../shared/data resembles: thin parts, pole fans of slivers, sharp edges across a plate
-thinner than a cell, many holes, open sheets with corners, far-off coordinates.
+thinner than a cell, many holes, open sheets with corners, far-off coordinates, and meshes as CAD
+systems export them (float coordinates, flat faces fanned into needles, strips of slivers along
+cylinders, some faces written with the opposite orientation).
 
 Usage: scripts/make_shapes.py OUT_DIR [SHARED_MESHES_DIR]
 
@@ -10,6 +12,7 @@ spot rotated, scaled by 1e-4 and moved 1e4 away, and kitten rotated and scaled b
 """
 import math
 import os
+import struct
 import sys
 
 
@@ -157,6 +160,73 @@ def read_obj(path):
     return V, F
 
 
+def as_float32(V):
+    """Coordinates rounded to single precision, as a binary STL stores them."""
+    r = lambda x: struct.unpack("<f", struct.pack("<f", x))[0]
+    return [(r(x), r(y), r(z)) for x, y, z in V]
+
+
+def extruded(outline, height, fan=True):
+    """A prism over a star-shaped outline as CAD exports it: each cap a fan of needles from the
+    outline's centroid, each side face one quad of two triangles, outward orientation."""
+    n = len(outline)
+    V = [(x, y, 0.0) for x, y in outline] + [(x, y, height) for x, y in outline]
+    cx, cy = sum(p[0] for p in outline) / n, sum(p[1] for p in outline) / n
+    V += [(cx, cy, 0.0), (cx, cy, height)]
+    bottom, top = 2 * n, 2 * n + 1
+    F = []
+    for i in range(n):
+        j = (i + 1) % n
+        F += [(i, j, n + j), (i, n + j, n + i), (bottom, j, i), (top, n + i, n + j)]
+    return as_float32(V), F
+
+
+def cad_cylinder(segments=64):
+    return extruded([(0.5 * math.cos(2 * math.pi * i / segments), 0.5 * math.sin(2 * math.pi * i / segments))
+                     for i in range(segments)], 2.0)
+
+
+def cad_gear(teeth=12, r0=0.8, r1=1.0):
+    outline = []
+    for k in range(teeth):
+        a, d = 2 * math.pi * k / teeth, 2 * math.pi / teeth
+        for f, r in ((0, r0), (0.25, r0), (0.35, r1), (0.65, r1), (0.75, r0)):
+            outline.append((r * math.cos(a + f * d), r * math.sin(a + f * d)))
+    return extruded(outline, 0.4)
+
+
+def cad_plate_with_hole(segments=32, half=1.0, r=0.3, height=0.5):
+    """A square plate with a round through-hole (genus 1): each face of the plate a ring of
+    triangles between the square and the hole, the side walls strips."""
+    square = []
+    for i in range(segments):
+        a = 2 * math.pi * i / segments
+        c, s = math.cos(a), math.sin(a)
+        m = max(abs(c), abs(s))
+        square.append((half * c / m, half * s / m))
+    hole = [(r * math.cos(2 * math.pi * i / segments), r * math.sin(2 * math.pi * i / segments)) for i in range(segments)]
+    V = []
+    for z in (0.0, height):
+        V += [(x, y, z) for x, y in square] + [(x, y, z) for x, y in hole]
+    at = lambda layer, ring, i: layer * 2 * segments + ring * segments + i % segments
+    F = []
+    for i in range(segments):
+        for layer, down in ((0, True), (1, False)):
+            a0, a1, b0, b1 = at(layer, 0, i), at(layer, 0, i + 1), at(layer, 1, i), at(layer, 1, i + 1)
+            for t in ((a0, a1, b1), (a0, b1, b0)):
+                F.append(t[::-1] if down else t)
+        a0, a1, c0, c1 = at(0, 0, i), at(0, 0, i + 1), at(1, 0, i), at(1, 0, i + 1)
+        F += [(a0, a1, c1), (a0, c1, c0)]
+        a0, a1, c0, c1 = at(0, 1, i), at(0, 1, i + 1), at(1, 1, i), at(1, 1, i + 1)
+        F += [(a0, c1, a1), (a0, c0, c1)]
+    return as_float32(V), F
+
+
+def with_flipped_faces(mesh, every=5):
+    V, F = mesh
+    return V, [t[::-1] if i % every == 0 else t for i, t in enumerate(F)]
+
+
 def transformed(V, scale, shift, angle=0.7):
     c, s = math.cos(angle), math.sin(angle)
     return [((c * x - s * y) * scale + shift, (s * x + c * y) * scale + shift, z * scale - shift) for x, y, z in V]
@@ -172,6 +242,8 @@ def main():
         "thin_plate": box((1, 1, 0.04), 1 / 40), "coarse_cube": box((1, 1, 1), 1 / 12),
         "thin_capsule": capsule(), "perforated": perforated(), "square_sheet": square_sheet(),
         "saddle_sheet": saddle_sheet(),
+        "cad_cylinder": cad_cylinder(), "cad_gear": cad_gear(), "cad_plate_hole": cad_plate_with_hole(),
+        "cad_cylinder_flipped_faces": with_flipped_faces(cad_cylinder()),
     }
     if len(sys.argv) == 3:
         for name in ("spot.obj", "kitten.obj"):

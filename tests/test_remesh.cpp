@@ -318,10 +318,10 @@ TEST(RemeshCvt, TheRunWithTheTipsHeldGivesTheSameOutputForAnyThreadCount) {
 }
 
 // A caller's cancellation query (options.mesher.cancelled) stops remesh_cvt() with StagesCancelled
-// once the post-CVT stages ask it (bunny_libigl at 1,000 sites, where they run), on one thread and
+// once the post-CVT stages ask it (armadillo_remeshed_14k at 1,000 sites, where they run), on one thread and
 // with the runs with the tips held going ahead on another.
 TEST(RemeshCvt, TheCallersCancellationQueryStopsTheStages) {
-  const TriangleMesh input = read_mesh(test::data_path("meshes/bunny_libigl.off"));
+  const TriangleMesh input = read_mesh(test::data_path("meshes/armadillo_remeshed_14k.obj"));
   for (int threads : {1, 2}) {
     RemeshOptions o = remesh_options(1000);
     o.cvt.threads = threads;

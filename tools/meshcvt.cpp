@@ -36,6 +36,7 @@ struct Settings {
   explicit Settings(const RemeshOptions& defaults = RemeshOptions{})
       : cvt(defaults.cvt),
         min_vertices_per_site(defaults.min_vertices_per_site),
+        flat_angle_deg(defaults.refinement.flat_angle_deg),
         repair_rounds(defaults.repair_rounds),
         no_post(!defaults.post_cvt_stages),
         no_features(!defaults.creases.enabled),
@@ -57,6 +58,8 @@ struct Settings {
 
   CvtOptions cvt;  // the CVT options no flag sets (the paper's with --paper)
   double min_vertices_per_site;
+  double flat_angle_deg;
+  bool midpoint_refinement = false;
   int repair_rounds;
   bool no_post, no_features;
   double crease_angle;
@@ -130,8 +133,15 @@ void add_stage_options(CLI::App& app, Settings& s) {
   app.add_flag("--no-split", s.no_split,
                "keep the site count: do not add sites to cells that are too big for thin parts (non-manifold dual)");
   app.add_option("--min-vertices-per-site", s.min_vertices_per_site,
-                 "refine the input by midpoint subdivision (surface unchanged) until it has this many vertices per "
-                 "site, so more sites than input vertices work (0 = never refine)")
+                 "refine the input (surface unchanged: long edges split at their midpoints, edges between faces in "
+                 "one plane flipped to Delaunay; midpoint subdivision for inputs that are not oriented manifolds) "
+                 "until it has this many vertices per site, so more sites than input vertices work (0 = never refine)")
+      ->capture_default_str();
+  app.add_flag("--midpoint-refinement", s.midpoint_refinement,
+               "refine the input by midpoint subdivision only (its triangles keep their shapes, needles included)");
+  app.add_option("--flat-angle", s.flat_angle_deg,
+                 "the refinement flips an edge only where its two faces' normals differ by less than this (degrees; "
+                 "0 = exactly coplanar faces only)")
       ->capture_default_str();
   app.add_option("--repair-rounds", s.repair_rounds,
                  "rounds of adding a site to every cell at a non-manifold spot of the dual (and sites on boundary loops "
@@ -192,6 +202,8 @@ void check_settings(const Settings& s) {
   if (s.threads < 0) throw InvalidInputError("--threads must be >= 0");
   if (!(s.min_vertices_per_site >= 0) || !std::isfinite(s.min_vertices_per_site))
     throw InvalidInputError("--min-vertices-per-site must be a number >= 0");
+  if (!(s.flat_angle_deg >= 0 && s.flat_angle_deg < 90))
+    throw InvalidInputError("--flat-angle must be a number of degrees in [0, 90)");
   if (s.repair_rounds < 0) throw InvalidInputError("--repair-rounds must be >= 0");
   if (!(s.crease_angle > 0 && s.crease_angle < 180)) throw InvalidInputError("--crease-angle must be in (0, 180) degrees");
   if (s.quality_every < 0) throw InvalidInputError("--quality-every must be >= 0");
@@ -212,6 +224,8 @@ RemeshOptions remesh_options(const Settings& s) {
   remesh.anisotropy = s.anisotropy;
   remesh.adaptive = s.adaptive;
   remesh.min_vertices_per_site = s.min_vertices_per_site;
+  remesh.refinement.flat_angle_deg = s.flat_angle_deg;
+  if (s.midpoint_refinement) remesh.refinement_method = RemeshOptions::Refinement::midpoint;
   remesh.repair_rounds = s.repair_rounds;
   if (s.repair_rounds == 0) remesh.loop_repair_rounds = 0;  // no repair at all
   remesh.post_cvt_stages = !s.no_post;
@@ -271,6 +285,14 @@ RemeshResult run_remesh(const TriangleMesh& mesh, const RemeshOptions& remesh, c
 
 // Notes on stderr what the run did to the input: refinement, degenerate faces, unreached components.
 void log_input_notes(const RemeshResult& res, const Settings& s) {
+  if (res.reoriented_faces)
+    cli::log_line(s.quiet, "oriented " + s.mesh_path + " consistently: " + std::to_string(res.reoriented_faces) +
+                               " faces reversed (each piece keeps the orientation of most of its faces)");
+  if (res.refinement_splits + res.refinement_flips)
+    cli::log_line(s.quiet, "refined " + s.mesh_path + " for the CVT to " + std::to_string(res.cvt_vertices) + " vertices: " +
+                               std::to_string(res.refinement_splits) + " edges split, " +
+                               std::to_string(res.refinement_flips) + " flat edges flipped (--min-vertices-per-site " +
+                               std::to_string(s.min_vertices_per_site) + ")");
   if (res.refinement_levels)
     cli::log_line(s.quiet, "refined " + s.mesh_path + " by " + std::to_string(res.refinement_levels) +
                                " midpoint subdivision(s) to " + std::to_string(res.cvt_vertices) +
@@ -369,6 +391,9 @@ cli::Json make_report(const Settings& s, const TriangleMesh& mesh, int input_gen
                      {"ring_dragged", res.coverage_ring_dragged}};
   rep["tips_held_deg"] = res.tips_held_deg;
   rep["refinement_levels"] = res.refinement_levels;
+  rep["refinement_splits"] = res.refinement_splits;
+  rep["refinement_flips"] = res.refinement_flips;
+  rep["reoriented_faces"] = res.reoriented_faces;
   rep["cvt_vertices"] = res.cvt_vertices;
   rep["repair_rounds"] = res.repair_rounds;
   rep["repair_sites"] = res.repair_sites;

@@ -21,6 +21,7 @@
 #include "heatcvt/errors.h"
 #include "heatcvt/laplacian.h"
 #include "heatcvt/mesh.h"
+#include "heatcvt/mesh_orientation.h"
 #include "heatcvt/mesher/compaction.h"
 #include "heatcvt/mesher/coverage_repair.h"
 #include "heatcvt/mesher/projector.h"
@@ -908,6 +909,74 @@ struct CvtInput {
   const TriangleMesh& work() const { return is_refined ? refined : mesh; }
 };
 
+double face_area_of(const TriangleMesh& m, Eigen::Index f) {
+  const Eigen::Vector3d a = m.V.row(m.F(f, 0)), b = m.V.row(m.F(f, 1)), c = m.V.row(m.F(f, 2));
+  return 0.5 * (b - a).cross(c - a).norm();
+}
+
+// Faces of a mesh whose area is below 1e-12 of the square of their longest edge: no heat flows
+// through them (their cotan weights are meaningless).
+int degenerate_face_count(const TriangleMesh& m) {
+  int count = 0;
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f) {
+    const Eigen::Vector3d a = m.V.row(m.F(f, 0)), b = m.V.row(m.F(f, 1)), c = m.V.row(m.F(f, 2));
+    const double longest2 = std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()});
+    count += (b - a).cross(c - a).norm() <= 2e-12 * longest2;
+  }
+  return count;
+}
+
+// The share of the mesh's area in faces with an angle below `angle_deg`.
+double needle_area_share(const TriangleMesh& m, double angle_deg) {
+  const double limit = angle_deg * 3.14159265358979323846 / 180;
+  double needles = 0, total = 0;
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f) {
+    double smallest = limit;
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d u = (m.V.row(m.F(f, (k + 1) % 3)) - m.V.row(m.F(f, k))).transpose();
+      const Eigen::Vector3d w = (m.V.row(m.F(f, (k + 2) % 3)) - m.V.row(m.F(f, k))).transpose();
+      smallest = std::min(smallest, std::atan2(u.cross(w).norm(), u.dot(w)));
+    }
+    const double area = face_area_of(m, f);
+    total += area;
+    if (smallest < limit) needles += area;
+  }
+  return total > 0 ? needles / total : 0;
+}
+
+// Enough resolution under every cell, the surface and its topology kept: an oriented edge
+// manifold is refined by refine_surface() (which also reshapes the needles of flat regions),
+// other inputs by midpoint subdivisions while they have too few vertices per site. A mesh with
+// enough vertices is refined only where it has needles (RemeshOptions::needle_area_share). Where
+// the splits and flips would leave more degenerate faces than the input has (a guard: they
+// should leave none), the midpoint subdivisions are used instead.
+void refine_for_cvt(CvtInput& in, RemeshResult& out) {
+  const RemeshOptions& options = in.options;
+  const double wanted = options.min_vertices_per_site * options.cvt.sites;
+  const bool oriented_manifold = out.input.topology.nonmanifold_edges == 0 && out.input.topology.inconsistent_edges == 0;
+  const bool needed = static_cast<double>(in.mesh.V.rows()) < wanted ||
+                      needle_area_share(in.mesh, options.needle_angle_deg) > options.needle_area_share;
+  if (options.refinement_method == RemeshOptions::Refinement::splits_and_flips && oriented_manifold &&
+      options.min_vertices_per_site > 0 && options.max_refinement_levels > 0 && needed) {
+    SurfaceRefinementOptions o = options.refinement;
+    o.target_vertices = std::min(wanted, std::ldexp(static_cast<double>(in.mesh.V.rows()), 2 * options.max_refinement_levels));
+    SurfaceRefinement r = refine_surface(in.mesh, o);
+    if (r.splits + r.flips == 0) return;
+    if (degenerate_face_count(r.mesh) <= degenerate_face_count(in.mesh)) {
+      out.refinement_splits = r.splits;
+      out.refinement_flips = r.flips;
+      in.refined = std::move(r.mesh), in.is_refined = true;
+      return;
+    }
+  }
+  while (options.min_vertices_per_site > 0 && out.refinement_levels < options.max_refinement_levels &&
+         static_cast<double>(in.work().V.rows()) < wanted) {
+    in.refined = midpoint_subdivide(in.work());
+    in.is_refined = true;
+    ++out.refinement_levels;
+  }
+}
+
 // The first part of remesh_cvt() on a mesh already in its unit frame: the input described and
 // refined where it has too few vertices per site, its Laplacian, the adaptive sizing, and the CVT
 // with its closed-ball repair (run_cvt()): `out` holds the dual, `in` what the rest runs on.
@@ -924,13 +993,7 @@ void cvt_of_input(CvtInput& in, const CvtCallback& progress, RemeshResult& out) 
   auto t = Clock::now();
   out.input = describe_surface(in.mesh);
 
-  // Enough resolution under every cell: midpoint subdivision keeps the surface and its topology.
-  while (options.min_vertices_per_site > 0 && out.refinement_levels < options.max_refinement_levels &&
-         static_cast<double>(in.work().V.rows()) < options.min_vertices_per_site * sites) {
-    in.refined = midpoint_subdivide(in.work());
-    in.is_refined = true;
-    ++out.refinement_levels;
-  }
+  refine_for_cvt(in, out);
   const TriangleMesh& work = in.work();
   out.cvt_vertices = static_cast<int>(work.V.rows());
   if (sites > out.cvt_vertices)
@@ -994,6 +1057,12 @@ void stages_of_input(const CvtInput& in, const InputSurface& surface, StageRunMe
   out.iterations = static_cast<int>(out.cvt.iterations.size());
   out.converged = out.cvt.converged;
   out.sites = out.cvt.sites;
+  if (out.refinement_splits + out.refinement_flips > 0) {
+    // The refined mesh's faces lie in the input's surface: its closest points are the same points.
+    Eigen::MatrixX3d at(static_cast<Eigen::Index>(out.sites.size()), 3);
+    for (std::size_t i = 0; i < out.sites.size(); ++i) at.row(static_cast<Eigen::Index>(i)) = position(in.work().V, in.work().F, out.sites[i]).transpose();
+    if (at.rows() > 0) out.sites = closest_surface_points(mesh.V, mesh.F, at);
+  }
   for (SurfacePoint& p : out.sites)
     for (int level = 0; level < out.refinement_levels; ++level) p = subdivision_parent(p);
 }
@@ -1005,10 +1074,14 @@ RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options, 
   // Computed in the unit bounding-box frame (normalize.h), so that the result does not depend on
   // the unit of length; positions are returned in the input's coordinates.
   TriangleMesh unit = mesh;
+  // Faces written with mixed orientations (exported CAD and STL meshes) would give the dual
+  // triangles of both orientations: they are turned to agree first.
+  const int reoriented = std::max(0, orient_faces_consistently(unit.F));
   const NormalizationFrame frame = normalize_positions(unit.V);
   CvtInput in{unit, {}, false, {}, {}, options};
   RemeshResult dual;
   cvt_of_input(in, progress, dual);
+  dual.reoriented_faces = reoriented;
   RemeshResult out = dual;
   const InputSurface surface(unit);
   StageRunMemo memo;  // the retry below repeats runs of the first stages

@@ -3,9 +3,10 @@
 /// CVT remeshing of a triangle mesh in one call (paper §7.1): the pipeline of `meshcvt`.
 ///
 ///   remesh_cvt(mesh, options)
-///     1. describe the input surface (topology, genus, orientability)        describe_surface()
-///     2. refine it by midpoint subdivision while it has fewer than
-///        min_vertices_per_site vertices per site (the surface is unchanged)  midpoint_subdivide()
+///     1. orient the input's faces consistently, describe the input surface
+///        (topology, genus, orientability)                                    orient_faces_consistently(), describe_surface()
+///     2. refine it to min_vertices_per_site vertices per site, slivers of
+///        flat regions reshaped (the surface is unchanged)                     refine_surface(), midpoint_subdivide()
 ///     3. cotan Laplacian (or the anisotropic lifted one), and the relative
 ///        sizes of the adaptive sizing (curvature)                              laplacian.h, adaptive_sizing.h
 ///     4. heat CVT (Lloyd iteration, localized solves) and its dual            centroidal_voronoi()
@@ -28,6 +29,7 @@
 #include "heatcvt/mesher/creases.h"
 #include "heatcvt/mesher/mesher_stats.h"
 #include "heatcvt/mesher/surface_mesher.h"
+#include "heatcvt/surface_refinement.h"
 #include "heatcvt/validate.h"
 
 namespace heatcvt {
@@ -80,16 +82,34 @@ struct RemeshOptions {
   /// g (mesher.sizing.relative_size); the vertex count stays cvt.sites. The quality targets and
   /// the coverage rules keep their uniform spacing. Default uniform (adaptivity 0).
   AdaptiveSizingOptions adaptive;
-  /// Refine the input by midpoint subdivision (1-to-4, the surface is unchanged) until it has at
-  /// least this many vertices per site, so the heat diffusion resolves every cell; 0 = never refine
-  /// (then cvt.sites ≤ #V is required). Default 8. Measured with meshcvt's defaults on
+  /// Refine the input, its surface unchanged, until it has at least this many vertices per site,
+  /// so the heat diffusion resolves every cell; 0 = never refine (then cvt.sites ≤ #V is
+  /// required). An oriented edge manifold is refined by refine_surface() (long edges split,
+  /// flat pairs of faces flipped to Delaunay: `refinement`), which also reshapes the slivers of
+  /// CAD meshes at any vertex count; other inputs by midpoint subdivision (1-to-4). Default 8. Measured with meshcvt's defaults on
   /// ../shared/data/meshes: spot, elephant and torus at 1,000 sites (2.3–2.9 vertices per site)
   /// end with φm 43.7–45.3° after heat iterations, once refined (9–12 per site) the start meets
   /// φm ≥ 51°, φmin ≥ 25° with no heat iteration; max_planck_decimated at 1,000 sites misses it at
   /// 5.3 per site and meets it at 21; knot1, fandisk, spot and torus meet it from 3.2–9.8.
   double min_vertices_per_site = 8.0;
-  /// At most this many midpoint subdivisions (each multiplies #F by 4). Default 4.
+  /// At most this many midpoint subdivisions (each multiplies #F by 4); refine_surface() stops
+  /// at as many vertices as these would give (4^levels times the input's). Default 4.
   int max_refinement_levels = 4;
+  /// How the input is refined: by refine_surface() where it applies (default), or always by
+  /// midpoint subdivision (the triangles keep their shapes, needles included).
+  enum class Refinement { splits_and_flips, midpoint };
+  Refinement refinement_method = Refinement::splits_and_flips;
+  /// An input with at least min_vertices_per_site vertices per site is refined all the same
+  /// (by refine_surface(), where it applies) when more than this share of its area lies in
+  /// needles, faces with an angle below needle_angle_deg: a CAD mesh's fans and strips
+  /// (12–80 % on the CAD shapes of scripts/make_shapes.py; at most 0.4 % on the meshes of
+  /// ../shared/data/meshes, whose refinement is then left as it was). Defaults 0.05 and 5°.
+  double needle_area_share = 0.05;
+  double needle_angle_deg = 5;
+  /// The splits and flat flips of refine_surface() (its target_vertices is set from
+  /// min_vertices_per_site and max_refinement_levels). Defaults: split above 4/3 of the target
+  /// edge length, flip where the faces' normals differ by less than 0.01°.
+  SurfaceRefinementOptions refinement;
   /// Closed-ball repair: at most this many rounds of "a new site at the farthest point of every
   /// cell at a non-manifold spot of the dual (cells wrapping a thin part, touching themselves or
   /// split), the sites in no dual triangle (a cell enclosed by another) dropped, then the CVT
@@ -231,6 +251,11 @@ struct RemeshResult {
   int iterations = 0;                ///< heat Lloyd iterations run (last CVT)
   bool converged = false;            ///< stopped by the tolerance (last CVT)
   int refinement_levels = 0;         ///< midpoint subdivisions of the input before the CVT
+  int refinement_splits = 0;         ///< edges of the input split by refine_surface() before the CVT
+  int refinement_flips = 0;          ///< flat edges flipped by refine_surface() before the CVT
+  /// Faces of the input reversed so that it is consistently oriented (orient_faces_consistently();
+  /// each piece keeps the orientation most of its faces have); 0 where it already was or admits none.
+  int reoriented_faces = 0;
   double size_ratio = 1;             ///< largest over smallest relative size of the adaptive sizing (1 = uniform)
   int cvt_vertices = 0;              ///< vertices of the mesh the CVT ran on
   int degenerate_faces = 0;          ///< faces without heat conduction (Laplacian::degenerate_faces)
