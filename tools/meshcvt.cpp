@@ -133,9 +133,10 @@ void add_stage_options(CLI::App& app, Settings& s) {
   app.add_flag("--no-split", s.no_split,
                "keep the site count: do not add sites to cells that are too big for thin parts (non-manifold dual)");
   app.add_option("--min-vertices-per-site", s.min_vertices_per_site,
-                 "refine the input (surface unchanged: long edges split at their midpoints, edges between faces in "
-                 "one plane flipped to Delaunay; midpoint subdivision for inputs that are not oriented manifolds) "
-                 "until it has this many vertices per site, so more sites than input vertices work (0 = never refine)")
+                 "refine the input (surface unchanged) until it has this many vertices per site, so more sites than "
+                 "input vertices work (0 = never refine): by midpoint subdivision, or, where more than 5 % of the area "
+                 "of an oriented manifold lies in needles (an angle below 5 degrees: CAD fans and strips), at any vertex "
+                 "count by long edges split at their midpoints and edges between faces in one plane flipped to Delaunay")
       ->capture_default_str();
   app.add_flag("--midpoint-refinement", s.midpoint_refinement,
                "refine the input by midpoint subdivision only (its triangles keep their shapes, needles included)");

@@ -944,20 +944,19 @@ double needle_area_share(const TriangleMesh& m, double angle_deg) {
   return total > 0 ? needles / total : 0;
 }
 
-// Enough resolution under every cell, the surface and its topology kept: an oriented edge
-// manifold is refined by refine_surface() (which also reshapes the needles of flat regions),
-// other inputs by midpoint subdivisions while they have too few vertices per site. A mesh with
-// enough vertices is refined only where it has needles (RemeshOptions::needle_area_share). Where
-// the splits and flips would leave more degenerate faces than the input has (a guard: they
+// Enough resolution under every cell, the surface and its topology kept. An oriented edge
+// manifold with needles (RemeshOptions::needle_area_share: a CAD mesh's fans and strips) is
+// refined by refine_surface(), which reshapes them, at any vertex count; other inputs by midpoint
+// subdivisions while they have too few vertices per site (the shapes of their triangles kept).
+// Where the splits and flips would leave more degenerate faces than the input has (a guard: they
 // should leave none), the midpoint subdivisions are used instead.
 void refine_for_cvt(CvtInput& in, RemeshResult& out) {
   const RemeshOptions& options = in.options;
   const double wanted = options.min_vertices_per_site * options.cvt.sites;
   const bool oriented_manifold = out.input.topology.nonmanifold_edges == 0 && out.input.topology.inconsistent_edges == 0;
-  const bool needed = static_cast<double>(in.mesh.V.rows()) < wanted ||
-                      needle_area_share(in.mesh, options.needle_angle_deg) > options.needle_area_share;
   if (options.refinement_method == RemeshOptions::Refinement::splits_and_flips && oriented_manifold &&
-      options.min_vertices_per_site > 0 && options.max_refinement_levels > 0 && needed) {
+      options.min_vertices_per_site > 0 && options.max_refinement_levels > 0 &&
+      needle_area_share(in.mesh, options.needle_angle_deg) > options.needle_area_share) {
     SurfaceRefinementOptions o = options.refinement;
     o.target_vertices = std::min(wanted, std::ldexp(static_cast<double>(in.mesh.V.rows()), 2 * options.max_refinement_levels));
     SurfaceRefinement r = refine_surface(in.mesh, o);

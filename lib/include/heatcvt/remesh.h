@@ -84,9 +84,10 @@ struct RemeshOptions {
   AdaptiveSizingOptions adaptive;
   /// Refine the input, its surface unchanged, until it has at least this many vertices per site,
   /// so the heat diffusion resolves every cell; 0 = never refine (then cvt.sites ≤ #V is
-  /// required). An oriented edge manifold is refined by refine_surface() (long edges split,
-  /// flat pairs of faces flipped to Delaunay: `refinement`), which also reshapes the slivers of
-  /// CAD meshes at any vertex count; other inputs by midpoint subdivision (1-to-4). Default 8. Measured with meshcvt's defaults on
+  /// required). By midpoint subdivision (1-to-4: every triangle keeps its shape), except an
+  /// oriented edge manifold with needles (needle_area_share), which refine_surface() refines
+  /// (long edges split, flat pairs of faces flipped to Delaunay: `refinement`), reshaping the
+  /// needles of CAD meshes, at any vertex count. Default 8. Measured with meshcvt's defaults on
   /// ../shared/data/meshes: spot, elephant and torus at 1,000 sites (2.3–2.9 vertices per site)
   /// end with φm 43.7–45.3° after heat iterations, once refined (9–12 per site) the start meets
   /// φm ≥ 51°, φmin ≥ 25° with no heat iteration; max_planck_decimated at 1,000 sites misses it at
@@ -95,15 +96,15 @@ struct RemeshOptions {
   /// At most this many midpoint subdivisions (each multiplies #F by 4); refine_surface() stops
   /// at as many vertices as these would give (4^levels times the input's). Default 4.
   int max_refinement_levels = 4;
-  /// How the input is refined: by refine_surface() where it applies (default), or always by
+  /// How the input is refined: by refine_surface() where it has needles (default), or always by
   /// midpoint subdivision (the triangles keep their shapes, needles included).
   enum class Refinement { splits_and_flips, midpoint };
   Refinement refinement_method = Refinement::splits_and_flips;
-  /// An input with at least min_vertices_per_site vertices per site is refined all the same
-  /// (by refine_surface(), where it applies) when more than this share of its area lies in
-  /// needles, faces with an angle below needle_angle_deg: a CAD mesh's fans and strips
-  /// (12–80 % on the CAD shapes of scripts/make_shapes.py; at most 0.4 % on the meshes of
-  /// ../shared/data/meshes, whose refinement is then left as it was). Defaults 0.05 and 5°.
+  /// An oriented edge manifold is refined by refine_surface(), at any vertex count, when more
+  /// than this share of its area lies in needles, faces with an angle below needle_angle_deg: a
+  /// CAD mesh's fans and strips (12–80 % on the CAD shapes of scripts/make_shapes.py; at most
+  /// 0.4 % on the meshes of ../shared/data/meshes, which keep the midpoint subdivision: on them
+  /// the splits and flips gained and lost about as often). Defaults 0.05 and 5°.
   double needle_area_share = 0.05;
   double needle_angle_deg = 5;
   /// The splits and flat flips of refine_surface() (its target_vertices is set from
