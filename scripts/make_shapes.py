@@ -166,7 +166,7 @@ def as_float32(V):
     return [(r(x), r(y), r(z)) for x, y, z in V]
 
 
-def extruded(outline, height, fan=True):
+def extruded(outline, height):
     """A prism over a star-shaped outline as CAD exports it: each cap a fan of needles from the
     outline's centroid, each side face one quad of two triangles, outward orientation."""
     n = len(outline)
@@ -244,6 +244,7 @@ def main():
         "saddle_sheet": saddle_sheet(),
         "cad_cylinder": cad_cylinder(), "cad_gear": cad_gear(), "cad_plate_hole": cad_plate_with_hole(),
         "cad_cylinder_flipped_faces": with_flipped_faces(cad_cylinder()),
+        "cad_cylinder_dense": cad_cylinder(2048), "cad_beam": extruded([(0, 0), (10, 0), (10, 0.1), (0, 0.1)], 0.1),
     }
     if len(sys.argv) == 3:
         for name in ("spot.obj", "kitten.obj"):

@@ -958,7 +958,7 @@ void refine_for_cvt(CvtInput& in, RemeshResult& out) {
       options.min_vertices_per_site > 0 && options.max_refinement_levels > 0 &&
       needle_area_share(in.mesh, options.needle_angle_deg) > options.needle_area_share) {
     SurfaceRefinementOptions o = options.refinement;
-    o.target_vertices = std::min(wanted, std::ldexp(static_cast<double>(in.mesh.V.rows()), 2 * options.max_refinement_levels));
+    o.target_vertices = wanted;
     SurfaceRefinement r = refine_surface(in.mesh, o);
     if (r.splits + r.flips == 0) return;
     if (degenerate_face_count(r.mesh) <= degenerate_face_count(in.mesh)) {

@@ -93,8 +93,9 @@ struct RemeshOptions {
   /// φm ≥ 51°, φmin ≥ 25° with no heat iteration; max_planck_decimated at 1,000 sites misses it at
   /// 5.3 per site and meets it at 21; knot1, fandisk, spot and torus meet it from 3.2–9.8.
   double min_vertices_per_site = 8.0;
-  /// At most this many midpoint subdivisions (each multiplies #F by 4); refine_surface() stops
-  /// at as many vertices as these would give (4^levels times the input's). Default 4.
+  /// At most this many midpoint subdivisions (each multiplies #F by 4); 0 also turns
+  /// refine_surface() off, which otherwise refines to min_vertices_per_site vertices per site
+  /// whatever the input's count (a 12-face box reaches any count). Default 4.
   int max_refinement_levels = 4;
   /// How the input is refined: by refine_surface() where it has needles (default), or always by
   /// midpoint subdivision (the triangles keep their shapes, needles included).
@@ -108,7 +109,7 @@ struct RemeshOptions {
   double needle_area_share = 0.05;
   double needle_angle_deg = 5;
   /// The splits and flat flips of refine_surface() (its target_vertices is set from
-  /// min_vertices_per_site and max_refinement_levels). Defaults: split above 4/3 of the target
+  /// min_vertices_per_site). Defaults: split above 4/3 of the target
   /// edge length, flip where the faces' normals differ by less than 0.01°.
   SurfaceRefinementOptions refinement;
   /// Closed-ball repair: at most this many rounds of "a new site at the farthest point of every
