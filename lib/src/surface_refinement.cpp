@@ -112,9 +112,8 @@ double smallest_angle(const Eigen::MatrixX3d& V, int a, int b, int c) {
 // c–d keeps the surface and improves the pair: the two faces lie in one plane (normals within
 // `cos_flat`, before and after), the quad is convex (both new faces turn the way the old ones
 // do), c–d is not already an edge, and the new pair's smallest angle is larger than the old
-// pair's. In a plane
-// that is Lawson's max-min angle criterion, whose flips end in the Delaunay triangulation; it
-// never makes a face narrower than the pair it replaces, also where the pair bends a little.
+// pair's. In a plane that is Lawson's max-min angle criterion, whose flips end in the Delaunay
+// triangulation; it never makes a face narrower than the pair it replaces.
 bool flat_delaunay_flip(const WorkingMesh& m, int a, int b, int c, int d, double cos_flat) {
   const Eigen::MatrixX3d& V = m.V;
   const Eigen::Vector3d n1 = face_cross(V, a, b, c), n2 = face_cross(V, b, a, d);
