@@ -37,6 +37,8 @@ struct Settings {
       : cvt(defaults.cvt),
         min_vertices_per_site(defaults.min_vertices_per_site),
         flat_angle_deg(defaults.refinement.flat_angle_deg),
+        needle_share(defaults.needle_area_share),
+        needle_angle_deg(defaults.needle_angle_deg),
         repair_rounds(defaults.repair_rounds),
         no_post(!defaults.post_cvt_stages),
         no_features(!defaults.creases.enabled),
@@ -58,7 +60,7 @@ struct Settings {
 
   CvtOptions cvt;  // the CVT options no flag sets (the paper's with --paper)
   double min_vertices_per_site;
-  double flat_angle_deg;
+  double flat_angle_deg, needle_share, needle_angle_deg;
   bool midpoint_refinement = false;
   int repair_rounds;
   bool no_post, no_features;
@@ -138,6 +140,11 @@ void add_stage_options(CLI::App& app, Settings& s) {
                  "of an oriented manifold lies in needles (an angle below 5 degrees: CAD fans and strips), at any vertex "
                  "count by long edges split at their midpoints and edges between faces in one plane flipped to Delaunay")
       ->capture_default_str();
+  app.add_option("--needle-share", s.needle_share,
+                 "the splits and flips refine an oriented manifold (at any vertex count) where more than this share of its "
+                 "area lies in needles (faces with an angle below --needle-angle); otherwise midpoint subdivision")
+      ->capture_default_str();
+  app.add_option("--needle-angle", s.needle_angle_deg, "a needle has an angle below this (degrees)")->capture_default_str();
   app.add_flag("--midpoint-refinement", s.midpoint_refinement,
                "refine the input by midpoint subdivision only (its triangles keep their shapes, needles included)");
   app.add_option("--flat-angle", s.flat_angle_deg,
@@ -205,6 +212,9 @@ void check_settings(const Settings& s) {
     throw InvalidInputError("--min-vertices-per-site must be a number >= 0");
   if (!(s.flat_angle_deg >= 0 && s.flat_angle_deg < 90))
     throw InvalidInputError("--flat-angle must be a number of degrees in [0, 90)");
+  if (!(s.needle_share >= 0 && s.needle_share <= 1)) throw InvalidInputError("--needle-share must be a number in [0, 1]");
+  if (!(s.needle_angle_deg >= 0 && s.needle_angle_deg <= 60))
+    throw InvalidInputError("--needle-angle must be a number of degrees in [0, 60]");
   if (s.repair_rounds < 0) throw InvalidInputError("--repair-rounds must be >= 0");
   if (!(s.crease_angle > 0 && s.crease_angle < 180)) throw InvalidInputError("--crease-angle must be in (0, 180) degrees");
   if (s.quality_every < 0) throw InvalidInputError("--quality-every must be >= 0");
@@ -226,6 +236,8 @@ RemeshOptions remesh_options(const Settings& s) {
   remesh.adaptive = s.adaptive;
   remesh.min_vertices_per_site = s.min_vertices_per_site;
   remesh.refinement.flat_angle_deg = s.flat_angle_deg;
+  remesh.needle_area_share = s.needle_share;
+  remesh.needle_angle_deg = s.needle_angle_deg;
   if (s.midpoint_refinement) remesh.refinement_method = RemeshOptions::Refinement::midpoint;
   remesh.repair_rounds = s.repair_rounds;
   if (s.repair_rounds == 0) remesh.loop_repair_rounds = 0;  // no repair at all
