@@ -25,6 +25,7 @@
 #include "heatcvt/mesher/compaction.h"
 #include "heatcvt/mesher/coverage_repair.h"
 #include "heatcvt/mesher/projector.h"
+#include "heatcvt/mesher/working_mesh.h"
 #include "heatcvt/normalize.h"
 #include "heatcvt/parallel.h"
 #include "heatcvt/subdivision.h"
@@ -909,11 +910,6 @@ struct CvtInput {
   const TriangleMesh& work() const { return is_refined ? refined : mesh; }
 };
 
-double face_area_of(const TriangleMesh& m, Eigen::Index f) {
-  const Eigen::Vector3d a = m.V.row(m.F(f, 0)), b = m.V.row(m.F(f, 1)), c = m.V.row(m.F(f, 2));
-  return 0.5 * (b - a).cross(c - a).norm();
-}
-
 // Faces of a mesh whose area is below 1e-12 of the square of their longest edge: no heat flows
 // through them (their cotan weights are meaningless).
 int degenerate_face_count(const TriangleMesh& m) {
@@ -929,18 +925,12 @@ int degenerate_face_count(const TriangleMesh& m) {
 // The share of the mesh's area in faces with an angle below `angle_deg`.
 double needle_area_share(const TriangleMesh& m, double angle_deg) {
   const double limit = angle_deg * 3.14159265358979323846 / 180;
-  double needles = 0, total = 0;
-  for (Eigen::Index f = 0; f < m.F.rows(); ++f) {
-    double smallest = limit;
-    for (int k = 0; k < 3; ++k) {
-      const Eigen::Vector3d u = (m.V.row(m.F(f, (k + 1) % 3)) - m.V.row(m.F(f, k))).transpose();
-      const Eigen::Vector3d w = (m.V.row(m.F(f, (k + 2) % 3)) - m.V.row(m.F(f, k))).transpose();
-      smallest = std::min(smallest, std::atan2(u.cross(w).norm(), u.dot(w)));
-    }
-    const double area = face_area_of(m, f);
-    total += area;
-    if (smallest < limit) needles += area;
-  }
+  const Eigen::VectorXd area = face_areas(m.V, m.F);
+  double needles = 0;
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+    if (triangle_min_angle(m.V.row(m.F(f, 0)).transpose(), m.V.row(m.F(f, 1)).transpose(), m.V.row(m.F(f, 2)).transpose()) < limit)
+      needles += area[f];
+  const double total = area.sum();
   return total > 0 ? needles / total : 0;
 }
 

@@ -3,11 +3,9 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <string>
 #include <vector>
 
 #include "heatcvt/errors.h"
-#include "heatcvt/mesh_orientation.h"
 #include "heatcvt/mesher/working_mesh.h"
 
 namespace heatcvt {
@@ -30,11 +28,6 @@ int third_corner(const MeshFace& f, int a, int b) {
 Eigen::Vector3d face_cross(const Eigen::MatrixX3d& V, int a, int b, int c) {
   const Eigen::Vector3d u = (V.row(b) - V.row(a)).transpose(), w = (V.row(c) - V.row(a)).transpose();
   return u.cross(w);
-}
-
-double angle_at(const Eigen::MatrixX3d& V, int apex, int p, int q) {
-  const Eigen::Vector3d u = (V.row(p) - V.row(apex)).transpose(), w = (V.row(q) - V.row(apex)).transpose();
-  return std::atan2(u.cross(w).norm(), u.dot(w));
 }
 
 // Whether the faces f1 and f2 (−1: none) on an edge lie in one plane: their normals differ by
@@ -103,11 +96,6 @@ void split_edges(WorkingMesh& m, int& used, const std::vector<Edge>& edges) {
     split_edge(m, e.a, e.b, new_vertex(m, used, 0.5 * (m.V.row(e.a) + m.V.row(e.b)).transpose()));
 }
 
-// Smallest angle of the triangle (a, b, c).
-double smallest_angle(const Eigen::MatrixX3d& V, int a, int b, int c) {
-  return std::min({angle_at(V, a, b, c), angle_at(V, b, c, a), angle_at(V, c, a, b)});
-}
-
 // Whether flipping the edge a→b of face f1 = (a, b, c), whose other face is f2 = (b, a, d), to
 // c–d keeps the surface and improves the pair: the two faces lie in one plane (normals within
 // `cos_flat`, before and after), the quad is convex (both new faces turn the way the old ones
@@ -127,8 +115,8 @@ bool flat_delaunay_flip(const WorkingMesh& m, int a, int b, int c, int d, double
   if (n3.dot(n4) < cos_flat * n3.norm() * n4.norm()) return false;
   if (c == d || m.edge_face_count(c, d) != 0) return false;
   constexpr double kGain = 1e-9;  // radians: ties (cocircular quads) are not flipped
-  return std::min(smallest_angle(V, c, a, d), smallest_angle(V, d, b, c)) >
-         std::min(smallest_angle(V, a, b, c), smallest_angle(V, b, a, d)) + kGain;
+  return std::min(face_min_angle(m, {c, a, d}), face_min_angle(m, {d, b, c})) >
+         std::min(face_min_angle(m, {a, b, c}), face_min_angle(m, {b, a, d})) + kGain;
 }
 
 // Lawson's flips restricted to flat pairs of faces, from the edges on `stack` (popped from the
@@ -211,11 +199,9 @@ SurfaceRefinement refine_surface(const TriangleMesh& mesh, const SurfaceRefineme
       !(options.flat_angle_deg >= 0 && options.flat_angle_deg < 90) || !(options.target_vertices >= 0))
     throw InvalidInputError("refine_surface: split_ratio >= 1, 0 < length_step < 1, 0 <= flat_angle_deg < 90 and "
                             "target_vertices >= 0 are required");
-  {
-    Eigen::MatrixX3i F = mesh.F;
-    if (orient_faces_consistently(F) != 0)
-      throw InvalidInputError("refine_surface: the mesh has an edge with more than two faces or is not consistently oriented");
-  }
+  const MeshTopology topology = mesh_topology(mesh.F, static_cast<int>(mesh.V.rows()));
+  if (topology.nonmanifold_edges > 0 || topology.inconsistent_edges > 0)
+    throw InvalidInputError("refine_surface: the mesh has an edge with more than two faces or is not consistently oriented");
   WorkingMesh m(mesh.V, Eigen::MatrixX3d::Zero(mesh.V.rows(), 3), std::vector<int>(static_cast<std::size_t>(mesh.V.rows()), -1));
   std::vector<MeshFace> faces(static_cast<std::size_t>(mesh.F.rows()));
   for (Eigen::Index f = 0; f < mesh.F.rows(); ++f) faces[static_cast<std::size_t>(f)] = {mesh.F(f, 0), mesh.F(f, 1), mesh.F(f, 2)};
