@@ -224,6 +224,28 @@ TEST(SurfaceRefinement, ReshapesTheNeedlesOfFansAndStrips) {
   }
 }
 
+// A finely faceted cylinder (2,048 strips, bent by 0.18° from one to the next) under a flat
+// angle of 0.2°: its side is flat pair by pair only, and there the flips make long edges as the
+// splits remove them. The refinement ends, with at least the vertices asked for and at most the
+// input's plus max_vertex_factor times as many, and keeps the topology.
+TEST(SurfaceRefinement, EndsOnACurveFlatOnlyPairByPair) {
+  const TriangleMesh input = cad_cylinder(2048);
+  SurfaceRefinementOptions o;
+  o.target_vertices = 2000;
+  o.flat_angle_deg = 0.2;
+  ASSERT_LT(360.0 / 2048, o.flat_angle_deg) << "neighbouring strips must be within the flat angle";
+  const SurfaceRefinement r = refine_surface(input, o);
+  EXPECT_GE(r.mesh.V.rows(), 2000);
+  EXPECT_LE(r.mesh.V.rows(), input.V.rows() + o.max_vertex_factor * o.target_vertices);
+  const MeshTopology after = mesh_topology(r.mesh.F, static_cast<int>(r.mesh.V.rows()));
+  EXPECT_EQ(after.nonmanifold_edges, 0);
+  EXPECT_EQ(after.boundary_loops, 0);
+  EXPECT_EQ(after.euler_characteristic(), 2);
+  SurfaceRefinementOptions bad = o;
+  bad.max_vertex_factor = 0.5;
+  EXPECT_THROW(refine_surface(input, bad), InvalidInputError);
+}
+
 // The same input and options give the same mesh; a mesh without anything to split or flip
 // (a regular grid of right triangles, cocircular pairs) is returned as it is; inputs that are
 // not oriented edge manifolds are refused.

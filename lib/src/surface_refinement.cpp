@@ -89,11 +89,17 @@ void split_edge(WorkingMesh& m, int a, int b, int v) {
   }
 }
 
-// Splits every edge of `edges` at its midpoint. Edges of one list are distinct, and halving a
-// face keeps the other edges of the list edges of the mesh.
-void split_edges(WorkingMesh& m, int& used, const std::vector<Edge>& edges) {
-  for (const Edge& e : edges)
+// Splits the edges of `edges` at their midpoints, in order, until the mesh has `max_vertices`
+// vertices. Edges of one list are distinct, and halving a face keeps the other edges of the list
+// edges of the mesh. Returns the splits.
+int split_edges(WorkingMesh& m, int& used, const std::vector<Edge>& edges, int max_vertices) {
+  int splits = 0;
+  for (const Edge& e : edges) {
+    if (used >= max_vertices) break;
     split_edge(m, e.a, e.b, new_vertex(m, used, 0.5 * (m.V.row(e.a) + m.V.row(e.b)).transpose()));
+    ++splits;
+  }
+  return splits;
 }
 
 // Whether flipping the edge a→b of face f1 = (a, b, c), whose other face is f2 = (b, a, d), to
@@ -158,8 +164,10 @@ int flip_flat_edges(WorkingMesh& m, double cos_flat, long& budget) {
 // longer than `length2` (squared) is split and the flips restore the Delaunay property around
 // its midpoint, until none is left. Splitting the longest edge of a Delaunay triangulation
 // inserts points where the region is emptiest, so the points spread evenly over the region
-// instead of lining up along the input's long edges. Returns the splits.
-int refine_flat_regions(WorkingMesh& m, int& used, double length2, double cos_flat, long& budget, int& flips) {
+// instead of lining up along the input's long edges. Stops at `max_vertices` vertices. Returns
+// the splits.
+int refine_flat_regions(WorkingMesh& m, int& used, int max_vertices, double length2, double cos_flat, long& budget,
+                        int& flips) {
   using Entry = std::pair<double, std::pair<int, int>>;  // length², then the edge's ends
   auto longer = [](const Entry& x, const Entry& y) {
     return x.first != y.first ? x.first < y.first : x.second > y.second;
@@ -174,7 +182,7 @@ int refine_flat_regions(WorkingMesh& m, int& used, double length2, double cos_fl
   };
   int splits = 0;
   std::vector<std::pair<int, int>> stack, created;
-  while (!heap.empty()) {
+  while (!heap.empty() && used < max_vertices) {
     std::pop_heap(heap.begin(), heap.end(), longer);
     const auto [a, b] = heap.back().second;
     heap.pop_back();
@@ -196,9 +204,10 @@ int refine_flat_regions(WorkingMesh& m, int& used, double length2, double cos_fl
 
 SurfaceRefinement refine_surface(const TriangleMesh& mesh, const SurfaceRefinementOptions& options) {
   if (!(options.split_ratio >= 1) || !(options.length_step > 0 && options.length_step < 1) ||
-      !(options.flat_angle_deg >= 0 && options.flat_angle_deg < 90) || !(options.target_vertices >= 0))
-    throw InvalidInputError("refine_surface: split_ratio >= 1, 0 < length_step < 1, 0 <= flat_angle_deg < 90 and "
-                            "target_vertices >= 0 are required");
+      !(options.flat_angle_deg >= 0 && options.flat_angle_deg < 90) || !(options.target_vertices >= 0) ||
+      !(options.max_vertex_factor >= 1))
+    throw InvalidInputError("refine_surface: split_ratio >= 1, 0 < length_step < 1, 0 <= flat_angle_deg < 90, "
+                            "target_vertices >= 0 and max_vertex_factor >= 1 are required");
   const MeshTopology topology = mesh_topology(mesh.F, static_cast<int>(mesh.V.rows()));
   if (topology.nonmanifold_edges > 0 || topology.inconsistent_edges > 0)
     throw InvalidInputError("refine_surface: the mesh has an edge with more than two faces or is not consistently oriented");
@@ -216,6 +225,8 @@ SurfaceRefinement refine_surface(const TriangleMesh& mesh, const SurfaceRefineme
     // An equilateral mesh of N vertices (2N faces) on area A has edges of length √(2A / (√3 N)).
     const double area = surface_area(mesh.V, mesh.F);
     double length = std::sqrt(2 * area / (std::sqrt(3.0) * options.target_vertices));
+    const int max_vertices = static_cast<int>(
+        std::min(2e9, m.num_vertices() + std::ceil(options.max_vertex_factor * options.target_vertices)));
     constexpr int kMaxSteps = 200;  // the length shrinks by length_step each step: far below any need
     for (int step = 0; step < kMaxSteps && length > 0; ++step) {
       const double split2 = options.split_ratio * options.split_ratio * length * length;
@@ -224,21 +235,21 @@ SurfaceRefinement refine_surface(const TriangleMesh& mesh, const SurfaceRefineme
       // within the flat angle can leave a pair bent by a little more, so both run until neither
       // finds a long edge, at most kPasses times.
       constexpr int kPasses = 4;
-      for (int added = 1, pass = 0; added > 0 && pass < kPasses; ++pass) {
+      for (int added = 1, pass = 0; added > 0 && pass < kPasses && used < max_vertices; ++pass) {
         added = 0;
-        for (std::vector<Edge> edges = long_edges(m, split2, cos_flat, false); !edges.empty();
+        for (std::vector<Edge> edges = long_edges(m, split2, cos_flat, false); !edges.empty() && used < max_vertices;
              edges = long_edges(m, split2, cos_flat, false)) {
-          split_edges(m, used, edges);
-          added += static_cast<int>(edges.size());
-          budget += 20L * static_cast<long>(edges.size());
+          const int split = split_edges(m, used, edges, max_vertices);
+          added += split;
+          budget += 20L * split;
           out.flips += flip_flat_edges(m, cos_flat, budget);
         }
         budget += 20L * m.num_faces();
-        added += refine_flat_regions(m, used, split2, cos_flat, budget, out.flips);
+        added += refine_flat_regions(m, used, max_vertices, split2, cos_flat, budget, out.flips);
         out.splits += added;
       }
       out.target_edge_length = length;
-      if (used >= options.target_vertices) break;
+      if (used >= options.target_vertices || used >= max_vertices) break;
       length *= options.length_step;
     }
   }

@@ -27,6 +27,11 @@ struct SurfaceRefinementOptions {
   /// While the mesh has fewer than target_vertices vertices with no edge left to split, the
   /// target length is multiplied by this and the splits go on. Default 0.85.
   double length_step = 0.85;
+  /// The splits stop once the mesh has its input's vertices plus this times target_vertices. In
+  /// a region that is flat only pair by pair (a finely faceted curve under a flat angle wider
+  /// than its facets' bends) the flips can make long edges as fast as the splits remove them;
+  /// this bounds the work there. Must be >= 1. Default 3.
+  double max_vertex_factor = 3.0;
 };
 
 /// What refine_surface() made.
