@@ -233,6 +233,34 @@ TEST(MeshcvtTool, AnInputThatCrossesItselfIsNamedAsTheCause) {
   EXPECT_GT(test::json_number(test::read_file(report), "input_self_intersections"), 0);
 }
 
+// An output off the count asked for by more than the sizing's 2 % says so on stderr, with where
+// the sites came from; one at the count does not. Inputs: a torus whose tube (radius 0.08) is
+// narrower than the spacing of 80 sites (0.25), where the CVT splits the cells wrapped around it,
+// and the same torus at 600 sites.
+TEST(MeshcvtTool, AnOutputOffTheCountSaysWhy) {
+  test::ScratchDir dir("meshcvt");
+  const TriangleMesh thin = test::torus(160, 12, 1.0, 0.08);
+  const std::string in = dir.path("thin_torus.obj");
+  write_mesh(in, thin.V, thin.F);
+  for (const int sites : {80, 600}) {
+    SCOPED_TRACE(sites);
+    const std::string out = dir.path("out" + std::to_string(sites) + ".obj");
+    const auto r = test::run_tool("meshcvt", in + " -n " + std::to_string(sites) + " -o " + out);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const Eigen::Index vertices = read_mesh(out).V.rows();
+    const bool off = std::abs(static_cast<double>(vertices - sites)) > 0.02 * sites;
+    const std::string said = std::to_string(vertices) + " vertices for the " + std::to_string(sites) + " asked for";
+    if (sites == 80) {
+      ASSERT_TRUE(off) << vertices << " vertices: the input must miss the count at 80 sites";
+      EXPECT_NE(r.err.find("warning: " + said), std::string::npos) << r.err;
+      EXPECT_NE(r.err.find("added by its splits of cells too big for thin parts"), std::string::npos) << r.err;
+    } else {
+      ASSERT_FALSE(off) << vertices << " vertices: the input must meet the count at 600 sites";
+      EXPECT_EQ(r.err.find("asked for"), std::string::npos) << r.err;
+    }
+  }
+}
+
 TEST(MeshcvtTool, MissingFile) {
   test::ScratchDir dir("meshcvt");
   const std::string missing = dir.path("nope.obj");
