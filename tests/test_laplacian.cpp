@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/SparseCholesky>
+#include <cmath>
 #include <cstdio>
 #include <string>
 
@@ -72,6 +73,32 @@ TEST(Laplacian, DegenerateFacesAreReportedNeverNaN) {
   EXPECT_TRUE(Eigen::MatrixXd(lap.L).allFinite());
   EXPECT_TRUE(lap.M.allFinite());
   EXPECT_GT(lap.M.minCoeff(), 0.0);
+}
+
+// A face across the sphere whose third corner is the midpoint of the other two, written to 9
+// significant digits as in a text file: collinear to rounding, with a nonzero area of rounding
+// size and an angle within 1e-5 rad of 180°. It is skipped like a zero-area face, and M − tL
+// stays positive definite: the heat solver factors it and the heat stays positive.
+TEST(Laplacian, AFaceCollinearToRoundingIsSkippedAndTheHeatSolverFactors) {
+  TriangleMesh m = test::icosphere(2);
+  const int a = 0, b = static_cast<int>(m.V.rows()) / 2, mid = static_cast<int>(m.V.rows());
+  Eigen::RowVector3d midpoint = 0.5 * (m.V.row(a) + m.V.row(b));
+  for (int k = 0; k < 3; ++k) midpoint[k] = std::stod(std::to_string(midpoint[k]).substr(0, 11));
+  m.V.conservativeResize(mid + 1, 3);
+  m.V.row(mid) = midpoint;
+  m.F.conservativeResize(m.F.rows() + 1, 3);
+  m.F.row(m.F.rows() - 1) << a, b, mid;
+  const Eigen::Vector3d u = (m.V.row(a) - m.V.row(mid)).transpose(), v = (m.V.row(b) - m.V.row(mid)).transpose();
+  ASSERT_GT(u.cross(v).norm(), 0.0) << "the face must keep an area of rounding size";
+  ASSERT_LT(std::atan2(u.cross(v).norm(), u.dot(v)), 3.14159265358979 + 1e-12);
+  ASSERT_GT(std::atan2(u.cross(v).norm(), u.dot(v)), 3.14159265358979 - 1e-5) << "its corner must be near 180°";
+  const Laplacian lap = cotan_laplacian(m.V, m.F);
+  ASSERT_EQ(lap.degenerate_faces.size(), 1u);
+  EXPECT_EQ(lap.degenerate_faces[0], m.F.rows() - 1);
+  const HeatSolver solver(lap);
+  const Eigen::VectorXd heat = solver.diffuse_from_vertex(a);
+  EXPECT_TRUE(heat.allFinite());
+  EXPECT_GT(heat.head(mid).minCoeff(), 0.0);
 }
 
 TEST(HeatSolver, MatchesEigenCholeskyAndConservesHeat) {

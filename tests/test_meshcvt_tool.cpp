@@ -261,6 +261,22 @@ TEST(MeshcvtTool, AnOutputOffTheCountSaysWhy) {
   }
 }
 
+// Too few sites for a triangle (one site on a sphere, five on a torus): one error line naming
+// the file, exit 1 and no output file, instead of a mesh of vertices alone.
+TEST(MeshcvtTool, NoTriangleIsAnErrorWithNoOutput) {
+  test::ScratchDir dir("meshcvt");
+  const std::string sphere = dir.path("sphere.obj"), out = dir.path("out.obj");
+  const TriangleMesh ico = test::icosphere(2);
+  write_mesh(sphere, ico.V, ico.F);
+  for (const auto& [in, sites] : {std::make_pair(sphere, 1), std::make_pair(test::data_path("meshes/torus.obj"), 4)}) {
+    SCOPED_TRACE(in);
+    const auto r = test::run_tool("meshcvt", in + " -n " + std::to_string(sites) + " -o " + out);
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_NE(r.err.find("meshcvt: error: " + in + ": no triangle could be made"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::ifstream(out).good()) << "no output may be written";
+  }
+}
+
 TEST(MeshcvtTool, MissingFile) {
   test::ScratchDir dir("meshcvt");
   const std::string missing = dir.path("nope.obj");

@@ -531,6 +531,10 @@ int run(const Settings& s) {
   const TriangleMesh mesh = read_input(s, input);
   const RemeshOptions remesh = remesh_options(s);
   const RemeshResult res = run_remesh(mesh, remesh, s);
+  // A mesh of vertices alone is no remesh: the computation failed, and nothing is written.
+  if (res.mesh.F.rows() == 0)
+    throw heatcvt::Error(s.mesh_path + ": no triangle could be made from the " + std::to_string(res.cvt.sites.size()) +
+                         " sites (their Voronoi cells meet at no vertex: too few sites for this surface; ask for more)");
   log_input_notes(res, s);
   const RunFigures figures = run_figures(mesh, res, t_start);
   const std::vector<cli::CheckRecord> check_list = cli::check_records(res.checks);

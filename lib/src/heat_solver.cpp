@@ -235,7 +235,8 @@ HeatSolver::HeatSolver(const Laplacian& laplacian, const HeatSolverOptions& opti
       }
     }
     if (e - b < 1 || factor_.row[b] != j || !(factor_.value[b] > 0))
-      throw SolverError("HeatSolver: malformed Cholesky factor at column " + std::to_string(j));
+      throw SolverError("HeatSolver: M - tL is not positive definite to rounding (pivot " + std::to_string(j) +
+                        " of its Cholesky factor is not positive; check the mesh and the time step)");
     if (e - b > 1) factor_.parent[j] = factor_.row[b + 1];
   }
   factor_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

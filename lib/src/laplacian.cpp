@@ -43,14 +43,25 @@ Laplacian cotan_laplacian_from_lengths(const Eigen::MatrixX3d& lengths, const Ei
       out.degenerate_faces.push_back(f);
       continue;
     }
+    // cot of the angle at corner k, from the law of cosines: (l_{k+1}² + l_{k+2}² − l_k²) / 4A.
+    double cot[3];
+    for (int k = 0; k < 3; ++k) {
+      const double lk = l[k], l1 = l[(k + 1) % 3], l2 = l[(k + 2) % 3];
+      cot[k] = (l1 * l1 + l2 * l2 - lk * lk) / (4.0 * area);
+    }
+    // A corner so near 180° that its cotangent is below −cot_clamp: the face's corners are
+    // collinear to rounding (its area is rounding, not surface). Its weight, clamped or not,
+    // would be a large negative one that no mass outweighs (M − tL indefinite): skipped like a
+    // zero-area face.
+    if (std::min({cot[0], cot[1], cot[2]}) < -options.cot_clamp) {
+      out.degenerate_faces.push_back(f);
+      continue;
+    }
     for (int k = 0; k < 3; ++k) out.M[F(f, k)] += area / 3.0;  // eq. 6: lumped mass
     for (int k = 0; k < 3; ++k) {
-      // cot of the angle at corner k, from the law of cosines: (l_{k+1}² + l_{k+2}² − l_k²) / 4A
-      const double lk = l[k], l1 = l[(k + 1) % 3], l2 = l[(k + 2) % 3];
-      double cot = (l1 * l1 + l2 * l2 - lk * lk) / (4.0 * area);
-      cot = std::clamp(cot, -options.cot_clamp, options.cot_clamp);
+      const double c = std::min(cot[k], options.cot_clamp);
       const int i = F(f, (k + 1) % 3), j = F(f, (k + 2) % 3);
-      const double w = 0.5 * cot;  // eq. 5: ½ (cot α_ij + cot β_ij), one half per face
+      const double w = 0.5 * c;  // eq. 5: ½ (cot α_ij + cot β_ij), one half per face
       triplets.emplace_back(i, j, w);
       triplets.emplace_back(j, i, w);
       triplets.emplace_back(i, i, -w);

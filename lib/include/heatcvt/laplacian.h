@@ -24,7 +24,9 @@ struct Laplacian {
 struct CotanOptions {
   /// Relative area below which a face counts as degenerate: area < eps · h̄². Default 1e-12.
   double degenerate_area_epsilon = 1e-12;
-  /// Cotangents are clamped to ±cot_clamp so needles never produce inf. Default 1e5.
+  /// Cotangents are clamped to cot_clamp so needles never produce inf; a face with a corner whose
+  /// cotangent is below −cot_clamp (an angle within 1/cot_clamp radians of 180°: its corners are
+  /// collinear to rounding) counts as degenerate. Default 1e5.
   double cot_clamp = 1e5;
   /// Mass given to vertices whose incident faces are all degenerate or that are isolated,
   /// as a fraction of the mean vertex mass, so that M stays positive. Default 1e-6.
