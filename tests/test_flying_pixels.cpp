@@ -225,6 +225,35 @@ TEST(FlyingPixels, ReadCloudDropsThemFromOrganisedPcdFilesOnly) {
   EXPECT_EQ(read_cloud(dir.path("organised.pcd"), &rep, keep).P.rows(), f.P.rows());
 }
 
+// A 50 × 50 organised cloud whose pixel k (row-major) lies at range 1.035^k from the sensor
+// (within float range): every grid neighbour is farther than 3.3 % of the range, beyond the
+// rule's 3 %, so the rule removes every pixel. The error says so (not "NaN/inf"), and with the
+// rule off every point is read.
+TEST(FlyingPixels, ACloudWhoseEveryPixelIsFlyingIsNamedAsSuch) {
+  test::ScratchDir dir("flying");
+  const Eigen::Vector3d eye(0, 0, -5);
+  Eigen::MatrixX3d P(2500, 3);
+  for (int k = 0; k < 2500; ++k) {
+    const Eigen::Vector3d ray = Eigen::Vector3d((k % 50 - 24.5) / 50, (k / 50 - 24.5) / 50, 1).normalized();
+    P.row(k) = (eye + std::pow(1.035, k) * ray).transpose();
+  }
+  const std::string path = dir.path("scattered.pcd");
+  write_pcd(path, P, 50, 50, eye);
+  CloudReadReport rep;
+  try {
+    read_cloud(path, &rep);
+    ADD_FAILURE() << "read_cloud must refuse a cloud with no point left";
+  } catch (const InvalidInputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(path + ": no point left"), std::string::npos) << what;
+    EXPECT_NE(what.find("the flying-pixel rule removed the 2500 others"), std::string::npos) << what;
+    EXPECT_EQ(what.find("are NaN/inf)"), std::string::npos) << what;
+  }
+  CloudReadOptions keep;
+  keep.flying_pixels.neighbour_distance_ratio = 0;
+  EXPECT_EQ(read_cloud(path, &rep, keep).P.rows(), 2500);
+}
+
 TEST(FlyingPixels, RealDepthFramesLoseFewPixelsAndTheStreamMatchesReadCloud) {
   // The organised Kinect frames of the shared data (structured light: an edge pixel gets no
   // depth rather than a mixed one) lose less than 0.1 % of their pixels, and the filtered stream

@@ -22,6 +22,7 @@
 #include "heatcvt/normalize.h"
 #include "heatcvt/pcl/heat_cvt_reconstruction.h"
 #include "heatcvt/reconstruct.h"
+#include "heatcvt/shapes.h"
 #include "test_support.h"
 
 using namespace heatcvt;
@@ -515,9 +516,11 @@ TEST(Hardening, ErrorLinesNameTheFileOrOptionNotAFunction) {
 
 TEST(Hardening, FailedChecksExitWith3AndTheOutputIsWritten) {
   test::ScratchDir dir("hard");
-  write_obj(dir.path("m.obj"), bumpy_sphere().V, bumpy_sphere().F);
-  // One site: the dual has no triangle.
-  const auto r = test::run_tool("meshcvt", dir.path("m.obj") + " -n 1 -q -o " + dir.path("o.obj") + " --report " +
+  // Two sheets through each other: the remesh crosses itself where the input does (a failed
+  // check; a result without any triangle is an error instead, MeshcvtTool.NoTriangleIsAnErrorWithNoOutput).
+  const TriangleMesh sheets = interpenetrating_sheets_mesh(24);
+  write_obj(dir.path("m.obj"), sheets.V, sheets.F);
+  const auto r = test::run_tool("meshcvt", dir.path("m.obj") + " -n 300 -q -o " + dir.path("o.obj") + " --report " +
                                                dir.path("r.json"));
   EXPECT_EQ(r.exit_code, 3) << r.err;
   EXPECT_TRUE(fs::exists(dir.path("o.obj")));

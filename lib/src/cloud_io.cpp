@@ -360,6 +360,11 @@ PointCloud read_cloud(const std::string& path, CloudReadReport* report, const Cl
   if (rep.points_in_file == 0) throw InvalidInputError(path + ": no points in the file");
   clean_cloud(cloud, &rep);
   rep.non_finite_dropped -= rep.flying_pixels_removed;  // finite pixels the flying-pixel rule set to NaN
+  if (cloud.P.rows() == 0 && rep.flying_pixels_removed > 0)
+    throw InvalidInputError(path + ": no point left: " + std::to_string(rep.non_finite_dropped) + " of its " +
+                            std::to_string(rep.points_in_file) + " points are NaN/inf and the flying-pixel rule removed " +
+                            "the " + std::to_string(rep.flying_pixels_removed) +
+                            " others (CloudReadOptions::flying_pixels off, cloud2mesh --flying-pixels 0, keeps them)");
   if (cloud.P.rows() == 0)
     throw InvalidInputError(path + ": no finite points (all " + std::to_string(rep.points_in_file) + " points are NaN/inf)");
   return cloud;
