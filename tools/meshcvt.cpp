@@ -504,12 +504,13 @@ void log_failed_checks(int status, const RemeshResult& res, const Settings& s) {
 }
 
 // Explains on stderr an output whose vertex count is off the count asked for by more than the
-// sizing's tolerance (SizingOptions::count_tolerance): where the sites came from (the CVT's splits
+// sizing's tolerance (IsotropicRemeshOptions::count_tolerance): where the sites came from (the CVT's splits
 // of cells too big for thin parts or handles, the closed-ball repair) and that no result at the
 // count passed the checks. (A result that fails a check gets log_failed_checks()'s line instead.)
 void log_count_miss(int status, const RemeshOptions& remesh, const RemeshResult& res, const Settings& s) {
   const int vertices = static_cast<int>(res.mesh.V.rows());
-  if (status != cli::exit_ok || s.sites <= 0 || std::abs(vertices - s.sites) <= remesh.mesher.sizing.count_tolerance * s.sites) return;
+  const double tolerance = remesh.mesher.sizing.count_tolerance * s.sites;
+  if (status != cli::exit_ok || s.sites <= 0 || std::abs(vertices - s.sites) <= tolerance) return;
   const int sites = static_cast<int>(res.cvt.sites.size());
   const int split = sites - s.sites - res.repair_sites + res.repair_dropped_sites;
   char line[640];
@@ -519,7 +520,7 @@ void log_count_miss(int status, const RemeshOptions& remesh, const RemeshResult&
                 "thin parts narrower than the site spacing need more sites",
                 vertices, s.sites, 100.0 * (vertices - s.sites) / s.sites, sites, split, res.repair_sites,
                 res.repair_dropped_sites,
-                s.no_post ? "the dual is written as it is (--no-post)" : "no remesh at the count passed the checks");
+                s.no_post ? "the dual is written as it is (--no-post-cvt)" : "no remesh at the count passed the checks");
   cli::log_line(s.quiet, line);
 }
 
