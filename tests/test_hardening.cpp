@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <signal.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -409,6 +410,29 @@ TEST(Hardening, AFailingLaterOutputLeavesNoEarlierOne) {
   EXPECT_EQ(lines_of(err).size(), 1u) << err;
   EXPECT_EQ(err.rfind("meshcvt: error: " + dir.path("cells.ply") + ":", 0), 0u) << err;
   EXPECT_EQ(dir.entries(), 1) << "an output or a temporary file was left behind";
+}
+
+// An output path that is a FIFO, directly or through a symbolic link: the write is refused
+// with an IOError naming the path, and the FIFO stays a FIFO (the temporary file is not renamed
+// over it). The same path as a regular file is written.
+TEST(Hardening, AnOutputThatIsNotARegularFileIsRefusedAndKept) {
+  test::ScratchDir dir("hard");
+  const std::string fifo = dir.path("fifo"), link = dir.path("link.obj");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  fs::create_symlink(fifo, link);
+  for (const std::string& path : {fifo, link}) {
+    SCOPED_TRACE(path);
+    try {
+      write_atomically(path, [](std::ostream& o) { o << "data"; });
+      ADD_FAILURE() << "the write must be refused";
+    } catch (const IOError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(path + ": cannot write, it is not a regular file", 0), 0u) << e.what();
+    }
+    EXPECT_TRUE(fs::is_fifo(fs::symlink_status(fifo)));
+  }
+  EXPECT_EQ(dir.entries(), 2) << "a temporary file was left behind";
+  write_atomically(dir.path("plain.txt"), [](std::ostream& o) { o << "data"; });
+  EXPECT_EQ(slurp(dir.path("plain.txt")), "data");
 }
 
 TEST(Hardening, TransactionCommitsAllOrNothing) {

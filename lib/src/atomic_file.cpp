@@ -105,6 +105,10 @@ void write_atomically(const std::string& path, const std::function<void(std::ost
   if (!dir.empty() && !fs::is_directory(dir, ec))
     throw IOError(path + ": cannot write, directory '" + dir.string() + "' does not exist");
   if (fs::is_directory(target, ec)) throw IOError(path + ": cannot write, it is a directory");
+  // The temporary is renamed over the target: a device, FIFO or socket there would be replaced
+  // by a regular file (through a symbolic link too, which resolve_output_path() follows).
+  if (fs::exists(target, ec) && !fs::is_regular_file(target, ec))
+    throw IOError(path + ": cannot write, it is not a regular file (a device, FIFO or socket)");
   const fs::path temp = dir / ("." + target.filename().string() + ".tmp-" + std::to_string(::getpid()) + "-" +
                                std::to_string(g_temp_counter.fetch_add(1)));
   const int slot = register_temp(temp.string());
