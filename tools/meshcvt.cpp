@@ -513,14 +513,18 @@ void log_count_miss(int status, const RemeshOptions& remesh, const RemeshResult&
   if (status != cli::exit_ok || s.sites <= 0 || std::abs(vertices - s.sites) <= tolerance) return;
   const int sites = static_cast<int>(res.cvt.sites.size());
   const int split = sites - s.sites - res.repair_sites + res.repair_dropped_sites;
+  const char* outcome = s.no_post ? "the dual is written as it is (--no-post-cvt)" : "no remesh at the count passed the checks";
   char line[640];
-  std::snprintf(line, sizeof line,
-                "warning: %d vertices for the %d asked for (%+.0f %%): the CVT ended with %d sites (%d added by its "
-                "splits of cells too big for thin parts or handles, %d by the closed-ball repair, %d dropped), and %s; "
-                "thin parts narrower than the site spacing need more sites",
-                vertices, s.sites, 100.0 * (vertices - s.sites) / s.sites, sites, split, res.repair_sites,
-                res.repair_dropped_sites,
-                s.no_post ? "the dual is written as it is (--no-post-cvt)" : "no remesh at the count passed the checks");
+  if (vertices > s.sites)  // the sites the CVT added account for the excess
+    std::snprintf(line, sizeof line,
+                  "warning: %d vertices for the %d asked for (%+.0f %%): the CVT ended with %d sites (%d added by its "
+                  "splits of cells too big for thin parts or handles, %d by the closed-ball repair, %d dropped), and "
+                  "%s; thin parts narrower than the site spacing need more sites",
+                  vertices, s.sites, 100.0 * (vertices - s.sites) / s.sites, sites, split, res.repair_sites,
+                  res.repair_dropped_sites, outcome);
+  else
+    std::snprintf(line, sizeof line, "warning: %d vertices for the %d asked for (%+.0f %%): %s", vertices, s.sites,
+                  100.0 * (vertices - s.sites) / s.sites, outcome);
   cli::log_line(s.quiet, line);
 }
 
