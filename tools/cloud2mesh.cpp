@@ -160,6 +160,12 @@ cli::Json make_report(const std::string& cloud_path, const std::vector<std::stri
   j["border_vertices"] = res.border.mesh_border_vertices;
   j["border_on_scan_edge"] = res.border.mesh_border_on_edge;
   j["border_p90_spacings"] = res.border.mesh_border_distance;
+  j["cloud_uncovered_share"] = res.cloud_coverage.uncovered_share;
+  j["cloud_thickness_spacings"] = res.cloud_coverage.thickness_spacings;
+  j["cloud_largest_uncovered_share"] = res.cloud_coverage.largest_group_share;
+  j["cloud_largest_uncovered_spacings"] = res.cloud_coverage.largest_group_spacings;
+  j["cloud_covered_in_part"] = res.cloud_coverage.partial();
+  j["cloud_volumetric"] = res.cloud_coverage.volumetric();
   j["tip_moves"] = res.coverage.moves;
   j["tip_uncovered_before"] = res.coverage.uncovered_before;
   j["tip_uncovered_after"] = res.coverage.uncovered_after;
@@ -508,6 +514,28 @@ void add_run_figures(cli::Json& j, size_t inputs, int sites, const Reconstructio
   j["filled_hole_edges"] = rec.res.filled_hole_edges;
 }
 
+// Prints how much of the cloud the mesh covers and a warning where the points fill a band or a
+// volume, or where the mesh covers the cloud only in part, with the largest group it left out
+// (cloud_coverage.h).
+void print_cloud_coverage(const CloudCoverage& c) {
+  if (c.queries == 0) return;
+  std::printf("  coverage: %.1f %% of the points within one site spacing of the mesh; the points lie %.2f spacings "
+              "thick\n",
+              100.0 * (1 - c.uncovered_share), c.thickness_spacings);
+  if (c.volumetric())
+    std::printf("  warning: the points fill a band or a volume %.2f site spacings thick (from %.2f they do not sample "
+                "a surface at this spacing): the mesh follows no surface of them; a smaller -n, --denoise or "
+                "--voxel may help where it is noise\n",
+                c.thickness_spacings, c.volume_thickness);
+  if (!c.partial()) return;
+  std::printf("  warning: the mesh covers the cloud only in part: %.1f %% of the points are farther than one site "
+              "spacing from it; the largest group of them holds %.1f %% of the points and is %.1f spacings across",
+              100.0 * c.uncovered_share, 100.0 * c.largest_group_share, c.largest_group_spacings);
+  if (c.largest_group_spacings < 1)
+    std::printf(" (smaller than one site spacing: a larger -n meshes it)");
+  std::printf("\n");
+}
+
 // Prints the summary of a run on stdout: points, times, the mesh, its quality and border, the checks.
 void print_summary(const Settings& s, const std::string& cloud_path, const Reconstruction& rec, double per_iter,
                    double total_s, const std::vector<cli::CheckRecord>& checks) {
@@ -540,6 +568,7 @@ void print_summary(const Settings& s, const std::string& cloud_path, const Recon
                 "within %.2f), %.1f %% of the scan's %d edge points within one spacing of the mesh\n",
                 100.0 * res.border.mesh_border_on_edge, res.border.mesh_border_vertices,
                 res.border.mesh_border_distance, 100.0 * res.border.edge_covered, res.border.edge_points);
+  print_cloud_coverage(res.cloud_coverage);
   if (res.coverage.moves > 0)
     std::printf("  tips: %d vertices moved onto the fitted surface the mesh had cut off (%d CVT points farther than "
                 "half a spacing from it before, %d after)\n",

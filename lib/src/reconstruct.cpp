@@ -71,6 +71,7 @@ void check_options(const ReconstructionOptions& o) {
     bad("cvt_points_per_site must be 0 (every point) or at least 3");
   if (o.denoise && o.denoise_neighbors < 2) bad("denoise_neighbors must be >= 2");
   check_stray_point_options(o.stray);
+  check_cloud_coverage_options(o.cloud_coverage);
   if (o.denoise && (!(o.denoise_stddev > 0) || !std::isfinite(o.denoise_stddev))) bad("denoise_stddev must be > 0");
   const CloudPreparationOptions& c = o.cloud;
   if (c.orientation_neighbors < 1 || c.max_fit_neighbors < 1 || c.smoothing_spacing_neighbors < 1)
@@ -725,6 +726,15 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   // off the count.
   const MeshingInputs in{cp, T, lap, metric_area, sizing.get(), density, fit, cloud.frame, n};
   res = mesh_with_retries(in, options, report, std::move(res));
+  StageClock coverage_stage{res};
+  Eigen::MatrixX3d P_input = P;
+  restore_frame(P_input, cloud.frame);
+  CloudCoverageOptions coverage_options = options.cloud_coverage;
+  coverage_options.threads = options.threads;
+  // The site spacing asked for, in input units: sqrt(area / sites) on the CVT points' triangles.
+  const double site_spacing = std::sqrt(surface_area(cp.PC, T) / requested_vertices(options)) * cloud.frame.scale;
+  res.cloud_coverage = cloud_coverage(res.mesh, P_input, site_spacing, coverage_options);
+  coverage_stage.done("cloud coverage");
   res.total_seconds = since(t_start);
   return res;
 }

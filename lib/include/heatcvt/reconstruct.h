@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "heatcvt/adaptive_sizing.h"
+#include "heatcvt/cloud_coverage.h"
 #include "heatcvt/cvt.h"
 #include "heatcvt/mesh.h"
 #include "heatcvt/mesher/coverage_repair.h"
@@ -188,6 +189,10 @@ struct ReconstructionOptions {
   int count_retries = 2;
   /// See `count_retries` (a fraction of the count asked for). Default 0.25.
   double retry_count_error = 0.25;
+  /// How the result's coverage of the points used is measured (ReconstructionResult::
+  /// cloud_coverage, cloud_coverage.h). Defaults as CloudCoverageOptions; `threads` is taken
+  /// from this struct's.
+  CloudCoverageOptions cloud_coverage;
 };
 
 /// The CVT options reconstruct_surface() runs centroidal_voronoi() with (sites, iterations,
@@ -258,6 +263,10 @@ struct ReconstructionResult {
   /// (ReconstructionOptions::count_retries), and the seed of the start sites of the result kept.
   int count_retries = 0;
   std::uint32_t seed_used = 1;
+  /// How much of the points used (after the clean-up) the mesh covers, how thick they lie at its
+  /// spacing and the largest group it leaves out, in input units (cloud_coverage.h): every check
+  /// can pass on a mesh of one part of the cloud.
+  CloudCoverage cloud_coverage;
 };
 
 /// Reconstructs a surface from the points P (#P by 3; NaN-free, duplicates allowed).

@@ -1,0 +1,189 @@
+// Coverage of a cloud by the mesh made from it (cloud_coverage.h): whole and partial meshes of a
+// sampled sphere, points that fill a ball, and the reconstruction's and cloud2mesh's report of them.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "heatcvt/cloud_coverage.h"
+#include "heatcvt/cloud_io.h"
+#include "heatcvt/errors.h"
+#include "heatcvt/reconstruct.h"
+#include "test_support.h"
+
+namespace heatcvt {
+namespace {
+
+// `n` points uniformly on the sphere of radius r about c (seeded).
+Eigen::MatrixX3d sphere_points(int n, double r, const Eigen::Vector3d& c, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0, 1);
+  Eigen::MatrixX3d P(n, 3);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d d(g(rng), g(rng), g(rng));
+    P.row(i) = (c + r * d.normalized()).transpose();
+  }
+  return P;
+}
+
+// `n` points uniformly in the unit ball (seeded).
+Eigen::MatrixX3d ball_points(int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Eigen::MatrixX3d P(n, 3);
+  for (int i = 0; i < n;) {
+    const Eigen::Vector3d x(u(rng), u(rng), u(rng));
+    if (x.squaredNorm() <= 1) P.row(i++) = x.transpose();
+  }
+  return P;
+}
+
+// The faces of `m` whose centroid has z above `z` (the vertices all kept).
+TriangleMesh cap_above(const TriangleMesh& m, double z) {
+  TriangleMesh out;
+  out.V = m.V;
+  std::vector<int> keep;
+  for (int f = 0; f < m.F.rows(); ++f)
+    if ((m.V.row(m.F(f, 0)) + m.V.row(m.F(f, 1)) + m.V.row(m.F(f, 2)))(2) / 3 > z) keep.push_back(f);
+  out.F.resize(static_cast<Eigen::Index>(keep.size()), 3);
+  for (std::size_t i = 0; i < keep.size(); ++i) out.F.row(static_cast<Eigen::Index>(i)) = m.F.row(keep[i]);
+  return out;
+}
+
+TEST(CloudCoverage, AMeshOfTheWholeSampledSurfaceCoversEveryPoint) {
+  const TriangleMesh mesh = test::icosphere(4);
+  const CloudCoverage c = cloud_coverage(mesh, sphere_points(20000, 1, Eigen::Vector3d::Zero(), 3));
+  EXPECT_EQ(c.queries, 20000);
+  EXPECT_EQ(c.uncovered_share, 0.0);
+  EXPECT_EQ(c.groups, 0);
+  EXPECT_FALSE(c.partial());
+  EXPECT_LT(c.thickness_spacings, 0.05);  // points on the surface: only the quadratic's misfit
+  EXPECT_FALSE(c.volumetric());
+}
+
+TEST(CloudCoverage, AMeshOfHalfTheSurfaceLeavesTheOtherHalfAsOneGroup) {
+  const TriangleMesh whole = test::icosphere(4);
+  const TriangleMesh half = cap_above(whole, 0);
+  const Eigen::MatrixX3d P = sphere_points(20000, 1, Eigen::Vector3d::Zero(), 4);
+  const CloudCoverage c = cloud_coverage(half, P);
+  // Precondition: the half mesh has a border at the equator.
+  ASSERT_LT(half.F.rows(), whole.F.rows() * 3 / 5);
+  // Every point more than one spacing below the equator is uncovered, every point above it covered:
+  // the share lies between those of the two caps.
+  const double h = c.spacing;
+  long below = 0, above_margin = 0;
+  for (Eigen::Index i = 0; i < P.rows(); ++i) {
+    below += P(i, 2) < -h;
+    above_margin += P(i, 2) < h;
+  }
+  EXPECT_GE(c.uncovered_share, static_cast<double>(below) / P.rows());
+  EXPECT_LE(c.uncovered_share, static_cast<double>(above_margin) / P.rows());
+  EXPECT_TRUE(c.partial());
+  // The lower half is one group, about the sphere's diameter across.
+  EXPECT_EQ(c.groups, 1);
+  EXPECT_EQ(c.largest_group_share, c.uncovered_share);
+  EXPECT_GT(c.largest_group_spacings * h, 1.8);
+  for (int threads : test::kThreadCounts) {
+    CloudCoverageOptions o;
+    o.threads = threads;
+    const CloudCoverage t = cloud_coverage(half, P, 0, o);
+    EXPECT_EQ(t.uncovered_share, c.uncovered_share) << threads;
+    EXPECT_EQ(t.thickness_spacings, c.thickness_spacings) << threads;
+    EXPECT_EQ(t.largest_group_spacings, c.largest_group_spacings) << threads;
+  }
+}
+
+TEST(CloudCoverage, PointsThatFillABallAreVolumetricAtEverySpacing) {
+  const Eigen::MatrixX3d P = ball_points(20000, 5);
+  for (int subdivisions : {2, 3}) {
+    const CloudCoverage c = cloud_coverage(test::icosphere(subdivisions), P);
+    EXPECT_TRUE(c.volumetric()) << subdivisions << ": " << c.thickness_spacings;
+    // The interior points are far from the sphere: the mesh covers the cloud only in part.
+    EXPECT_TRUE(c.partial()) << subdivisions;
+  }
+  // A sparser ball: where a spacing holds too few points the estimate widens its radius
+  // (CloudCoverageOptions::max_radius_doublings); it sees the volume within two spacings, and
+  // over a wider radius it no longer calls the points a volume (the shape's own misfit counts).
+  const Eigen::MatrixX3d sparse = ball_points(2000, 11);
+  const CloudCoverage within_two = cloud_coverage(test::icosphere(3), sparse);
+  EXPECT_EQ(within_two.thickness_radius_spacings, 2.0);
+  EXPECT_TRUE(within_two.volumetric()) << within_two.thickness_spacings;
+  const CloudCoverage wider = cloud_coverage(test::icosphere(4), sparse);
+  EXPECT_GT(wider.thickness_radius_spacings, 2.0);
+  EXPECT_FALSE(wider.volumetric());
+  // The same number of points on the sphere's surface is not.
+  EXPECT_FALSE(cloud_coverage(test::icosphere(3), sphere_points(20000, 1, Eigen::Vector3d::Zero(), 6)).volumetric());
+}
+
+TEST(CloudCoverage, BadOptionsAndAnEmptyMeshAreRefused) {
+  const TriangleMesh mesh = test::icosphere(2);
+  const Eigen::MatrixX3d P = sphere_points(100, 1, Eigen::Vector3d::Zero(), 7);
+  CloudCoverageOptions o;
+  o.covered_spacings = 0;
+  EXPECT_THROW(cloud_coverage(mesh, P, 0, o), InvalidInputError);
+  o = {};
+  o.partial_share = 1.5;
+  EXPECT_THROW(cloud_coverage(mesh, P, 0, o), InvalidInputError);
+  EXPECT_THROW(cloud_coverage(mesh, P, -1), InvalidInputError);
+  EXPECT_THROW(cloud_coverage(mesh, P, NAN), InvalidInputError);
+  TriangleMesh empty;
+  empty.V = mesh.V;
+  EXPECT_THROW(cloud_coverage(empty, P), InvalidInputError);
+  ReconstructionOptions r;
+  r.cloud_coverage.volume_thickness = -1;
+  EXPECT_THROW(reconstruct_surface(P, r), InvalidInputError);
+}
+
+// A cluster far smaller than the site spacing -n gives the whole cloud: the area shares give it
+// no site, so the mesh leaves it out, and the result says so (the largest uncovered group, under
+// one spacing across, holds most of the points).
+TEST(CloudCoverage, AReconstructionThatLeavesOutAClusterSmallerThanASpacingSaysSo) {
+  Eigen::MatrixX3d P(3000, 3);
+  P << sphere_points(2500, 1, Eigen::Vector3d::Zero(), 8), sphere_points(500, 100, Eigen::Vector3d(300, 0, 0), 9);
+  ReconstructionOptions o;
+  o.sites = 300;
+  const ReconstructionResult r = reconstruct_surface(P, o);
+  const CloudCoverage& c = r.cloud_coverage;
+  // Precondition: the small sphere is below one site spacing of the whole mesh.
+  ASSERT_GT(c.spacing, 2.0);
+  EXPECT_TRUE(c.partial());
+  EXPECT_GE(c.largest_group_share, 0.8);
+  EXPECT_LT(c.largest_group_spacings, 1.0);
+  EXPECT_FALSE(c.volumetric());
+  // The small sphere alone is meshed whole.
+  ReconstructionOptions alone = o;
+  const ReconstructionResult s = reconstruct_surface(P.topRows(2500), alone);
+  EXPECT_FALSE(s.cloud_coverage.partial());
+  EXPECT_LT(s.cloud_coverage.uncovered_share, 0.02);
+}
+
+TEST(CloudCoverage, Cloud2meshWarnsOfACloudThatFillsAVolumeAndNotOfAScan) {
+  test::ScratchDir dir("coverage_tool");
+  {
+    const Eigen::MatrixX3d P = ball_points(4000, 10);
+    PointCloud cloud;
+    cloud.P = P;
+    write_cloud_xyz(dir.path("ball.xyz"), cloud);
+  }
+  const test::CommandResult ball =
+      test::run_tool("cloud2mesh", dir.path("ball.xyz") + " -n 200 -o " + dir.path("ball.ply") + " --report " +
+                                       dir.path("ball.json") + " --quiet");
+  ASSERT_TRUE(ball.exit_code == 0 || ball.exit_code == 3) << ball.err;
+  const test::CommandResult ball_out =
+      test::run_tool("cloud2mesh", dir.path("ball.xyz") + " -n 200 -o " + dir.path("ball2.ply"));
+  EXPECT_NE(ball_out.out.find("warning: the points fill a band or a volume"), std::string::npos) << ball_out.out;
+  const std::string json = test::read_file(dir.path("ball.json"));
+  EXPECT_NE(json.find("\"cloud_volumetric\": true"), std::string::npos) << json;
+  EXPECT_GE(test::json_number(json, "cloud_thickness_spacings"), 0.25);
+
+  const test::CommandResult milk = test::run_tool(
+      "cloud2mesh", test::data_path("clouds/pcl_milk.pcd") + " -n 500 -o " + dir.path("milk.ply"));
+  ASSERT_EQ(milk.exit_code, 0) << milk.err;
+  EXPECT_NE(milk.out.find("coverage: "), std::string::npos) << milk.out;
+  EXPECT_EQ(milk.out.find("warning"), std::string::npos) << milk.out;
+}
+
+}  // namespace
+}  // namespace heatcvt
