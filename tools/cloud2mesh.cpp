@@ -162,6 +162,7 @@ cli::Json make_report(const std::string& cloud_path, const std::vector<std::stri
   j["border_p90_spacings"] = res.border.mesh_border_distance;
   j["cloud_uncovered_share"] = res.cloud_coverage.uncovered_share;
   j["cloud_thickness_spacings"] = res.cloud_coverage.thickness_spacings;
+  j["cloud_thickness_radius_spacings"] = res.cloud_coverage.thickness_radius_spacings;
   j["cloud_largest_uncovered_share"] = res.cloud_coverage.largest_group_share;
   j["cloud_largest_uncovered_spacings"] = res.cloud_coverage.largest_group_spacings;
   j["cloud_covered_in_part"] = res.cloud_coverage.partial();
