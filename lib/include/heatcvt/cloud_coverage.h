@@ -35,12 +35,12 @@ struct CloudCoverageOptions {
   /// sampling a surface (CloudCoverage::volumetric()). Default 0.28, where the heat CVT's dual
   /// breaks (noise_estimate.h): points that fill a ball give 0.29-0.39 (more near its surface,
   /// where neighbourhoods are cut), blobby.xyz 0.33, pcl_noisy_slice_displaced 0.278 at 500 sites,
-  /// the other scans of ../shared/data/clouds at most 0.22.
+  /// the other scans of ../shared/data/clouds at most 0.22 where measured within 2 spacings.
   double volume_thickness = 0.28;
   /// The thickness tells a volume only where it was measured within at most this many site
   /// spacings: over a wider radius (a sampling sparser than about 3 points per site, see
   /// max_radius_doublings) the quadratic's misfit to the shape itself counts (fin90_with_PCA_normals
-  /// at 500 sites, 1.5 points per site: 0.33 over 8 spacings). Default 2.
+  /// at 500 sites, 1.5 points per site: 0.33 over 4 spacings). Default 2.
   double volume_radius_spacings = 2.0;
   /// Where fewer than half the thickness's query points have NoiseEstimateOptions::min_neighbors
   /// points within a site spacing (a cloud sparser than the spacing), the radius of the estimate
