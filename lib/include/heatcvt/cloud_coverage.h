@@ -33,8 +33,8 @@ struct CloudCoverageOptions {
   double partial_share = 0.2;
   /// A thickness (in site spacings) from which the points fill a band or a volume rather than
   /// sampling a surface (CloudCoverage::volumetric()). Default 0.28, where the heat CVT's dual
-  /// breaks (noise_estimate.h): points that fill a ball give 0.29-0.39 (more near its surface,
-  /// where neighbourhoods are cut), blobby.xyz 0.33, pcl_noisy_slice_displaced 0.278 at 500 sites,
+  /// breaks (noise_estimate.h): points that fill a ball give 0.29-0.39 (the less, the more
+  /// neighbourhoods its surface cuts), blobby.xyz 0.33, pcl_noisy_slice_displaced 0.278 at 500 sites,
   /// the other scans of ../shared/data/clouds at most 0.22 where measured within 2 spacings.
   double volume_thickness = 0.28;
   /// The thickness tells a volume only where it was measured within at most this many site
