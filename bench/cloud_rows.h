@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "bench_util.h"
-#include "heatcvt/closest_point.h"
+#include "heatcvt/cloud_coverage.h"
 #include "heatcvt/dual_mesh.h"
 #include "heatcvt/mesh.h"
 #include "heatcvt/sample_border.h"
@@ -43,15 +43,8 @@ inline Row describe(const TriangleMesh& m, double seconds, const Eigen::MatrixX3
   if (m.F.rows() == 0) return r;
   const double h = mean_edge_length(m.V, m.F);
   r.border = border_fit(P, on_border, m, h);
-  // Every point of clouds up to 100,000 points, an even stride of larger ones.
-  const Eigen::Index stride = std::max<Eigen::Index>(1, P.rows() / 100000);
-  Eigen::MatrixX3d Q(P.rows() / stride, 3);
-  for (Eigen::Index i = 0; i < Q.rows(); ++i) Q.row(i) = P.row(i * stride);
-  const std::vector<SurfacePoint> closest = closest_surface_points(m.V, m.F, Q);
-  long near = 0;
-  for (Eigen::Index i = 0; i < Q.rows(); ++i)
-    near += (position(m.V, m.F, closest[static_cast<std::size_t>(i)]) - Q.row(i).transpose()).norm() <= h;
-  r.covered = Q.rows() > 0 ? static_cast<double>(near) / static_cast<double>(Q.rows()) : 0.0;
+  // Every point of clouds up to 100,000 points, an even stride of larger ones (cloud_coverage.h).
+  r.covered = P.rows() > 0 ? 1.0 - cloud_coverage(m, P).uncovered_share : 0.0;
   return r;
 }
 
