@@ -159,6 +159,36 @@ TEST(CloudCoverage, AReconstructionThatLeavesOutAClusterSmallerThanASpacingSaysS
   EXPECT_LT(s.cloud_coverage.uncovered_share, 0.02);
 }
 
+// An unevenly dense RGB-D fragment whose sparse floor the dual of the first start sites leaves
+// out (324 of 500 sites in no triangle): the mesh covers the cloud in part, and the retries from
+// the next start sites (ReconstructionOptions::count_retries) give one that covers it whole.
+TEST(CloudCoverage, APartialMeshIsRebuiltFromOtherStartSites) {
+  const PointCloud cloud = read_cloud(test::data_path("clouds/open3d_cloud_bin_0.pcd"));
+  ReconstructionOptions once;
+  once.sites = 500;
+  once.count_retries = 0;
+  const ReconstructionResult first = reconstruct_surface(cloud.P, once);
+  // Precondition: the first start sites give a partial mesh whose left-out part other sites can reach.
+  ASSERT_TRUE(first.cloud_coverage.partial()) << first.cloud_coverage.uncovered_share;
+  ASSERT_FALSE(first.cloud_coverage.volumetric());
+  ASSERT_GE(first.cloud_coverage.largest_group_spacings, 1.0);
+  ReconstructionOptions retried = once;
+  retried.count_retries = ReconstructionOptions{}.count_retries;
+  const ReconstructionResult r = reconstruct_surface(cloud.P, retried);
+  EXPECT_GE(r.count_retries, 1);
+  EXPECT_NE(r.seed_used, once.seed);
+  EXPECT_FALSE(r.cloud_coverage.partial()) << r.cloud_coverage.uncovered_share;
+  EXPECT_LT(r.cloud_coverage.uncovered_share, first.cloud_coverage.uncovered_share);
+  EXPECT_TRUE(r.validation.ok()) << r.validation.summary();
+  EXPECT_LE(std::abs(r.mesh.V.rows() - 500), 10);
+  EXPECT_GE(r.min_angle_deg, 25.0);
+  // The same result for another thread count.
+  retried.threads = 1;
+  const ReconstructionResult one = reconstruct_surface(cloud.P, retried);
+  EXPECT_EQ(one.seed_used, r.seed_used);
+  EXPECT_TRUE(one.mesh.V == r.mesh.V && one.mesh.F == r.mesh.F);
+}
+
 TEST(CloudCoverage, Cloud2meshWarnsOfACloudThatFillsAVolumeAndNotOfAScan) {
   test::ScratchDir dir("coverage_tool");
   {

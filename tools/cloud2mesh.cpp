@@ -368,8 +368,10 @@ void add_reconstruction_options(CLI::App& app, Settings& s) {
   app.add_option("--t-coef", s.opt.time_coefficient, "time step t = C * (mean edge length)^2")->capture_default_str();
   app.add_option("--seed", s.opt.seed, "seed of the initial sites")->capture_default_str();
   app.add_option("--count-retries", s.opt.count_retries,
-                 "where the mesh is more than --retry-count-error * -n off the count, run the CVT and the mesher again "
-                 "from the start sites of the next seeds, at most this many times, and keep the best result (0 = never)")
+                 "where the mesh is more than --retry-count-error * -n off the count, or leaves more than a fifth of "
+                 "the points farther than a site spacing (not where they fill a volume or the part left out is "
+                 "smaller than a spacing), run the CVT and the mesher again from the start sites of the next seeds, at "
+                 "most this many times, and keep the best result (0 = never)")
       ->capture_default_str();
   app.add_option("--retry-count-error", s.opt.retry_count_error, "see --count-retries (a fraction of -n)")
       ->capture_default_str();
@@ -559,7 +561,8 @@ void print_summary(const Settings& s, const std::string& cloud_path, const Recon
               val.boundary_loops, val.genus, res.holes_filled, res.unused_sites, res.pieces_removed,
               res.flying_faces, res.sized ? ", sized to -n" : "");
   if (res.count_retries > 0)
-    std::printf("  retries: %d more CVT and mesher runs for a mesh far off -n; kept the one from seed %u\n",
+    std::printf("  retries: %d more CVT and mesher runs for a mesh far off -n or covering the cloud in part; kept "
+                "the one from seed %u\n",
                 res.count_retries, res.seed_used);
   const std::string boundary = val.boundary_loops > 0 ? format_angle(res.boundary_min_angle_deg) : "none";
   std::printf("  quality: phi_min %.2f deg (boundary triangles %s), phi_m %.2f deg\n", res.min_angle_deg,

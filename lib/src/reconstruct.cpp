@@ -455,7 +455,7 @@ void copy_stats(const MesherStats& st, ReconstructionResult& res) {
 
 // What one run of the CVT and the mesher reads: the CVT points, their triangles and Laplacian
 // (metric_area: the lifted metric's face areas, empty when isotropic), the adaptive sizing of the
-// CVT points (null when uniform), the fitted surface, the cloud's frame and its point count.
+// CVT points (null when uniform), the fitted surface, the cloud's frame, its point count and the points.
 struct MeshingInputs {
   const CvtPoints& cp;
   const Eigen::MatrixX3i& T;
@@ -466,9 +466,27 @@ struct MeshingInputs {
   const CloudSurfaceProjector& fit;
   const CloudFrame& frame;
   int points;
+  const Eigen::MatrixX3d& P;  // the points used, in the cloud's frame
 };
 
 using StageReport = std::function<void(const std::string&, double)>;
+
+// The vertex count asked for: the sizing's target where one is set (the streamed path runs the
+// CVT on fewer sites where the noise is wide and sizes the mesh to the count), else `sites`.
+int requested_vertices(const ReconstructionOptions& options) {
+  return options.mesher.sizing.target_vertices > 0 ? options.mesher.sizing.target_vertices : options.sites;
+}
+
+// The coverage of the points used by `mesh` (in the input's frame), its thickness at the site
+// spacing asked for: sqrt(area / vertices asked for) on the CVT points' triangles.
+CloudCoverage measure_coverage(const MeshingInputs& in, const ReconstructionOptions& options, const TriangleMesh& mesh) {
+  Eigen::MatrixX3d P = in.P;
+  restore_frame(P, in.frame);
+  CloudCoverageOptions coverage_options = options.cloud_coverage;
+  coverage_options.threads = options.threads;
+  const double site_spacing = std::sqrt(surface_area(in.cp.PC, in.T) / requested_vertices(options)) * in.frame.scale;
+  return cloud_coverage(mesh, P, site_spacing, coverage_options);
+}
 
 // Steps 3-5 with the start sites of options.seed: the heat CVT on the CVT points, its dual
 // meshed on the fitted surface (surface_mesher.h), the tips, the border fit, quality and CGAL
@@ -557,12 +575,8 @@ void cvt_and_mesh(const MeshingInputs& in, const ReconstructionOptions& options,
   res.validation = validate_triangle_mesh(res.mesh.V, res.mesh.F, vopt);
   stage.done("validate");
   report("validate", 1);
-}
-
-// The vertex count asked for: the sizing's target where one is set (the streamed path runs the
-// CVT on fewer sites where the noise is wide and sizes the mesh to the count), else `sites`.
-int requested_vertices(const ReconstructionOptions& options) {
-  return options.mesher.sizing.target_vertices > 0 ? options.mesher.sizing.target_vertices : options.sites;
+  res.cloud_coverage = measure_coverage(in, options, res.mesh);
+  stage.done("cloud coverage");
 }
 
 // How far the mesh is off the vertex count asked for, as a fraction of it.
@@ -576,19 +590,29 @@ double excess_count_error(const ReconstructionResult& r, const ReconstructionOpt
   return std::max(0.0, count_error(r, options) - options.mesher.sizing.count_tolerance);
 }
 
-// Whether `a` is a better result than `b`: it passes every check where `b` does not, then it is
-// nearer the count, then its φmin is larger.
+// Whether the result covers the cloud only in part where start sites elsewhere may cover it
+// whole: not where the points fill a volume (no surface to reach) nor where the largest group
+// left out is smaller than a spacing (no site of the count falls there).
+bool partial_other_starts_may_mend(const ReconstructionResult& r) {
+  const CloudCoverage& c = r.cloud_coverage;
+  return c.partial() && !c.volumetric() && c.largest_group_spacings >= 1;
+}
+
+// Whether `a` is a better result than `b`: it passes every check where `b` does not, then it
+// covers the cloud whole where `b` does not, then it is nearer the count, then its φmin is larger.
 bool better_result(const ReconstructionResult& a, const ReconstructionResult& b, const ReconstructionOptions& options) {
   if (a.validation.ok() != b.validation.ok()) return a.validation.ok();
+  if (a.cloud_coverage.partial() != b.cloud_coverage.partial()) return !a.cloud_coverage.partial();
   const double ea = excess_count_error(a, options), eb = excess_count_error(b, options);
   if (ea != eb) return ea < eb;
   return a.min_angle_deg > b.min_angle_deg;
 }
 
-// cvt_and_mesh() with options.seed; where the mesh is more than retry_count_error off the count,
-// again with the next seeds (at most count_retries times), keeping the best result
-// (better_result()). A coarse dual that crosses itself can lose most of its faces to the
-// untangling, and start sites a little elsewhere give another dual. A retry that fails (nothing
+// cvt_and_mesh() with options.seed; where the mesh is more than retry_count_error off the count
+// or covers the cloud only in part (partial_other_starts_may_mend()), again with the next seeds
+// (at most count_retries times), keeping the best result (better_result()). A coarse dual that
+// crosses itself can lose most of its faces to the untangling, the dual of a sparse part of an
+// unevenly dense scan can lose its sites, and start sites a little elsewhere give another dual. A retry that fails (nothing
 // extracted from its start sites) is passed over. The stage times of every run are kept, those of a retry
 // prefixed with its seed.
 ReconstructionResult mesh_with_retries(const MeshingInputs& in, const ReconstructionOptions& options,
@@ -599,7 +623,7 @@ ReconstructionResult mesh_with_retries(const MeshingInputs& in, const Reconstruc
   std::vector<std::pair<std::string, double>> seconds = best.stage_seconds;
   int retries = 0;
   for (int retry = 1; retry <= options.count_retries; ++retry) {
-    if (count_error(best, options) <= options.retry_count_error) break;
+    if (count_error(best, options) <= options.retry_count_error && !partial_other_starts_may_mend(best)) break;
     retries = retry;
     ReconstructionOptions again = options;
     again.seed = options.seed + static_cast<std::uint32_t>(retry);
@@ -724,17 +748,8 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
 
   // 3.-5. The CVT, its mesh and the checks; again from other start sites where the mesh is far
   // off the count.
-  const MeshingInputs in{cp, T, lap, metric_area, sizing.get(), density, fit, cloud.frame, n};
+  const MeshingInputs in{cp, T, lap, metric_area, sizing.get(), density, fit, cloud.frame, n, P};
   res = mesh_with_retries(in, options, report, std::move(res));
-  StageClock coverage_stage{res};
-  Eigen::MatrixX3d P_input = P;
-  restore_frame(P_input, cloud.frame);
-  CloudCoverageOptions coverage_options = options.cloud_coverage;
-  coverage_options.threads = options.threads;
-  // The site spacing asked for, in input units: sqrt(area / sites) on the CVT points' triangles.
-  const double site_spacing = std::sqrt(surface_area(cp.PC, T) / requested_vertices(options)) * cloud.frame.scale;
-  res.cloud_coverage = cloud_coverage(res.mesh, P_input, site_spacing, coverage_options);
-  coverage_stage.done("cloud coverage");
   res.total_seconds = since(t_start);
   return res;
 }

@@ -181,11 +181,15 @@ struct ReconstructionOptions {
   /// Where the mesh comes out more than retry_count_error off the vertex count asked for
   /// (mesher.sizing.target_vertices where set, else `sites`; a coarse dual that crosses itself
   /// can lose most of its faces to the untangling, and what is left may be too little for the
-  /// sizing to regrow), the CVT and the mesher run again from the
+  /// sizing to regrow), or where it covers the cloud only in part (CloudCoverage::partial(): more
+  /// than a fifth of the points farther than a spacing, on a cloud that is not volumetric and
+  /// whose largest group left out is at least a spacing across, which other start sites can
+  /// reach: an unevenly dense RGB-D fragment whose sparse floor the dual of one start leaves
+  /// out), the CVT and the mesher run again from the
   /// start sites of the next seeds (seed + 1, seed + 2, ...), at most count_retries times, on the
   /// same points, fit and Laplacian; the result kept passes every check where another does not,
-  /// then is nearest the count (beyond mesher.sizing.count_tolerance), then has the larger φmin.
-  /// 0 = no retry. Default 2.
+  /// then covers the cloud whole where another does not, then is nearest the count (beyond
+  /// mesher.sizing.count_tolerance), then has the larger φmin. 0 = no retry. Default 2.
   int count_retries = 2;
   /// See `count_retries` (a fraction of the count asked for). Default 0.25.
   double retry_count_error = 0.25;
@@ -302,8 +306,9 @@ struct ReconstructionResult {
 ///     on the fitted surface to `sites` vertices shared among the pieces by area, kept only when
 ///     no worse on any target), closed pieces outward, unused sites removed;
 ///  6. validate_triangle_mesh() (require_closed = false: open scans legitimately keep boundaries);
-///  7. where the mesh is more than `retry_count_error` off the count, steps 3-6 again from the start
-///     sites of the next seeds (at most `count_retries` times), the best result kept.
+///  7. the cloud's coverage by the mesh (cloud_coverage.h); where the mesh is more than
+///     `retry_count_error` off the count or covers the cloud only in part, steps 3-7 again from
+///     the start sites of the next seeds (at most `count_retries` times), the best result kept.
 /// Deterministic for a given input, options and seed, independent of `threads`.
 /// \throw InvalidInputError for empty / too small clouds, sites < 4 or > usable points, bad options.
 ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P, const ReconstructionOptions& options = {},
