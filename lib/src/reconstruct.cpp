@@ -599,15 +599,12 @@ bool partial_other_starts_may_mend(const ReconstructionResult& r) {
 }
 
 // Whether `a` is a better result than `b`: it passes every check where `b` does not, then it
-// covers the cloud whole where `b` does not, then it is nearer the count, then, where both cover
-// the cloud in part, it leaves fewer points out, then its φmin is larger.
+// covers the cloud whole where `b` does not, then it is nearer the count, then its φmin is larger.
 bool better_result(const ReconstructionResult& a, const ReconstructionResult& b, const ReconstructionOptions& options) {
   if (a.validation.ok() != b.validation.ok()) return a.validation.ok();
-  const CloudCoverage &ca = a.cloud_coverage, &cb = b.cloud_coverage;
-  if (ca.partial() != cb.partial()) return !ca.partial();
+  if (a.cloud_coverage.partial() != b.cloud_coverage.partial()) return !a.cloud_coverage.partial();
   const double ea = excess_count_error(a, options), eb = excess_count_error(b, options);
   if (ea != eb) return ea < eb;
-  if (ca.partial() && ca.uncovered_share != cb.uncovered_share) return ca.uncovered_share < cb.uncovered_share;
   return a.min_angle_deg > b.min_angle_deg;
 }
 

@@ -189,8 +189,7 @@ struct ReconstructionOptions {
   /// start sites of the next seeds (seed + 1, seed + 2, ...), at most count_retries times, on the
   /// same points, fit and Laplacian; the result kept passes every check where another does not,
   /// then covers the cloud whole where another does not, then is nearest the count (beyond
-  /// mesher.sizing.count_tolerance), then, where all cover it in part, leaves the fewest points
-  /// out, then has the larger φmin. 0 = no retry. Default 2.
+  /// mesher.sizing.count_tolerance), then has the larger φmin. 0 = no retry. Default 2.
   int count_retries = 2;
   /// See `count_retries` (a fraction of the count asked for). Default 0.25.
   double retry_count_error = 0.25;
