@@ -178,7 +178,11 @@ TEST(StrayPoints, AReturnFarOffDoesNotPullTheMeshOutOfTheScannedSquare) {
   ReconstructionOptions opt;
   opt.sites = 200;  // spacing about 0.07
   opt.stray.ratio = 0;
-  const ReconstructionResult kept = reconstruct_surface(P, opt);
+  // One CVT and mesher run: the retries from other start sites (count_retries) may mend a mesh
+  // that covers the square in part, which is not what this test is about.
+  ReconstructionOptions once = opt;
+  once.count_retries = 0;
+  const ReconstructionResult kept = reconstruct_surface(P, once);
   // Precondition: left in, the stray point pulls the mesh out of the square or off part of it.
   ASSERT_TRUE(farthest_outside(kept.mesh) > 0.1 || uncovered(kept.mesh) > 0.2)
       << farthest_outside(kept.mesh) << " " << uncovered(kept.mesh);
