@@ -153,8 +153,7 @@ TEST(CloudCoverage, AReconstructionThatLeavesOutAClusterSmallerThanASpacingSaysS
   EXPECT_LT(c.largest_group_spacings, 1.0);
   EXPECT_FALSE(c.volumetric());
   // The small sphere alone is meshed whole.
-  ReconstructionOptions alone = o;
-  const ReconstructionResult s = reconstruct_surface(P.topRows(2500), alone);
+  const ReconstructionResult s = reconstruct_surface(P.topRows(2500), o);
   EXPECT_FALSE(s.cloud_coverage.partial());
   EXPECT_LT(s.cloud_coverage.uncovered_share, 0.02);
 }

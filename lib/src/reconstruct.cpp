@@ -455,7 +455,7 @@ void copy_stats(const MesherStats& st, ReconstructionResult& res) {
 
 // What one run of the CVT and the mesher reads: the CVT points, their triangles and Laplacian
 // (metric_area: the lifted metric's face areas, empty when isotropic), the adaptive sizing of the
-// CVT points (null when uniform), the fitted surface, the cloud's frame, its point count and the points.
+// CVT points (null when uniform), the fitted surface, the cloud's frame and the points used.
 struct MeshingInputs {
   const CvtPoints& cp;
   const Eigen::MatrixX3i& T;
@@ -465,7 +465,6 @@ struct MeshingInputs {
   const Eigen::VectorXd& density;  // the sizing's density at the CVT points (empty when uniform)
   const CloudSurfaceProjector& fit;
   const CloudFrame& frame;
-  int points;
   const Eigen::MatrixX3d& P;  // the points used, in the cloud's frame
 };
 
@@ -549,7 +548,7 @@ void cvt_and_mesh(const MeshingInputs& in, const ReconstructionOptions& options,
   stage.t = Clock::now();
   if (mesh.empty())
     throw Error("reconstruct_surface: no triangle could be extracted from the Voronoi diagram of " +
-                std::to_string(mesh.num_vertices()) + " sites on " + std::to_string(in.points) + " points");
+                std::to_string(mesh.num_vertices()) + " sites on " + std::to_string(in.P.rows()) + " points");
   res.mesh = finish_mesh(mesh, in.fit, mopt, stats);
   copy_stats(stats, res);
   stage.t = Clock::now();
@@ -612,9 +611,9 @@ bool better_result(const ReconstructionResult& a, const ReconstructionResult& b,
 // or covers the cloud only in part (partial_other_starts_may_mend()), again with the next seeds
 // (at most count_retries times), keeping the best result (better_result()). A coarse dual that
 // crosses itself can lose most of its faces to the untangling, the dual of a sparse part of an
-// unevenly dense scan can lose its sites, and start sites a little elsewhere give another dual. A retry that fails (nothing
-// extracted from its start sites) is passed over. The stage times of every run are kept, those of a retry
-// prefixed with its seed.
+// unevenly dense scan can lose its sites, and start sites a little elsewhere give another dual.
+// A retry that fails (nothing extracted from its start sites) is passed over. The stage times of
+// every run are kept, those of a retry prefixed with its seed.
 ReconstructionResult mesh_with_retries(const MeshingInputs& in, const ReconstructionOptions& options,
                                        const StageReport& report, ReconstructionResult start) {
   ReconstructionResult best = start;
@@ -746,9 +745,9 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     stage.done("adaptive sizing");
   }
 
-  // 3.-5. The CVT, its mesh and the checks; again from other start sites where the mesh is far
-  // off the count.
-  const MeshingInputs in{cp, T, lap, metric_area, sizing.get(), density, fit, cloud.frame, n, P};
+  // 3.-5. The CVT, its mesh, the checks and the cloud's coverage; again from other start sites
+  // where the mesh is far off the count or covers the cloud in part.
+  const MeshingInputs in{cp, T, lap, metric_area, sizing.get(), density, fit, cloud.frame, P};
   res = mesh_with_retries(in, options, report, std::move(res));
   res.total_seconds = since(t_start);
   return res;
