@@ -1186,6 +1186,40 @@ TEST(CoverageRepair, DragsTheRingAlongWhereTheVertexAloneWouldMakeSlivers) {
   EXPECT_EQ(r.vertices, start.num_vertices());
 }
 
+TEST(CoverageRepair, GrowsVerticesOutAlongAPartLongerThanItsRingReaches) {
+  // A finger about 3.5 spacings long and one wide on a face of the coarse mesh: no vertex of it is
+  // on the finger, and moving vertices (their rings dragged along too) cannot make it.
+  const SpikeOnAFace spike = spike_on_a_face(1.0, 96);
+  const TriangleMesh& fine = spike.fine;
+  const double spacing = spike.spacing;
+  const MeshSurfaceProjector surface(fine.V, fine.F);
+  const CoverageRepairOptions moves_only;
+  ASSERT_EQ(moves_only.grow_gap, 0.0) << "growth is off by default";
+  WorkingMesh moved = spike.coarse;
+  const CoverageRepairStats st0 = repair_coverage(moved, surface, fine.V, spacing, moves_only);
+  ASSERT_GT(st0.gap_after, 1.5 * spacing) << "the finger must be out of reach of the moves for the test";
+  EXPECT_EQ(st0.inserted, 0);
+
+  CoverageRepairOptions grow = moves_only;
+  grow.grow_gap = 1;
+  grow.max_grown_fraction = 0.05;  // 8 of the 162 vertices: 0.5 % is less than one on so coarse a mesh
+  WorkingMesh w = spike.coarse;
+  const double angle_before = ring_min_angle(w);
+  const CoverageRepairStats st = repair_coverage(w, surface, fine.V, spacing, grow);
+  EXPECT_GT(st.inserted, 0);
+  EXPECT_LE(st.inserted, static_cast<int>(std::floor(grow.max_grown_fraction * spike.coarse.num_vertices())));
+  EXPECT_LT(st.gap_after, 0.5 * st0.gap_after) << "the inserted vertices reach out along the finger";
+  EXPECT_NEAR(farthest_from(w, fine), st.gap_after, 1e-9);
+  EXPECT_GE(ring_min_angle(w), std::min(grow.min_angle_deg * kDeg, angle_before) - 1e-9);
+  const std::vector<SurfacePoint> on = closest_surface_points(fine.V, fine.F, w.V);
+  for (int v = 0; v < w.num_vertices(); ++v)
+    EXPECT_LT((position(fine.V, fine.F, on[static_cast<std::size_t>(v)]) - w.V.row(v).transpose()).norm(), 1e-9)
+        << "vertex " << v;
+  const ValidationReport r = validate(w, true);
+  EXPECT_TRUE(r.ok()) << r.summary();
+  EXPECT_EQ(r.vertices, spike.coarse.num_vertices() + st.inserted);
+}
+
 // The coarse icosphere(2) and the fine icosphere(5) with spikes of `height` (sharpness k) on the
 // centroids of faces a and b of the coarse one (radius 1 + the sum of both spike terms).
 struct TwoSpikes {

@@ -332,6 +332,12 @@ TEST(Reconstruct, BadInputsThrowWithAMessage) {
   ReconstructionOptions tol = o;
   tol.lloyd_tolerance = std::nan("");
   expect_throw(P, tol, "lloyd_tolerance");
+  ReconstructionOptions grow = o;
+  grow.coverage.grow_gap = -1;
+  expect_throw(P, grow, "grow_gap");
+  grow.coverage.grow_gap = 1;
+  grow.coverage.max_grown_fraction = 2;
+  expect_throw(P, grow, "max_grown_fraction");
   expect_throw(P.topRows(20), o, "usable points");
   // Degenerate clouds: all points identical after merging duplicates -> too few points.
   expect_throw(Eigen::MatrixX3d::Ones(100, 3), o, "usable points");
@@ -381,7 +387,7 @@ TEST(Reconstruct, TipsOfThinPartsOfClosedPiecesAreReachedAgain) {
   const double spacing = std::sqrt(4 * M_PI / opt.sites);
   const double gap_capped = farthest_point_from(capped.mesh, P);
   ASSERT_GT(gap_capped, 0.5 * spacing);  // precondition: the spike's end is cut off
-  opt.coverage = {};
+  opt.coverage = tip_growth_defaults();
   const ReconstructionResult r = reconstruct_surface(P, opt);
   EXPECT_GT(r.coverage.moves, 0);
   EXPECT_LT(farthest_point_from(r.mesh, P), 0.75 * gap_capped);
@@ -400,6 +406,37 @@ TEST(Reconstruct, TipsOfThinPartsOfClosedPiecesAreReachedAgain) {
   const ReconstructionResult open = reconstruct_surface(square, opt);
   ASSERT_GT(open.validation.boundary_loops, 0);
   EXPECT_EQ(open.coverage.moves, 0);
+}
+
+// A sphere with a spike about 4 site spacings long and one wide at its base: the moves of the
+// tips' repair cannot make it (each vertex and its ring reach about a spacing out), so the mesh
+// caps it far below its end. The growth (coverage.grow_gap, on by default) inserts a vertex there
+// and moves it out along the spike: the farthest point of the cloud comes at least a quarter
+// nearer, and the mesh keeps its checks, shape and count. (A tube as narrow as a spacing grows by
+// one vertex: a second beyond it would leave the tube's faces below the angle bound.)
+TEST(Reconstruct, ASpikeLongerThanARingReachesIsGrownByInsertedVertices) {
+  const TriangleMesh src = test::spiked_sphere(4, 1.45);
+  const Eigen::MatrixX3d P = sample_surface(src.V, src.F, 40000, 5);
+  ReconstructionOptions opt;
+  opt.sites = 1000;
+  opt.threads = 2;
+  ASSERT_GT(opt.coverage.grow_gap, 0) << "the growth is on by default";
+  opt.coverage.grow_gap = 0;
+  const ReconstructionResult moved = reconstruct_surface(P, opt);
+  const double spacing = std::sqrt(4 * M_PI / opt.sites);
+  const double gap_moved = farthest_point_from(moved.mesh, P);
+  ASSERT_GT(gap_moved, 1.5 * spacing);  // precondition: the moves leave the spike cut off
+  EXPECT_EQ(moved.coverage.inserted, 0);
+  opt.coverage = tip_growth_defaults();
+  const ReconstructionResult r = reconstruct_surface(P, opt);
+  EXPECT_GT(r.coverage.inserted, 0);
+  EXPECT_LT(farthest_point_from(r.mesh, P), 0.75 * gap_moved);
+  EXPECT_TRUE(r.validation.ok()) << r.validation.summary();
+  EXPECT_EQ(r.validation.boundary_loops, 0);
+  EXPECT_EQ(r.validation.genus, 0);
+  EXPECT_GE(r.min_angle_deg, 25.0);
+  EXPECT_GE(r.mean_min_angle_deg, 52.0);
+  EXPECT_NEAR(static_cast<double>(r.mesh.V.rows()), opt.sites, 0.02 * opt.sites);
 }
 
 // CGAL's noisy unit sphere (radius spread 0.90–1.10) at 2,000 sites: the noise is about half a

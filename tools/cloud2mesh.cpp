@@ -168,6 +168,7 @@ cli::Json make_report(const std::string& cloud_path, const std::vector<std::stri
   j["cloud_covered_in_part"] = res.cloud_coverage.partial();
   j["cloud_volumetric"] = res.cloud_coverage.volumetric();
   j["tip_moves"] = res.coverage.moves;
+  j["tip_vertices_inserted"] = res.coverage.inserted;
   j["tip_uncovered_before"] = res.coverage.uncovered_before;
   j["tip_uncovered_after"] = res.coverage.uncovered_after;
   j["blas"] = heatcvt::blas_description();
@@ -574,9 +575,10 @@ void print_summary(const Settings& s, const std::string& cloud_path, const Recon
                 res.border.mesh_border_distance, 100.0 * res.border.edge_covered, res.border.edge_points);
   print_cloud_coverage(res.cloud_coverage);
   if (res.coverage.moves > 0)
-    std::printf("  tips: %d vertices moved onto the fitted surface the mesh had cut off (%d CVT points farther than "
-                "half a spacing from it before, %d after)\n",
-                res.coverage.moves, res.coverage.uncovered_before, res.coverage.uncovered_after);
+    std::printf("  tips: %d vertices moved onto the fitted surface the mesh had cut off, %d of them inserted on "
+                "parts longer than a moved vertex reaches (%d CVT points farther than half a spacing from it "
+                "before, %d after)\n",
+                res.coverage.moves, res.coverage.inserted, res.coverage.uncovered_before, res.coverage.uncovered_after);
   // The point Laplacian resolves a heat cell from about 10 points (ReconstructionOptions::
   // cvt_points_per_site); far fewer leave holes and slivers the mesher can only patch.
   const double points_per_site = static_cast<double>(res.points_used) / opt.sites;

@@ -58,6 +58,11 @@ void check_options(const ReconstructionOptions& o) {
   if (!(o.adaptive.max_size_ratio >= 1) || !std::isfinite(o.adaptive.max_size_ratio))
     bad("adaptive.max_size_ratio must be a finite number >= 1");
   if (!(o.voxel_size >= 0) || !std::isfinite(o.voxel_size)) bad("voxel_size must be a finite number >= 0");
+  if (!(o.coverage.grow_gap >= 0) || !std::isfinite(o.coverage.grow_gap)) bad("coverage.grow_gap must be a finite number >= 0");
+  if (!(o.coverage.max_grown_fraction >= 0 && o.coverage.max_grown_fraction <= 1))
+    bad("coverage.max_grown_fraction must be in [0, 1]");
+  if (o.coverage.grow_rounds < 0) bad("coverage.grow_rounds must be >= 0");
+  if (!(o.coverage.grow_step > 0) || !std::isfinite(o.coverage.grow_step)) bad("coverage.grow_step must be a finite number > 0");
   if (!(o.time_coefficient > 0) || !std::isfinite(o.time_coefficient)) bad("time_coefficient must be > 0");
   if (o.threads < 0) bad("threads must be >= 0");
   if (o.max_hole_edges < 0) bad("max_hole_edges must be >= 0");
@@ -254,6 +259,7 @@ bool cover_tips(WorkingMesh& mesh, const SurfaceProjector& fit, const Eigen::Mat
   if (stats.moves > 0 && (mean_min_angle(mesh) < floor || !crossing_face_pairs_after(mesh, before, {}).empty())) {
     mesh.rollback(before);
     stats.moves = 0;
+    stats.inserted = 0;
     stats.uncovered_after = stats.uncovered_before;
     stats.gap_after = stats.gap_before;
   }

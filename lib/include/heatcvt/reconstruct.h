@@ -73,6 +73,15 @@ struct CloudPreparationOptions {
 };
 
 /// Options of reconstruct_surface(). Every default is the one `cloud2mesh --help` shows.
+/// The coverage repair of the cloud path (ReconstructionOptions::coverage): the defaults of
+/// CoverageRepairOptions with the growth on (grow_gap = 1 spacing): a tip longer than its ring
+/// can reach gets vertices inserted (docs/benchmarks.md, "Tips grown by inserted vertices").
+inline CoverageRepairOptions tip_growth_defaults() {
+  CoverageRepairOptions o;
+  o.grow_gap = 1.0;
+  return o;
+}
+
 struct ReconstructionOptions {
   int sites = 3000;               ///< vertices of the output mesh (CVT sites). Default 3000.
   /// Maximum heat Lloyd iterations. Default 6: they start from sites already relaxed by the
@@ -174,8 +183,12 @@ struct ReconstructionOptions {
   /// wider than half a spacing leaves points off the mesh everywhere, not at tips, and chasing
   /// them costs the shape. Vertices of open pieces stay: there the samples the mesh leaves out
   /// lie beyond the scan's edge or where flying faces and slivers were cut.
-  /// coverage.rounds = 0 turns it off. Defaults as CoverageRepairOptions.
-  CoverageRepairOptions coverage;
+  /// Where samples stay farther than coverage.grow_gap spacings after the moves (a claw or a
+  /// finger a few spacings long, cut off whole), vertices are inserted there and moved out along
+  /// it (at most coverage.max_grown_fraction of the count: the count stays within 2 %).
+  /// coverage.rounds = 0 turns it off. Defaults as CoverageRepairOptions, except grow_gap = 1
+  /// (coverage.grow_gap = 0: moves only).
+  CoverageRepairOptions coverage = tip_growth_defaults();
   /// See `coverage`. Default 1°.
   double tips_max_mean_angle_loss_deg = 1.0;
   /// Where the mesh comes out more than retry_count_error off the vertex count asked for

@@ -7,14 +7,30 @@
 #include <limits>
 #include <memory>
 #include <numeric>
+#include <cstdio>
+#include <cstdlib>
 
 #include "heatcvt/closest_point.h"
 #include "heatcvt/mesh.h"
+#include "heatcvt/mesher/edge_flips.h"
 #include "heatcvt/point_index.h"
 
 namespace heatcvt {
 
 namespace {
+
+// Insertions per growth round: each costs a pass over the faces.
+constexpr int kMaxInsertionsPerRound = 64;
+// A face at a grown vertex and its neighbour across the edge opposite it must not meet at a
+// dihedral angle above 120° (the cosine of their unit normals above −0.5): a fold, not a side.
+constexpr double kMinGrowthFoldCos = -0.5;
+
+// Unit normal of face f of `mesh` (zero for a degenerate face).
+Eigen::Vector3d face_normal(const WorkingMesh& mesh, const MeshFace& f) {
+  const Eigen::Vector3d n =
+      (mesh.V.row(f[1]) - mesh.V.row(f[0])).cross(mesh.V.row(f[2]) - mesh.V.row(f[0])).transpose();
+  return n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::Zero();
+}
 
 // Distances from the samples to the mesh, kept up to date as vertices move. For each sample, the
 // distance to the faces around its nearest vertex (`bound`) bounds its distance to the mesh, and
@@ -228,6 +244,128 @@ bool move_towards(WorkingMesh& mesh, const SurfaceProjector& surface, const std:
   return false;
 }
 
+// Splits the edge of face `face` whose midpoint is nearest q (an interior edge, neither end
+// locked) at that midpoint projected to the surface, and updates `vf`; returns the new vertex,
+// or −1 where no edge of the face may be split. Faces (a, b, c) and its twin (b, a, d) become
+// (a, m, c), (m, b, c) and (b, m, d), (m, a, d): the orientation is kept.
+int split_towards(WorkingMesh& mesh, const SurfaceProjector& surface, std::vector<std::vector<int>>& vf,
+                  const std::vector<char>& locked, int face, const Eigen::Vector3d& q) {
+  const MeshFace f = mesh.face(face);
+  int best = -1;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 3; ++k) {
+    const int a = f[k], b = f[(k + 1) % 3];
+    if ((locked[a] && locked[b]) || mesh.edge_face_count(a, b) != 2) continue;
+    const double d = (0.5 * (mesh.V.row(a) + mesh.V.row(b)).transpose() - q).squaredNorm();
+    if (d < nearest) nearest = d, best = k;
+  }
+  if (best < 0) return -1;
+  const int a = f[best], b = f[(best + 1) % 3], c = f[(best + 2) % 3];
+  const int other = mesh.half_edge_face(b, a);
+  if (other < 0) return -1;
+  int d = -1;
+  for (int v : mesh.face(other))
+    if (v != a && v != b) d = v;
+  if (d < 0 || d == c) return -1;
+  Eigen::Vector3d pos, nrm;
+  int hint = mesh.anchor[a];
+  surface.project(0.5 * (mesh.V.row(a) + mesh.V.row(b)).transpose(), hint, pos, nrm);
+  if (!pos.allFinite() || !nrm.allFinite()) return -1;
+  const int m = mesh.add_vertex(pos, nrm, hint);
+  mesh.replace_face(face, {a, m, c});
+  mesh.replace_face(other, {b, m, d});
+  const int f3 = mesh.add_face({m, b, c}), f4 = mesh.add_face({m, a, d});
+  vf.resize(static_cast<std::size_t>(mesh.num_vertices()));
+  vf[m] = {face, other, f3, f4};
+  std::replace(vf[a].begin(), vf[a].end(), other, f4);
+  std::replace(vf[b].begin(), vf[b].end(), face, f3);
+  vf[c].push_back(f3);
+  vf[d].push_back(f4);
+  return m;
+}
+
+// One growth round (CoverageRepairOptions::grow_gap): for the samples farther than `grow_limit`
+// (farthest first, one per region), the edge of the nearest face nearest to the sample is split
+// (split_towards()) and the new vertex m moved the largest of options.fractions of the way to it,
+// by at most `step`;
+// max-min-angle flips then run around m, and the edit is kept where the faces around m keep a
+// smallest angle of min(min_angle_deg, the smallest before) and the faces at m face as before,
+// else undone. At most `budget` vertices are added; `vf` and `locked` follow the mesh, and the
+// added vertices are appended to `moved`. Returns the vertices added.
+int grow_towards(WorkingMesh& mesh, const SurfaceProjector& surface, const Eigen::MatrixX3d& samples, const Gaps& gaps,
+                 double grow_limit, double step, int budget, const CoverageRepairOptions& options,
+                 std::vector<std::vector<int>>& vf, std::vector<char>& locked, std::vector<int>& moved) {
+  const double floor_angle = options.min_angle_deg * M_PI / 180.0;
+  std::vector<int> order;
+  for (int i = 0; i < static_cast<int>(gaps.distance.size()); ++i)
+    if (gaps.distance[i] > grow_limit) order.push_back(i);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return gaps.distance[a] > gaps.distance[b]; });
+  std::vector<char> busy(static_cast<std::size_t>(mesh.num_vertices()), 0);
+  int inserted = 0;
+  for (int i : order) {
+    if (inserted >= budget) break;
+    const int face = gaps.face[i];
+    const MeshFace old_face = mesh.face(face);
+    if (busy[old_face[0]] || busy[old_face[1]] || busy[old_face[2]]) continue;
+    const Eigen::Vector3d q = samples.row(i).transpose();
+    // The shape to keep: the smallest angle of the faces around the split face's corners.
+    double shape_before = M_PI;
+    for (int w : old_face)
+      for (int id : vf[w]) shape_before = std::min(shape_before, face_min_angle(mesh, mesh.face(id)));
+    const double floor = std::min(floor_angle, shape_before) - 1e-12;
+    const WorkingMesh::Checkpoint undo = mesh.checkpoint();
+    bool kept = false, capped = false;
+    for (const double t : options.fractions) {
+      if (capped) break;  // the step bound gave the last fraction the same move
+      const int m = split_towards(mesh, surface, vf, locked, face, q);
+      if (m < 0) break;
+      Eigen::Vector3d d = t * (q - mesh.V.row(m).transpose());
+      if (d.norm() > step) d *= step / d.norm(), capped = true;
+      const Placed to = place(mesh, surface, m, d);
+      mesh.V.row(m) = to.x.transpose();
+      mesh.N.row(m) = to.n.transpose();
+      mesh.anchor[m] = to.hint;
+      // Max-min-angle flips around m: the split's halves become the diagonal the new vertex asks for.
+      std::vector<char> near(static_cast<std::size_t>(mesh.num_vertices()), 0);
+      for (int id : vf[m])
+        for (int w : mesh.face(id)) near[w] = 1;
+      flip_edges(mesh, FlipOptions{}, &near);
+      vf = mesh.vertex_faces();
+      // Kept where the faces around m keep their shape and none at m folds over its neighbour
+      // across the edge opposite m (a finger's sides stand steep on the faces around its base,
+      // at up to about 90°; a fold turns one back).
+      double after = M_PI;
+      bool unfolded = true;
+      for (int w = 0; w < mesh.num_vertices(); ++w) {
+        if (!near[w]) continue;
+        for (int id : vf[w]) after = std::min(after, face_min_angle(mesh, mesh.face(id)));
+      }
+      for (int id : vf[m]) {
+        const MeshFace& g = mesh.face(id);
+        int k = 0;
+        while (g[k] != m) ++k;
+        const int u = g[(k + 1) % 3], x = g[(k + 2) % 3];
+        const int across = mesh.half_edge_face(x, u);
+        if (across < 0) continue;
+        if (!(face_normal(mesh, g).dot(face_normal(mesh, mesh.face(across))) > kMinGrowthFoldCos)) unfolded = false;
+      }
+      if (unfolded && after >= floor) {
+        kept = true;
+        locked.resize(static_cast<std::size_t>(mesh.num_vertices()), 0);
+        busy.resize(static_cast<std::size_t>(mesh.num_vertices()), 0);
+        for (int w = 0; w < mesh.num_vertices(); ++w)
+          if (near[w]) busy[w] = 1;
+        moved.push_back(m);
+        break;
+      }
+      mesh.rollback(undo);
+      vf = mesh.vertex_faces();
+    }
+    if (kept) ++inserted;
+  }
+  return inserted;
+}
+
 }  // namespace
 
 CoverageRepairStats repair_coverage(WorkingMesh& mesh, const SurfaceProjector& surface,
@@ -239,38 +377,58 @@ CoverageRepairStats repair_coverage(WorkingMesh& mesh, const SurfaceProjector& s
   std::vector<char> locked = mesh.boundary_vertices();
   if (fixed)
     for (std::size_t v = 0; v < locked.size() && v < fixed->size(); ++v) locked[v] |= (*fixed)[v];
-  const std::vector<std::vector<int>> vf = mesh.vertex_faces();  // moves keep the faces
-  Gaps gaps(mesh, samples, limit);
+  std::vector<std::vector<int>> vf = mesh.vertex_faces();  // moves keep the faces; splits update it
+  auto gaps_ptr = std::make_unique<Gaps>(mesh, samples, limit);
   const auto uncovered = [&](const Gaps& g) {
     return static_cast<int>(std::count_if(g.distance.begin(), g.distance.end(), [&](double d) { return d > limit; }));
   };
-  stats.gap_before = gaps.largest;
-  stats.uncovered_before = uncovered(gaps);
+  stats.gap_before = gaps_ptr->largest;
+  stats.uncovered_before = uncovered(*gaps_ptr);
   // With keep_narrowest_round, the state of the narrowest largest gap so far is kept to return.
-  double best_gap = gaps.largest;
-  int best_uncovered = stats.uncovered_before, best_moves = 0;
+  double best_gap = gaps_ptr->largest;
+  int best_uncovered = stats.uncovered_before, best_moves = 0, best_inserted = 0;
   std::unique_ptr<WorkingMesh::Checkpoint> best;  // none: the state before the first round
   const WorkingMesh::Checkpoint start = options.keep_narrowest_round ? mesh.checkpoint() : WorkingMesh::Checkpoint{};
-  for (int round = 0; round < options.rounds && gaps.largest > limit; ++round) {
-    std::vector<int> order;
-    for (int i = 0; i < static_cast<int>(gaps.distance.size()); ++i)
-      if (gaps.distance[i] > limit) order.push_back(i);
-    std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return gaps.distance[a] > gaps.distance[b]; });
-    std::vector<char> busy(static_cast<std::size_t>(mesh.num_vertices()), 0);
-    const Eigen::MatrixX3d old = mesh.V;
-    std::vector<int> moved;
-    for (int i : order) move_towards(mesh, surface, vf, locked, busy, gaps.face[i], samples.row(i).transpose(), options, moved);
-    stats.moves += static_cast<int>(moved.size());
-    if (moved.empty()) break;
-    gaps.update(moved, old);
-    stats.round_gaps.push_back(gaps.largest);
-    if (options.keep_narrowest_round && gaps.largest < best_gap) {
-      best_gap = gaps.largest;
-      best_uncovered = uncovered(gaps);
-      best_moves = stats.moves;
-      best = std::make_unique<WorkingMesh::Checkpoint>(mesh.checkpoint());
+  const auto move_rounds = [&]() {
+    Gaps& gaps = *gaps_ptr;
+    for (int round = 0; round < options.rounds && gaps.largest > limit; ++round) {
+      std::vector<int> order;
+      for (int i = 0; i < static_cast<int>(gaps.distance.size()); ++i)
+        if (gaps.distance[i] > limit) order.push_back(i);
+      std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return gaps.distance[a] > gaps.distance[b]; });
+      std::vector<char> busy(static_cast<std::size_t>(mesh.num_vertices()), 0);
+      const Eigen::MatrixX3d old = mesh.V;
+      std::vector<int> moved;
+      for (int i : order) move_towards(mesh, surface, vf, locked, busy, gaps.face[i], samples.row(i).transpose(), options, moved);
+      stats.moves += static_cast<int>(moved.size());
+      if (moved.empty()) break;
+      gaps.update(moved, old);
+      stats.round_gaps.push_back(gaps.largest);
+      if (options.keep_narrowest_round && gaps.largest < best_gap) {
+        best_gap = gaps.largest;
+        best_uncovered = uncovered(gaps);
+        best_moves = stats.moves;
+        best_inserted = stats.inserted;
+        best = std::make_unique<WorkingMesh::Checkpoint>(mesh.checkpoint());
+      }
     }
+  };
+  move_rounds();
+  // Growth, then the move rounds again where it inserted vertices.
+  const double grow_limit = options.grow_gap * spacing;
+  int budget = static_cast<int>(std::floor(options.max_grown_fraction * vertices_in_faces(mesh)));
+  for (int g = 0; g < options.grow_rounds && grow_limit > 0 && budget > 0 && gaps_ptr->largest > grow_limit; ++g) {
+    std::vector<int> moved;
+    const int inserted = grow_towards(mesh, surface, samples, *gaps_ptr, grow_limit, options.grow_step * spacing,
+                                      std::min(budget, kMaxInsertionsPerRound), options, vf, locked, moved);
+    if (inserted == 0) break;
+    stats.inserted += inserted;
+    stats.moves += static_cast<int>(moved.size());
+    budget -= inserted;
+    gaps_ptr = std::make_unique<Gaps>(mesh, samples, limit);
+    move_rounds();
   }
+  const Gaps& gaps = *gaps_ptr;
   stats.gap_after = gaps.largest;
   stats.uncovered_after = uncovered(gaps);
   if (options.keep_narrowest_round && gaps.largest > best_gap) {
@@ -278,6 +436,7 @@ CoverageRepairStats repair_coverage(WorkingMesh& mesh, const SurfaceProjector& s
     stats.gap_after = best_gap;
     stats.uncovered_after = best_uncovered;
     stats.moves = best_moves;
+    stats.inserted = best_inserted;
   }
   return stats;
 }

@@ -43,6 +43,24 @@ struct CoverageRepairOptions {
   /// changed two rows of 30 at 500 sites (one better, one worse), and its narrower start left the
   /// crease snap on a thin plate beyond max_crease_gap_growth (docs/benchmarks.md).
   bool keep_narrowest_round = false;
+  /// Growth: a sample still farther than this many vertex spacings after the move rounds lies on
+  /// a part longer than moving vertices can reach (a finger or a claw a few spacings long, cut
+  /// off whole). The edge of its nearest face nearest to it is split, the new vertex moved
+  /// towards it (the largest of `fractions` that keeps the faces around at or above
+  /// min(min_angle_deg, their smallest angle before) after max-min-angle flips there, and facing
+  /// as before), and the move rounds run again, so the new vertices walk out along the part.
+  /// 0 = no growth. Default 0: ReconstructionOptions::coverage turns it on (1 spacing); an input
+  /// mesh (meshcvt) keeps its count without it.
+  double grow_gap = 0;
+  /// ... adding at most this fraction of the vertices in faces in all (the count stays within
+  /// the 2 % the tools allow). Default 0.005.
+  double max_grown_fraction = 0.005;
+  /// ... moving each new vertex by at most this many spacings (a long part grows over several
+  /// rounds, each new vertex a step beyond the last: one moved the whole way leaves needles).
+  /// Default 0.75.
+  double grow_step = 0.75;
+  /// ... in at most this many growth rounds (each followed by the move rounds). Default 8.
+  int grow_rounds = 8;
 };
 
 /// What repair_coverage() did.
@@ -50,6 +68,7 @@ struct CoverageRepairStats {
   int uncovered_before = 0;  ///< samples farther than max_gap spacings before the repair
   int uncovered_after = 0;   ///< and after it
   int moves = 0;             ///< vertex moves kept (a dragged ring neighbour counts as one)
+  int inserted = 0;          ///< vertices added by the growth (CoverageRepairOptions::grow_gap)
   double gap_before = 0;     ///< largest distance from a sample to the mesh, before and after
   double gap_after = 0;
   /// The largest distance after each round that moved a vertex, in order.
