@@ -7,8 +7,6 @@
 #include <limits>
 #include <memory>
 #include <numeric>
-#include <cstdio>
-#include <cstdlib>
 
 #include "heatcvt/closest_point.h"
 #include "heatcvt/mesh.h"
@@ -287,10 +285,9 @@ int split_towards(WorkingMesh& mesh, const SurfaceProjector& surface, std::vecto
 // One growth round (CoverageRepairOptions::grow_gap): for the samples farther than `grow_limit`
 // (farthest first, one per region), the edge of the nearest face nearest to the sample is split
 // (split_towards()) and the new vertex m moved the largest of options.fractions of the way to it,
-// by at most `step`;
-// max-min-angle flips then run around m, and the edit is kept where the faces around m keep a
-// smallest angle of min(min_angle_deg, the smallest before) and the faces at m face as before,
-// else undone. At most `budget` vertices are added; `vf` and `locked` follow the mesh, and the
+// by at most `step`; max-min-angle flips then run around m, and the edit is kept where the faces
+// around m keep a smallest angle of min(min_angle_deg, the smallest before) and no face at m folds
+// over its neighbour (kMinGrowthFoldCos), else undone. At most `budget` vertices are added; `vf` and `locked` follow the mesh, and the
 // added vertices are appended to `moved`. Returns the vertices added.
 int grow_towards(WorkingMesh& mesh, const SurfaceProjector& surface, const Eigen::MatrixX3d& samples, const Gaps& gaps,
                  double grow_limit, double step, int budget, const CoverageRepairOptions& options,

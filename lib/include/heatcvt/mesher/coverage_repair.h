@@ -46,9 +46,10 @@ struct CoverageRepairOptions {
   /// Growth: a sample still farther than this many vertex spacings after the move rounds lies on
   /// a part longer than moving vertices can reach (a finger or a claw a few spacings long, cut
   /// off whole). The edge of its nearest face nearest to it is split, the new vertex moved
-  /// towards it (the largest of `fractions` that keeps the faces around at or above
-  /// min(min_angle_deg, their smallest angle before) after max-min-angle flips there, and facing
-  /// as before), and the move rounds run again, so the new vertices walk out along the part.
+  /// towards it (the largest of `fractions`, by at most grow_step, that keeps the faces around at
+  /// or above min(min_angle_deg, their smallest angle before) after max-min-angle flips there,
+  /// with no face at it folded over its neighbour: a dihedral angle above 120°), and the move
+  /// rounds run again, so the new vertices walk out along the part.
   /// 0 = no growth. Default 0: ReconstructionOptions::coverage turns it on (1 spacing); an input
   /// mesh (meshcvt) keeps its count without it.
   double grow_gap = 0;
