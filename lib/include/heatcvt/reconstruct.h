@@ -72,7 +72,6 @@ struct CloudPreparationOptions {
   NeighbourSpreadOptions spread;
 };
 
-/// Options of reconstruct_surface(). Every default is the one `cloud2mesh --help` shows.
 /// The coverage repair of the cloud path (ReconstructionOptions::coverage): the defaults of
 /// CoverageRepairOptions with the growth on (grow_gap = 1 spacing): a tip longer than its ring
 /// can reach gets vertices inserted (docs/benchmarks.md, "Tips grown by inserted vertices").
@@ -82,6 +81,7 @@ inline CoverageRepairOptions tip_growth_defaults() {
   return o;
 }
 
+/// Options of reconstruct_surface(). Every default is the one `cloud2mesh --help` shows.
 struct ReconstructionOptions {
   int sites = 3000;               ///< vertices of the output mesh (CVT sites). Default 3000.
   /// Maximum heat Lloyd iterations. Default 6: they start from sites already relaxed by the

@@ -50,8 +50,9 @@ struct CoverageRepairOptions {
   /// or above min(min_angle_deg, their smallest angle before) after max-min-angle flips there,
   /// with no face at it folded over its neighbour: a dihedral angle above 120°), and the move
   /// rounds run again, so the new vertices walk out along the part.
-  /// 0 = no growth. Default 0: ReconstructionOptions::coverage turns it on (1 spacing); an input
-  /// mesh (meshcvt) keeps its count without it.
+  /// 0 = no growth. Default 0: ReconstructionOptions::coverage turns it on (1 spacing); meshcvt
+  /// keeps it off (at 1,000 sites it cost two shared meshes their φmin of 30° and no row gained a
+  /// target: docs/benchmarks.md).
   double grow_gap = 0;
   /// ... adding at most this fraction of the vertices in faces in all (the count stays within
   /// the 2 % the tools allow). Default 0.005.
