@@ -1154,6 +1154,17 @@ TEST(CoverageRepair, PutsAVertexBackOnATipThatTheMeshCutOff) {
   EXPECT_EQ(r.vertices, spike.coarse.num_vertices());
 }
 
+// Every vertex of `w` on the surface `fine` (to rounding), and `w` a valid mesh of `vertices`.
+void expect_valid_on_surface(const WorkingMesh& w, const TriangleMesh& fine, int vertices) {
+  const std::vector<SurfacePoint> on = closest_surface_points(fine.V, fine.F, w.V);
+  for (int v = 0; v < w.num_vertices(); ++v)
+    EXPECT_LT((position(fine.V, fine.F, on[static_cast<std::size_t>(v)]) - w.V.row(v).transpose()).norm(), 1e-9)
+        << "vertex " << v;
+  const ValidationReport r = validate(w, true);
+  EXPECT_TRUE(r.ok()) << r.summary();
+  EXPECT_EQ(r.vertices, vertices);
+}
+
 TEST(CoverageRepair, DragsTheRingAlongWhereTheVertexAloneWouldMakeSlivers) {
   // A spike about one spacing tall: its nearest corner moved alone onto the tip (or part of the
   // way) would leave its triangles below the angle bound.
@@ -1177,13 +1188,7 @@ TEST(CoverageRepair, DragsTheRingAlongWhereTheVertexAloneWouldMakeSlivers) {
   EXPECT_NEAR(farthest_from(w, fine), st.gap_after, 1e-12);
   EXPECT_GE(ring_min_angle(w), std::min(o.min_angle_deg * kDeg, angle_before) - 1e-9);
   // Every vertex, dragged ones too, on the surface (the fine mesh it was projected to).
-  const std::vector<SurfacePoint> on = closest_surface_points(fine.V, fine.F, w.V);
-  for (int v = 0; v < w.num_vertices(); ++v)
-    EXPECT_LT((position(fine.V, fine.F, on[static_cast<std::size_t>(v)]) - w.V.row(v).transpose()).norm(), 1e-9)
-        << "vertex " << v;
-  const ValidationReport r = validate(w, true);
-  EXPECT_TRUE(r.ok()) << r.summary();
-  EXPECT_EQ(r.vertices, start.num_vertices());
+  expect_valid_on_surface(w, fine, start.num_vertices());
 }
 
 TEST(CoverageRepair, GrowsVerticesOutAlongAPartLongerThanItsRingReaches) {
@@ -1211,13 +1216,7 @@ TEST(CoverageRepair, GrowsVerticesOutAlongAPartLongerThanItsRingReaches) {
   EXPECT_LT(st.gap_after, 0.5 * st0.gap_after) << "the inserted vertices reach out along the finger";
   EXPECT_NEAR(farthest_from(w, fine), st.gap_after, 1e-9);
   EXPECT_GE(ring_min_angle(w), std::min(grow.min_angle_deg * kDeg, angle_before) - 1e-9);
-  const std::vector<SurfacePoint> on = closest_surface_points(fine.V, fine.F, w.V);
-  for (int v = 0; v < w.num_vertices(); ++v)
-    EXPECT_LT((position(fine.V, fine.F, on[static_cast<std::size_t>(v)]) - w.V.row(v).transpose()).norm(), 1e-9)
-        << "vertex " << v;
-  const ValidationReport r = validate(w, true);
-  EXPECT_TRUE(r.ok()) << r.summary();
-  EXPECT_EQ(r.vertices, spike.coarse.num_vertices() + st.inserted);
+  expect_valid_on_surface(w, fine, spike.coarse.num_vertices() + st.inserted);
 }
 
 // The coarse icosphere(2) and the fine icosphere(5) with spikes of `height` (sharpness k) on the

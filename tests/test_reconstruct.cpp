@@ -369,6 +369,16 @@ double farthest_point_from(const TriangleMesh& m, const Eigen::MatrixX3d& P) {
   return d;
 }
 
+// A valid closed genus-0 mesh with φmin ≥ 25°, φm ≥ 52° and its vertex count within 2 % of `sites`.
+void expect_closed_sphere_on_targets(const ReconstructionResult& r, int sites) {
+  EXPECT_TRUE(r.validation.ok()) << r.validation.summary();
+  EXPECT_EQ(r.validation.boundary_loops, 0);
+  EXPECT_EQ(r.validation.genus, 0);
+  EXPECT_GE(r.min_angle_deg, 25.0);
+  EXPECT_GE(r.mean_min_angle_deg, 52.0);
+  EXPECT_NEAR(static_cast<double>(r.mesh.V.rows()), sites, 0.02 * sites);
+}
+
 }  // namespace
 
 // A sphere with a thin spike about one site spacing tall: the relaxation and the polish pull the
@@ -391,12 +401,7 @@ TEST(Reconstruct, TipsOfThinPartsOfClosedPiecesAreReachedAgain) {
   const ReconstructionResult r = reconstruct_surface(P, opt);
   EXPECT_GT(r.coverage.moves, 0);
   EXPECT_LT(farthest_point_from(r.mesh, P), 0.75 * gap_capped);
-  EXPECT_TRUE(r.validation.ok()) << r.validation.summary();
-  EXPECT_EQ(r.validation.boundary_loops, 0);
-  EXPECT_EQ(r.validation.genus, 0);
-  EXPECT_GE(r.min_angle_deg, 25.0);
-  EXPECT_GE(r.mean_min_angle_deg, 52.0);
-  EXPECT_NEAR(static_cast<double>(r.mesh.V.rows()), opt.sites, 0.02 * opt.sites);
+  expect_closed_sphere_on_targets(r, opt.sites);
 
   Eigen::MatrixX3d square(3000, 3);
   std::mt19937 rng(3);
@@ -431,12 +436,7 @@ TEST(Reconstruct, ASpikeLongerThanARingReachesIsGrownByInsertedVertices) {
   const ReconstructionResult r = reconstruct_surface(P, opt);
   EXPECT_GT(r.coverage.inserted, 0);
   EXPECT_LT(farthest_point_from(r.mesh, P), 0.75 * gap_moved);
-  EXPECT_TRUE(r.validation.ok()) << r.validation.summary();
-  EXPECT_EQ(r.validation.boundary_loops, 0);
-  EXPECT_EQ(r.validation.genus, 0);
-  EXPECT_GE(r.min_angle_deg, 25.0);
-  EXPECT_GE(r.mean_min_angle_deg, 52.0);
-  EXPECT_NEAR(static_cast<double>(r.mesh.V.rows()), opt.sites, 0.02 * opt.sites);
+  expect_closed_sphere_on_targets(r, opt.sites);
 }
 
 // CGAL's noisy unit sphere (radius spread 0.90–1.10) at 2,000 sites: the noise is about half a
