@@ -15,6 +15,7 @@
 #include "heatcvt/dual_mesh.h"
 #include "heatcvt/mesh.h"
 #include "heatcvt/mesh_io.h"
+#include "heatcvt/reconstruct.h"
 #include "heatcvt/validate.h"
 #include "test_support.h"
 
@@ -48,7 +49,7 @@ TEST(Cloud2MeshTool, HelpListsDefaults) {
   EXPECT_EQ(r.exit_code, 0);
   for (const char* needle : {"-n", "3000", "--iterations", "INT=6", "--neighbours", "--anisotropy", "--denoise", "--seed",
                              "--relaxation", "--fast-start", "--surface-lloyd", "INT=40", "--points-per-site",
-                             "FLOAT=10", "--threads", "--report", "--quiet"})
+                             "FLOAT=10", "--tip-growth", "--threads", "--report", "--quiet"})
     EXPECT_NE(r.out.find(needle), std::string::npos) << needle;
 }
 
@@ -165,6 +166,30 @@ TEST(Cloud2MeshTool, EverySharedCloudSmallSiteCount) {
 // A cluttered scan (a table top with objects) leaves stray pieces: by default every piece of the
 // output has at least 1 % of its vertices and the report counts the pieces dropped; --keep-small
 // keeps them all (and so has more components); either way the vertex count asked for is met.
+// A sphere with a spike about 4 site spacings long at -n 1000 (Reconstruct.
+// ASpikeLongerThanARingReachesIsGrownByInsertedVertices has the geometry): by default the tips'
+// repair inserts vertices on it and the report counts them; --tip-growth 0 only moves vertices.
+TEST(Cloud2MeshTool, TipGrowthInsertsVerticesOnALongSpikeAndZeroTurnsItOff) {
+  test::ScratchDir dir("c2m");
+  const TriangleMesh src = test::spiked_sphere(4, 1.45);
+  const Eigen::MatrixX3d P = sample_surface(src.V, src.F, 40000, 5);
+  std::ostringstream text;
+  text.precision(17);
+  for (Eigen::Index i = 0; i < P.rows(); ++i) text << P(i, 0) << " " << P(i, 1) << " " << P(i, 2) << "\n";
+  test::write_text_file(dir.path("spike.xyz"), text.str());
+  nlohmann::json report[2];
+  for (int off = 0; off < 2; ++off) {
+    const std::string rep = dir.path(off ? "off.json" : "on.json");
+    auto r = test::run_tool("cloud2mesh", dir.path("spike.xyz") + " -n 1000 -o " + dir.path(off ? "off.ply" : "on.ply") +
+                                              " --report " + rep + (off ? " --tip-growth 0" : "") + " -q");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    report[off] = nlohmann::json::parse(test::read_file(rep));
+    EXPECT_NEAR(report[off]["vertices"].get<int>(), 1000, 20);
+  }
+  EXPECT_GT(report[0]["tip_vertices_inserted"].get<int>(), 0);
+  EXPECT_EQ(report[1]["tip_vertices_inserted"].get<int>(), 0);
+}
+
 TEST(Cloud2MeshTool, StrayPiecesDroppedUnlessKeepSmall) {
   test::ScratchDir dir("c2m");
   const std::string cloud = test::data_path("clouds/pcldata_min_cut_segmentation_tutorial.pcd");
@@ -289,6 +314,8 @@ TEST(Cloud2MeshTool, NonsenseOptions) {
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--points-per-site nan"), {"--points-per-site"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--count-retries -1"), {"--count-retries"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--retry-count-error nan"), {"--retry-count-error"}, dir, 1);
+  expect_clean_failure(test::run_tool("cloud2mesh", base + "--tip-growth -1"), {"--tip-growth"}, dir, 1);
+  expect_clean_failure(test::run_tool("cloud2mesh", base + "--tip-growth nan"), {"--tip-growth"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--bogus"), {"bogus"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", dir.path("s.xyz") + " -o " + dir.path("o.xyz")), {"o.xyz"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", dir.path("s.xyz") + " -o " + dir.path("missing/o.ply")),

@@ -86,6 +86,8 @@ void check_options(const ReconstructionOptions& opt) {
   if (!(opt.lloyd_mean_tolerance >= 0) || !std::isfinite(opt.lloyd_mean_tolerance))
     throw InvalidInputError("--mean-tolerance must be >= 0");
   if (opt.count_retries < 0) throw InvalidInputError("--count-retries must be >= 0");
+  if (!(opt.coverage.grow_gap >= 0) || !std::isfinite(opt.coverage.grow_gap))
+    throw InvalidInputError("--tip-growth must be >= 0");
   if (!(opt.retry_count_error >= 0) || !std::isfinite(opt.retry_count_error))
     throw InvalidInputError("--retry-count-error must be >= 0");
   if (opt.max_hole_edges < 0) throw InvalidInputError("--max-hole-edges must be >= 0");
@@ -375,6 +377,11 @@ void add_reconstruction_options(CLI::App& app, Settings& s) {
                  "most this many times, and keep the best result (0 = never)")
       ->capture_default_str();
   app.add_option("--retry-count-error", s.opt.retry_count_error, "see --count-retries (a fraction of -n)")
+      ->capture_default_str();
+  app.add_option("--tip-growth", s.opt.coverage.grow_gap,
+                 "where CVT points stay more than this many site spacings from the mesh after the tips' vertices "
+                 "were moved (a claw or finger several spacings long, cut off whole), vertices are inserted there "
+                 "and moved out along it, at most 0.5 % of -n in all; 0 = vertices are only moved")
       ->capture_default_str();
   app.add_option("--relaxation", s.opt.lloyd_relaxation, "Lloyd over-relaxation factor in [1, 2); 1 = plain Lloyd")
       ->capture_default_str();
