@@ -129,6 +129,22 @@ TEST(WorkingMesh, EdgeIndexFollowsEveryOperation) {
   expect_index_fresh(w);
   w.pop_face();
   expect_index_fresh(w);
+  // A vertex split into a face and taken back: faces popped, the vertex popped.
+  const MeshFace h = w.face(0);
+  const int m = w.add_vertex(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0, 0, 1), -1);
+  w.replace_face(0, {h[0], h[1], m});
+  w.add_face({h[1], h[2], m});
+  w.add_face({h[2], h[0], m});
+  expect_index_fresh(w);
+  w.pop_face();
+  w.pop_face();
+  w.replace_face(0, h);
+  w.pop_vertex();
+  EXPECT_EQ(w.num_vertices(), s.V.rows());
+  EXPECT_EQ(static_cast<Eigen::Index>(w.anchor.size()), s.V.rows());
+  expect_index_fresh(w);
+  EXPECT_EQ(w.add_vertex(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0, 0, 1), -1), m);
+  EXPECT_EQ(w.valence(m), 0);
 }
 
 TEST(WorkingMesh, FlipTurnsTheSharedEdge) {
@@ -756,6 +772,34 @@ TEST(EdgeFlips, AContinuedCallWithDirtyMarksFlipsWhatAFullScanFlips) {
     ASSERT_GT(full_flips, 0) << "valence_mode " << valence_mode;
     EXPECT_EQ(flip_edges(continued, o, nullptr, nullptr, &dirty), full_flips) << "valence_mode " << valence_mode;
     EXPECT_EQ(continued.faces(), full.faces()) << "valence_mode " << valence_mode;
+  }
+}
+
+TEST(EdgeFlips, AListOfTheFacesAtTheOnlyAtVerticesFlipsWhatAFullScanFlips) {
+  // With `only_at`, visiting only the faces at the marked vertices must give the same flips as a
+  // scan of every face. A sheared grid (many flips, asserted) with a patch of marked vertices.
+  TriangleMesh grid = test::grid(16, 0, 1, 0, 1, true);
+  grid.V.col(0) += 1.5 * grid.V.col(1);
+  const WorkingMesh start = test::working_mesh(grid);
+  std::vector<char> marked(static_cast<std::size_t>(start.num_vertices()), 0);
+  for (int v = 0; v < start.num_vertices(); ++v)
+    marked[v] = start.V(v, 1) > 0.3 && start.V(v, 1) < 0.6 && start.V(v, 0) - 1.5 * start.V(v, 1) > 0.2 &&
+                start.V(v, 0) - 1.5 * start.V(v, 1) < 0.5;
+  ASSERT_GT(std::count(marked.begin(), marked.end(), 1), 4);
+  const std::vector<std::vector<int>> vf = start.vertex_faces();
+  std::vector<int> listed;
+  for (int v = 0; v < start.num_vertices(); ++v)
+    if (marked[v]) listed.insert(listed.end(), vf[v].begin(), vf[v].end());
+  for (const int passes : {1, 5, 50}) {
+    FlipOptions o;
+    o.max_passes = passes;
+    WorkingMesh full = start, local = start, unmarked = start;
+    const int full_flips = flip_edges(full, o, &marked);
+    ASSERT_GT(full_flips, 0);
+    ASSERT_LT(full_flips, flip_edges(unmarked, o));  // the marks limit the flips
+    EXPECT_EQ(flip_edges(local, o, &marked, nullptr, nullptr, nullptr, &listed), full_flips) << passes;
+    EXPECT_EQ(local.faces(), full.faces()) << passes;
+    expect_index_fresh(local);
   }
 }
 

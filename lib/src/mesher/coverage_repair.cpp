@@ -17,7 +17,7 @@ namespace heatcvt {
 
 namespace {
 
-// Insertions per growth round: each costs a pass over the faces.
+// Insertions per growth round: each round measures the gaps of every sample again.
 constexpr int kMaxInsertionsPerRound = 64;
 // A face at a grown vertex and its neighbour across the edge opposite it must not meet at a
 // dihedral angle above 120° (the cosine of their unit normals above −0.5): a fold, not a side.
@@ -54,7 +54,7 @@ class Gaps {
     std::vector<char> again(bound_.size(), 0);
     for (std::size_t i = 0; i < bound_.size(); ++i) again[i] = distance[i] > limit_;
     for (int v : moved)
-      for (const Eigen::Vector3d x : {Eigen::Vector3d(old.row(v).transpose()), Eigen::Vector3d(mesh_.V.row(v).transpose())})
+      for (const Eigen::Vector3d& x : {Eigen::Vector3d(old.row(v).transpose()), Eigen::Vector3d(mesh_.V.row(v).transpose())})
         for (int i : sample_index_.within(x, limit_ + longest)) again[static_cast<std::size_t>(i)] = 1;
     std::vector<int> which;
     for (std::size_t i = 0; i < again.size(); ++i)
@@ -282,22 +282,151 @@ int split_towards(WorkingMesh& mesh, const SurfaceProjector& surface, std::vecto
   return m;
 }
 
+// Move attempts known to fail. A failed move_towards() changes nothing, and its outcome reads only
+// the face it was given and the vertices within two rings of that face's corners (positions,
+// projector hints, faces, busy marks). So an attempt that failed while none of those vertices was
+// busy fails again, for the same face with the same corners, while none of them has changed since
+// and none is busy: it is skipped, with the same result as trying it.
+class FailedMoves {
+ public:
+  explicit FailedMoves(Eigen::Index samples) : when_(static_cast<std::size_t>(samples), -1), face_(when_.size(), -1), corners_(when_.size()) {}
+
+  // Vertices moved, added or given other faces now.
+  void changed(const std::vector<int>& vertices) {
+    for (int v : vertices) {
+      if (v >= static_cast<int>(changed_at_.size())) changed_at_.resize(static_cast<std::size_t>(v) + 1, 0);
+      changed_at_[static_cast<std::size_t>(v)] = ++clock_;
+    }
+  }
+  bool known(int sample, int face, const WorkingMesh& mesh, const std::vector<std::vector<int>>& vf,
+             const std::vector<char>& busy) const {
+    const std::size_t i = static_cast<std::size_t>(sample);
+    if (when_[i] < 0 || face_[i] != face || corners_[i] != mesh.face(face)) return false;
+    for (int u : region(mesh, vf, face))
+      if (busy[u] || (u < static_cast<int>(changed_at_.size()) && changed_at_[u] > when_[i])) return false;
+    return true;
+  }
+  void failed(int sample, int face, const WorkingMesh& mesh, const std::vector<std::vector<int>>& vf,
+              const std::vector<char>& busy) {
+    const std::size_t i = static_cast<std::size_t>(sample);
+    when_[i] = -1;
+    for (int u : region(mesh, vf, face))
+      if (busy[u]) return;
+    when_[i] = clock_;
+    face_[i] = face;
+    corners_[i] = mesh.face(face);
+  }
+
+ private:
+  // The vertices within two rings of the corners of `face`.
+  static std::vector<int> region(const WorkingMesh& mesh, const std::vector<std::vector<int>>& vf, int face) {
+    std::vector<int> ring;
+    for (int c : mesh.face(face))
+      for (int id : vf[c]) ring.insert(ring.end(), mesh.face(id).begin(), mesh.face(id).end());
+    std::sort(ring.begin(), ring.end());
+    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+    std::vector<int> r;
+    for (int w : ring)
+      for (int id : vf[w]) r.insert(r.end(), mesh.face(id).begin(), mesh.face(id).end());
+    return r;
+  }
+  long clock_ = 0;
+  std::vector<long> changed_at_;
+  std::vector<long> when_;
+  std::vector<int> face_;
+  std::vector<MeshFace> corners_;
+};
+
+// The faces a growth attempt at face `face` may change, saved with the mesh's counts so that the
+// attempt is undone without a copy of the whole mesh: the faces at the corners of `face` and at
+// the vertices across its edges. Those hold every face the split (split_towards()) rewrites,
+// whichever edge it takes, and every face at its four corners, the only faces the flips around
+// the new vertex can change (flip_edges() with `only_at`).
+struct LocalUndo {
+  int vertices = 0, faces = 0;
+  std::vector<int> ids;           // ascending
+  std::vector<MeshFace> corners;  // the faces `ids` as saved
+};
+
+LocalUndo save_around(const WorkingMesh& mesh, const std::vector<std::vector<int>>& vf, int face) {
+  LocalUndo u;
+  u.vertices = mesh.num_vertices();
+  u.faces = mesh.num_faces();
+  const MeshFace& f = mesh.face(face);
+  std::vector<int> at(f.begin(), f.end());
+  for (int k = 0; k < 3; ++k)
+    if (const int g = mesh.half_edge_face(f[(k + 1) % 3], f[k]); g >= 0) at.insert(at.end(), mesh.face(g).begin(), mesh.face(g).end());
+  for (int w : at) u.ids.insert(u.ids.end(), vf[w].begin(), vf[w].end());
+  std::sort(u.ids.begin(), u.ids.end());
+  u.ids.erase(std::unique(u.ids.begin(), u.ids.end()), u.ids.end());
+  for (int id : u.ids) u.corners.push_back(mesh.face(id));
+  return u;
+}
+
+// The faces an attempt may have changed: the saved ones and those added since.
+std::vector<int> touched_faces(const WorkingMesh& mesh, const LocalUndo& u) {
+  std::vector<int> t = u.ids;
+  for (int id = u.faces; id < mesh.num_faces(); ++id) t.push_back(id);
+  return t;
+}
+
+// Brings `vf` up to date (ascending lists, as WorkingMesh::vertex_faces()) after the faces
+// `touched` (ascending; ids past the face count are gone) changed; `stale` holds every vertex
+// whose list may name one of them.
+void sync_vertex_faces(const WorkingMesh& mesh, const std::vector<int>& touched, std::vector<int> stale,
+                       std::vector<std::vector<int>>& vf) {
+  vf.resize(static_cast<std::size_t>(mesh.num_vertices()));
+  for (int id : touched)
+    if (id < mesh.num_faces()) stale.insert(stale.end(), mesh.face(id).begin(), mesh.face(id).end());
+  std::sort(stale.begin(), stale.end());
+  stale.erase(std::unique(stale.begin(), stale.end()), stale.end());
+  const auto is_touched = [&](int id) { return std::binary_search(touched.begin(), touched.end(), id); };
+  for (int v : stale)
+    if (v < mesh.num_vertices()) vf[v].erase(std::remove_if(vf[v].begin(), vf[v].end(), is_touched), vf[v].end());
+  for (int id : touched)
+    if (id < mesh.num_faces())
+      for (int w : mesh.face(id)) vf[w].push_back(id);
+  for (int v : stale)
+    if (v < mesh.num_vertices()) std::sort(vf[v].begin(), vf[v].end());
+}
+
+// Corners of the faces `ids` (those that exist).
+std::vector<int> corners_of(const WorkingMesh& mesh, const std::vector<int>& ids) {
+  std::vector<int> c;
+  for (int id : ids)
+    if (id < mesh.num_faces()) c.insert(c.end(), mesh.face(id).begin(), mesh.face(id).end());
+  return c;
+}
+
+// Undoes an attempt: the saved faces back, the faces and vertices added since dropped; `vf` follows.
+void undo_attempt(WorkingMesh& mesh, const LocalUndo& u, std::vector<std::vector<int>>& vf) {
+  const std::vector<int> touched = touched_faces(mesh, u);
+  const std::vector<int> stale = corners_of(mesh, touched);
+  while (mesh.num_faces() > u.faces) mesh.pop_face();
+  for (std::size_t i = 0; i < u.ids.size(); ++i) mesh.replace_face(u.ids[i], u.corners[i]);
+  while (mesh.num_vertices() > u.vertices) mesh.pop_vertex();
+  sync_vertex_faces(mesh, touched, stale, vf);
+}
+
 // One growth round (CoverageRepairOptions::grow_gap): for the samples farther than `grow_limit`
 // (farthest first, one per region), the edge of the nearest face nearest to the sample is split
 // (split_towards()) and the new vertex m moved the largest of options.fractions of the way to it,
 // by at most `step`; max-min-angle flips then run around m, and the edit is kept where the faces
 // around m keep a smallest angle of min(min_angle_deg, the smallest before) and no face at m folds
-// over its neighbour (kMinGrowthFoldCos), else undone. At most `budget` vertices are added; `vf` and `locked` follow the mesh, and the
-// added vertices are appended to `moved`. Returns the vertices added.
+// over its neighbour (kMinGrowthFoldCos), else undone. At most `budget` vertices are added; `vf` and
+// `locked` follow the mesh, the added vertices are appended to `moved` and the corners of every face
+// a kept edit changed to `regrown`. Returns the vertices added.
 int grow_towards(WorkingMesh& mesh, const SurfaceProjector& surface, const Eigen::MatrixX3d& samples, const Gaps& gaps,
                  double grow_limit, double step, int budget, const CoverageRepairOptions& options,
-                 std::vector<std::vector<int>>& vf, std::vector<char>& locked, std::vector<int>& moved) {
+                 std::vector<std::vector<int>>& vf, std::vector<char>& locked, std::vector<int>& moved,
+                 std::vector<int>& regrown) {
   const double floor_angle = options.min_angle_deg * M_PI / 180.0;
   std::vector<int> order;
   for (int i = 0; i < static_cast<int>(gaps.distance.size()); ++i)
     if (gaps.distance[i] > grow_limit) order.push_back(i);
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return gaps.distance[a] > gaps.distance[b]; });
   std::vector<char> busy(static_cast<std::size_t>(mesh.num_vertices()), 0);
+  std::vector<char> near;  // the ring of the attempt's new vertex, cleared after each attempt
   int inserted = 0;
   for (int i : order) {
     if (inserted >= budget) break;
@@ -310,7 +439,7 @@ int grow_towards(WorkingMesh& mesh, const SurfaceProjector& surface, const Eigen
     for (int w : old_face)
       for (int id : vf[w]) shape_before = std::min(shape_before, face_min_angle(mesh, mesh.face(id)));
     const double floor = std::min(floor_angle, shape_before) - 1e-12;
-    const WorkingMesh::Checkpoint undo = mesh.checkpoint();
+    const LocalUndo undo = save_around(mesh, vf, face);
     bool kept = false, capped = false;
     for (const double t : options.fractions) {
       if (capped) break;  // the step bound gave the last fraction the same move
@@ -323,20 +452,24 @@ int grow_towards(WorkingMesh& mesh, const SurfaceProjector& surface, const Eigen
       mesh.N.row(m) = to.n.transpose();
       mesh.anchor[m] = to.hint;
       // Max-min-angle flips around m: the split's halves become the diagonal the new vertex asks for.
-      std::vector<char> near(static_cast<std::size_t>(mesh.num_vertices()), 0);
+      near.resize(static_cast<std::size_t>(mesh.num_vertices()), 0);
+      std::vector<int> ring;
       for (int id : vf[m])
-        for (int w : mesh.face(id)) near[w] = 1;
-      flip_edges(mesh, FlipOptions{}, &near);
-      vf = mesh.vertex_faces();
+        for (int w : mesh.face(id))
+          if (!near[w]) near[w] = 1, ring.push_back(w);
+      const std::vector<int> touched = touched_faces(mesh, undo);
+      flip_edges(mesh, FlipOptions{}, &near, nullptr, nullptr, nullptr, &touched);
+      // Before the flips, the touched faces had the saved corners and m.
+      std::vector<int> stale{m};
+      for (const MeshFace& g : undo.corners) stale.insert(stale.end(), g.begin(), g.end());
+      sync_vertex_faces(mesh, touched, stale, vf);
       // Kept where the faces around m keep their shape and none at m folds over its neighbour
       // across the edge opposite m (a finger's sides stand steep on the faces around its base,
       // at up to about 90°; a fold turns one back).
       double after = M_PI;
       bool unfolded = true;
-      for (int w = 0; w < mesh.num_vertices(); ++w) {
-        if (!near[w]) continue;
+      for (int w : ring)
         for (int id : vf[w]) after = std::min(after, face_min_angle(mesh, mesh.face(id)));
-      }
       for (int id : vf[m]) {
         const MeshFace& g = mesh.face(id);
         int k = 0;
@@ -346,17 +479,19 @@ int grow_towards(WorkingMesh& mesh, const SurfaceProjector& surface, const Eigen
         if (across < 0) continue;
         if (!(face_normal(mesh, g).dot(face_normal(mesh, mesh.face(across))) > kMinGrowthFoldCos)) unfolded = false;
       }
+      for (int w : ring) near[w] = 0;
       if (unfolded && after >= floor) {
         kept = true;
         locked.resize(static_cast<std::size_t>(mesh.num_vertices()), 0);
         busy.resize(static_cast<std::size_t>(mesh.num_vertices()), 0);
-        for (int w = 0; w < mesh.num_vertices(); ++w)
-          if (near[w]) busy[w] = 1;
+        for (int w : ring) busy[w] = 1;
         moved.push_back(m);
+        const std::vector<int> corners = corners_of(mesh, touched);
+        regrown.insert(regrown.end(), corners.begin(), corners.end());
+        for (const MeshFace& g : undo.corners) regrown.insert(regrown.end(), g.begin(), g.end());
         break;
       }
-      mesh.rollback(undo);
-      vf = mesh.vertex_faces();
+      undo_attempt(mesh, undo, vf);
     }
     if (kept) ++inserted;
   }
@@ -386,6 +521,7 @@ CoverageRepairStats repair_coverage(WorkingMesh& mesh, const SurfaceProjector& s
   int best_uncovered = stats.uncovered_before, best_moves = 0, best_inserted = 0;
   std::unique_ptr<WorkingMesh::Checkpoint> best;  // none: the state before the first round
   const WorkingMesh::Checkpoint start = options.keep_narrowest_round ? mesh.checkpoint() : WorkingMesh::Checkpoint{};
+  FailedMoves failed(samples.rows());
   const auto move_rounds = [&]() {
     Gaps& gaps = *gaps_ptr;
     for (int round = 0; round < options.rounds && gaps.largest > limit; ++round) {
@@ -396,7 +532,15 @@ CoverageRepairStats repair_coverage(WorkingMesh& mesh, const SurfaceProjector& s
       std::vector<char> busy(static_cast<std::size_t>(mesh.num_vertices()), 0);
       const Eigen::MatrixX3d old = mesh.V;
       std::vector<int> moved;
-      for (int i : order) move_towards(mesh, surface, vf, locked, busy, gaps.face[i], samples.row(i).transpose(), options, moved);
+      for (int i : order) {
+        const int face = gaps.face[i];
+        if (failed.known(i, face, mesh, vf, busy)) continue;
+        const std::size_t before = moved.size();
+        if (move_towards(mesh, surface, vf, locked, busy, face, samples.row(i).transpose(), options, moved))
+          failed.changed(std::vector<int>(moved.begin() + static_cast<std::ptrdiff_t>(before), moved.end()));
+        else
+          failed.failed(i, face, mesh, vf, busy);
+      }
       stats.moves += static_cast<int>(moved.size());
       if (moved.empty()) break;
       gaps.update(moved, old);
@@ -416,9 +560,11 @@ CoverageRepairStats repair_coverage(WorkingMesh& mesh, const SurfaceProjector& s
   int budget = static_cast<int>(std::floor(options.max_grown_fraction * vertices_in_faces(mesh)));
   for (int g = 0; g < options.grow_rounds && grow_limit > 0 && budget > 0 && gaps_ptr->largest > grow_limit; ++g) {
     std::vector<int> moved;
+    std::vector<int> regrown;
     const int inserted = grow_towards(mesh, surface, samples, *gaps_ptr, grow_limit, options.grow_step * spacing,
-                                      std::min(budget, kMaxInsertionsPerRound), options, vf, locked, moved);
+                                      std::min(budget, kMaxInsertionsPerRound), options, vf, locked, moved, regrown);
     if (inserted == 0) break;
+    failed.changed(regrown);
     stats.inserted += inserted;
     stats.moves += static_cast<int>(moved.size());
     budget -= inserted;

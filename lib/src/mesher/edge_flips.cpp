@@ -88,37 +88,68 @@ std::vector<char> moved_vertex_rings(const WorkingMesh& mesh, const WorkingMesh:
 }
 
 int flip_edges(WorkingMesh& mesh, const FlipOptions& options, const std::vector<char>* only_at,
-               const std::vector<int>* target_valence, const std::vector<char>* dirty, bool* converged) {
+               const std::vector<int>* target_valence, const std::vector<char>* dirty, bool* converged,
+               const std::vector<int>* faces) {
   const FlipRule rule(mesh, options, only_at, target_valence);
+  // The faces visited, in ascending order: every face, or those of `faces`.
+  std::vector<int> visit;
+  if (faces) {
+    visit = *faces;
+    std::sort(visit.begin(), visit.end());
+    visit.erase(std::unique(visit.begin(), visit.end()), visit.end());
+  } else {
+    visit.resize(static_cast<std::size_t>(mesh.num_faces()));
+    for (int f = 0; f < mesh.num_faces(); ++f) visit[static_cast<std::size_t>(f)] = f;
+  }
   // A rejected edge stays rejected while none of a, b, c, d is in a flip: the rule reads only
   // their valences and edges (positions do not move here). `changed` stamps the vertices of
-  // every flip, `checked` the last rejection of each face corner (with its d), so passes after
-  // the first look only at edges next to a flip. Same flips in the same order as a full scan.
+  // every flip (by their rank in `stamped`: every vertex, or the corners of the visited faces),
+  // `checked` the last rejection of each visited face corner (with its d), so passes after the
+  // first look only at edges next to a flip. Same flips in the same order as a full scan.
+  std::vector<int> stamped;
+  if (faces)
+    for (int f : visit)
+      for (int v : mesh.face(f)) stamped.push_back(v);
+  std::sort(stamped.begin(), stamped.end());
+  stamped.erase(std::unique(stamped.begin(), stamped.end()), stamped.end());
   const int nv = mesh.num_vertices();
-  std::vector<long> changed(nv, 0);
-  std::vector<long> checked(3 * static_cast<size_t>(mesh.num_faces()), -1);
+  const auto rank = [&](int v) -> long {
+    if (v < 0 || v >= nv) return -1;
+    if (!faces) return v;
+    const auto it = std::lower_bound(stamped.begin(), stamped.end(), v);
+    return it != stamped.end() && *it == v ? it - stamped.begin() : -1;
+  };
+  std::vector<long> changed(faces ? stamped.size() : static_cast<std::size_t>(nv), 0);
+  std::vector<long> checked(3 * visit.size(), -1);
   std::vector<int> checked_d(checked.size(), -1);
   long clock = 0;
-  auto in_range = [nv](int v) { return v >= 0 && v < nv; };
-  auto still = [&](int v, long when) { return !in_range(v) || changed[v] <= when; };
+  // A vertex outside `stamped` (a corner of a twin face the caller did not list) counts as changed.
+  auto still = [&](int v, long when) {
+    if (v < 0 || v >= nv) return true;
+    const long r = rank(v);
+    return r >= 0 && changed[static_cast<std::size_t>(r)] <= when;
+  };
+  const auto tracked_vertex = [&](int v) { return v >= 0 && v < nv; };
   // With `dirty`, an edge with neither end dirty still has the verdict of the converged call
   // before: recorded as rejected at clock 0. A change of its twin face stamps a or b.
   if (dirty)
-    for (int f1 = 0; f1 < mesh.num_faces(); ++f1)
+    for (std::size_t slot = 0; slot < visit.size(); ++slot)
       for (int k = 0; k < 3; ++k) {
-        const int a = mesh.face(f1)[k], b = mesh.face(f1)[(k + 1) % 3];
-        if (in_range(a) && in_range(b) && !(*dirty)[a] && !(*dirty)[b]) checked[3 * static_cast<size_t>(f1) + k] = 0;
+        const MeshFace& t = mesh.face(visit[slot]);
+        const int a = t[k], b = t[(k + 1) % 3];
+        if (tracked_vertex(a) && tracked_vertex(b) && !(*dirty)[a] && !(*dirty)[b]) checked[3 * slot + k] = 0;
       }
   int flips = 0;
   if (converged) *converged = false;
   for (int pass = 0; pass < options.max_passes; ++pass) {
     int pass_flips = 0;
-    for (int f1 = 0; f1 < mesh.num_faces(); ++f1)
+    for (std::size_t slot = 0; slot < visit.size(); ++slot) {
+      const int f1 = visit[slot];
       for (int k = 0; k < 3; ++k) {
         const MeshFace& t = mesh.face(f1);
         const int a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
-        const size_t corner = 3 * static_cast<size_t>(f1) + k;
-        const bool tracked = in_range(a) && in_range(b) && in_range(c) && corner < checked.size();
+        const size_t corner = 3 * slot + k;
+        const bool tracked = tracked_vertex(a) && tracked_vertex(b) && tracked_vertex(c);
         if (tracked && checked[corner] >= 0) {
           const long when = checked[corner];
           if (still(a, when) && still(b, when) && still(c, when) && still(checked_d[corner], when)) continue;
@@ -134,10 +165,11 @@ int flip_edges(WorkingMesh& mesh, const FlipOptions& options, const std::vector<
         mesh.flip(f1, k, f2);
         ++clock;
         for (int v : {a, b, c, d})
-          if (in_range(v)) changed[v] = clock;
+          if (const long r = rank(v); r >= 0) changed[static_cast<std::size_t>(r)] = clock;
         ++pass_flips;
         break;  // face f1 changed: move on to the next face
       }
+    }
     flips += pass_flips;
     if (pass_flips == 0) {
       if (converged) *converged = true;

@@ -101,6 +101,19 @@ void WorkingMesh::pop_face() {
   faces_.pop_back();
 }
 
+void WorkingMesh::pop_vertex() {
+  const Eigen::Index m = V.rows() - 1;
+  V.conservativeResize(m, 3);
+  N.conservativeResize(m, 3);
+  anchor.pop_back();
+  const auto shrink = [m](auto& per_vertex) {
+    if (static_cast<Eigen::Index>(per_vertex.size()) > m) per_vertex.resize(static_cast<std::size_t>(m));
+  };
+  shrink(valence_);
+  shrink(out_);
+  shrink(edges_);
+}
+
 void WorkingMesh::replace_face(int f, const MeshFace& g) {
   unindex_face(f);
   faces_[f] = g;

@@ -33,12 +33,16 @@ struct FlipOptions {
 /// `dirty` marks every vertex that has moved or changed its faces since, and every vertex that
 /// shares a face with one (moved_vertex_rings()). Edges with neither end dirty are not looked at
 /// again until a flip reaches them; the flips are the same as without it.
+/// With `faces`, only those faces are visited (in ascending order): the same flips as a full
+/// scan where every face that can hold a flipped edge is listed. With `only_at`, a face gets
+/// such an edge only through a flip of one of its own edges, so listing the faces at the
+/// only_at vertices suffices.
 /// The vertices moved since `before` (changes_since()) and those sharing a face with one: the
 /// `dirty` marks of flip_edges() after a smoothing step.
 std::vector<char> moved_vertex_rings(const WorkingMesh& mesh, const WorkingMesh::Checkpoint& before);
 
 int flip_edges(WorkingMesh& mesh, const FlipOptions& options = {}, const std::vector<char>* only_at = nullptr,
                const std::vector<int>* target_valence = nullptr, const std::vector<char>* dirty = nullptr,
-               bool* converged = nullptr);
+               bool* converged = nullptr, const std::vector<int>* faces = nullptr);
 
 }  // namespace heatcvt

@@ -61,6 +61,8 @@ class WorkingMesh {
   int add_face(const MeshFace& f);
   /// Removes the last face (undoes add_face).
   void pop_face();
+  /// Removes the last vertex (undoes add_vertex); no face may use it.
+  void pop_vertex();
   /// Replaces face f by g (same index).
   void replace_face(int f, const MeshFace& g);
   /// Removes the faces with drop[f] != 0 (drop has one entry per face); the others keep their
