@@ -316,6 +316,7 @@ TEST(Cloud2MeshTool, NonsenseOptions) {
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--retry-count-error nan"), {"--retry-count-error"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--tip-growth -1"), {"--tip-growth"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--tip-growth nan"), {"--tip-growth"}, dir, 1);
+  expect_clean_failure(test::run_tool("cloud2mesh", base + "--t-coef 1e10"), {"--t-coef"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--bogus"), {"bogus"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", dir.path("s.xyz") + " -o " + dir.path("o.xyz")), {"o.xyz"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", dir.path("s.xyz") + " -o " + dir.path("missing/o.ply")),

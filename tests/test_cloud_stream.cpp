@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -250,6 +251,42 @@ TEST(CloudStream, TruncatedFileGivesOneIOErrorNamingTheFile) {
       EXPECT_EQ(message, error_of([&] { read_cloud(truncated); }));
     }
   }
+}
+
+TEST(CloudStream, ACompressedPcdWithoutCompressedBytesIsRefused) {
+  // A binary_compressed PCD whose compressed-size field is 0 while its data size is not: one
+  // IOError naming the file, from the chunk reader and from read_cloud.
+  test::ScratchDir dir("cloud_stream_compressed_zero");
+  const std::string path = dir.path("compressed.pcd");
+  write_pcd(path, torus_cloud(), 2);
+  std::string data;
+  {
+    std::ifstream in(path, std::ios::binary);
+    data.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const std::string marker = "DATA binary_compressed\n";
+  const std::size_t at = data.find(marker);
+  ASSERT_NE(at, std::string::npos);
+  std::uint32_t sizes[2];
+  std::memcpy(sizes, data.data() + at + marker.size(), sizeof sizes);
+  ASSERT_GT(sizes[0], 0u);
+  ASSERT_GT(sizes[1], 0u);
+  std::memset(&data[at + marker.size()], 0, 4);
+  const std::string corrupt = dir.path("zero.pcd");
+  {
+    std::ofstream out(corrupt, std::ios::binary);
+    out.write(data.data(), static_cast<std::streamsize>(data.size()));
+  }
+  const std::string streamed = error_of([&] {
+    CloudChunkReader r(corrupt);
+    CloudChunk c;
+    while (r.next(c)) {
+    }
+  });
+  EXPECT_EQ(streamed.rfind(corrupt + ": ", 0), 0u) << streamed;
+  EXPECT_NE(streamed.find("compressed"), std::string::npos) << streamed;
+  const std::string whole = error_of([&] { read_cloud(corrupt); });
+  EXPECT_EQ(whole.rfind(corrupt + ": ", 0), 0u) << whole;
 }
 
 TEST(CloudStream, BadInputsGiveReadCloudsErrors) {

@@ -383,6 +383,19 @@ TEST(Hardening, AnOutputOnAnInputIsRejectedAndTheInputKept) {
                    "heatvoronoi", dir.path("m.obj"), dir, 3);
   EXPECT_EQ(slurp(dir.path("m.obj")), mesh_before);
   EXPECT_EQ(slurp(dir.path("c.ply")), cloud_before);
+  // Site files read as inputs are inputs too: --weights and --centroids may not overwrite them.
+  std::ostringstream sites;
+  sites.precision(17);
+  for (int v : {0, 7, 19, 33}) sites << m.V(v, 0) << ' ' << m.V(v, 1) << ' ' << m.V(v, 2) << '\n';
+  test::write_text_file(dir.path("s.txt"), sites.str());
+  const std::string sites_before = slurp(dir.path("s.txt"));
+  expect_bad_input(test::run_tool("nncoords", dir.path("m.obj") + " --sites " + dir.path("s.txt") + " --weights " +
+                                                  dir.path("s.txt")),
+                   "nncoords", dir.path("s.txt"), dir, 4);
+  expect_bad_input(test::run_tool("heatvoronoi", dir.path("m.obj") + " --sites-file " + dir.path("s.txt") + " -o " +
+                                                     dir.path("v.ply") + " --centroids " + dir.path("s.txt")),
+                   "heatvoronoi", dir.path("s.txt"), dir, 4);
+  EXPECT_EQ(slurp(dir.path("s.txt")), sites_before);
 }
 
 TEST(Hardening, AFailingLaterOutputLeavesNoEarlierOne) {

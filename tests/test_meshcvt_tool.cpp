@@ -333,6 +333,7 @@ TEST(MeshcvtTool, BadOptions) {
   fails("-n 3 --adaptive 3", "--adaptive");
   fails("-n 3 --adaptive 1 --size-ratio 0.5", "--size-ratio");
   fails("-n 3 --t-coef 0", "--t-coef");
+  fails("-n 3 --t-coef 1e10", "--t-coef");
   fails("-n 3 --threads -1", "--threads");
   fails("-n 3 --relaxation 2", "--relaxation");
   fails("-n 3 --target-phi-m 70", "--target-phi-m");

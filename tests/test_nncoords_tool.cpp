@@ -127,6 +127,9 @@ TEST(NncoordsTool, MissingAndMalformedFiles) {
   expect_clean_failure(test::run_tool("nncoords", s.mesh + " --sites " + s.sites + " --values " + s.dir.path("vals.txt") +
                                                       " -o " + s.dir.path("o.ply")),
                        {s.dir.path("vals.txt"), "line 3"}, s.dir, 4);
+  expect_clean_failure(test::run_tool("nncoords", s.mesh + " --sites " + s.sites + " --weights " + s.dir.path("w.txt") +
+                                                      " --t-coef 1e10"),
+                       {"--t-coef"}, s.dir, 4);
 }
 
 TEST(NncoordsTool, BadSites) {

@@ -75,8 +75,7 @@ void check_options(const ReconstructionOptions& opt) {
   if (!(opt.adaptive.max_size_ratio >= 1) || !std::isfinite(opt.adaptive.max_size_ratio))
     throw InvalidInputError("--size-ratio must be a number >= 1");
   if (!(opt.voxel_size >= 0) || !std::isfinite(opt.voxel_size)) throw InvalidInputError("--voxel must be >= 0");
-  if (!(opt.time_coefficient > 0) || !std::isfinite(opt.time_coefficient))
-    throw InvalidInputError("--t-coef must be a positive number");
+  cli::check_time_coefficient(opt.time_coefficient);
   if (opt.threads < 0) throw InvalidInputError("--threads must be >= 0");
   if (opt.surface_lloyd_iterations < 0) throw InvalidInputError("--surface-lloyd must be >= 0");
   if (!(opt.cvt_points_per_site == 0 || opt.cvt_points_per_site >= 3) || !std::isfinite(opt.cvt_points_per_site))
@@ -445,6 +444,7 @@ std::vector<ScanInput> list_scans(const Settings& s) {
     scans.push_back({s.cloud_paths[i], s.pose_paths.empty() ? Eigen::Isometry3d::Identity() : read_pose_file(s.pose_paths[i])});
   std::vector<std::string> inputs{s.conf_path};
   for (const ScanInput& scan : scans) inputs.push_back(scan.path);
+  inputs.insert(inputs.end(), s.pose_paths.begin(), s.pose_paths.end());
   cli::check_distinct_outputs({{"-o", s.out_path}, {"--report", s.report_path}}, inputs);
   return scans;
 }

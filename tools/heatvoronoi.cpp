@@ -154,7 +154,7 @@ int main(int argc, char** argv) {
   app.add_option("--threads", threads, "worker threads (0 = all cores)")->capture_default_str();
   app.add_flag("-q,--quiet", quiet, "no progress output on stderr");
   return cli::parse_and_run(app, argc, argv, "heatvoronoi", [&]() -> int {
-    if (!(t_coef > 0) || !std::isfinite(t_coef)) throw InvalidInputError("--t-coef must be a positive number");
+    cli::check_time_coefficient(t_coef);
     if (threads < 0) throw InvalidInputError("--threads must be >= 0");
     if (centroid_steps < 1) throw InvalidInputError("--centroid-steps must be >= 1");
     cli::check_output_path(cells_path, {".ply", ".obj", ".off", ".stl"});
@@ -162,7 +162,7 @@ int main(int argc, char** argv) {
     cli::check_output_path(centroids_path, {".xyz", ".txt"});
     cli::check_output_path(report_path, {".json"});
     cli::check_distinct_outputs({{"-o", cells_path}, {"--edges", edges_path}, {"--centroids", centroids_path},
-                                 {"--report", report_path}}, {mesh_path});
+                                 {"--report", report_path}}, {mesh_path, sites_file});
     auto log = [&](const std::string& s) { cli::log_line(quiet, s); };
     const auto t_start = Clock::now();
     MeshReadReport read_report;

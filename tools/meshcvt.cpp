@@ -206,7 +206,7 @@ void check_settings(const Settings& s) {
   if (!(s.adaptive.adaptivity >= 0 && s.adaptive.adaptivity <= 2)) throw InvalidInputError("--adaptive must be in [0, 2]");
   if (!(s.adaptive.max_size_ratio >= 1) || !std::isfinite(s.adaptive.max_size_ratio))
     throw InvalidInputError("--size-ratio must be a number >= 1");
-  if (!(s.t_coef > 0) || !std::isfinite(s.t_coef)) throw InvalidInputError("--t-coef must be a positive number");
+  cli::check_time_coefficient(s.t_coef);
   if (s.threads < 0) throw InvalidInputError("--threads must be >= 0");
   if (!(s.min_vertices_per_site >= 0) || !std::isfinite(s.min_vertices_per_site))
     throw InvalidInputError("--min-vertices-per-site must be a number >= 0");

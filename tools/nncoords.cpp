@@ -93,7 +93,7 @@ void add_options(CLI::App& app, Settings& s) {
 
 // Option checks before any work, naming the option at fault; then the output paths.
 void check_settings(const Settings& s) {
-  if (!(s.t_coef > 0) || !std::isfinite(s.t_coef)) throw InvalidInputError("--t-coef must be a positive number");
+  cli::check_time_coefficient(s.t_coef);
   if (s.threads < 0) throw InvalidInputError("--threads must be >= 0");
   if (s.samples < 0) throw InvalidInputError("--samples must be >= 0");
   if (!(s.snap > 0) || !std::isfinite(s.snap)) throw InvalidInputError("--snap-tolerance must be a positive number");
@@ -101,7 +101,7 @@ void check_settings(const Settings& s) {
   cli::check_output_path(s.weights_path, {".txt"});
   cli::check_output_path(s.report_path, {".json"});
   cli::check_distinct_outputs({{"-o", s.out_path}, {"--weights", s.weights_path}, {"--report", s.report_path}},
-                              {s.mesh_path});
+                              {s.mesh_path, s.sites_path, s.values_path});
 }
 
 // Reads and checks the input mesh and notes its size on stderr.

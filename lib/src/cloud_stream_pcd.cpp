@@ -165,6 +165,8 @@ void PcdDecoder::check_body_size() {
       path, header_, src.remaining(), [&](char* dst, std::size_t n) { return src.read(dst, n); }, sz);
   if (kind_ == "binary_compressed") {
     // One LZF block: it must be decompressed whole (see cloud_stream.h).
+    if (sz[0] == 0 && sz[1] > 0)
+      fail(path, "corrupt compressed PCD: compressed size 0 for " + std::to_string(sz[1]) + " bytes of data");
     std::vector<char> packed(sz[0]);
     if (sz[0] > 0 && !src.read(packed.data(), sz[0])) fail(path, "truncated: compressed PCD data missing");
     block_.resize(sz[1]);

@@ -90,6 +90,14 @@ int parse_command_line(CLI::App& app, int argc, char** argv, const std::string& 
   return -1;
 }
 
+void check_time_coefficient(double coefficient) {
+  if (!(coefficient > 0) || !std::isfinite(coefficient) || coefficient > kMaxTimeCoefficient) {
+    std::ostringstream s;
+    s << "--t-coef must be a positive number of at most " << kMaxTimeCoefficient << " (got " << coefficient << ")";
+    throw InvalidInputError(s.str());
+  }
+}
+
 void keep_freed_memory() {
   mallopt(M_MMAP_THRESHOLD, static_cast<int>(kAllocatorRetainBytes));
   mallopt(M_TRIM_THRESHOLD, static_cast<int>(kAllocatorRetainBytes));

@@ -97,6 +97,15 @@ auto on_file(const std::string& path, Work&& work) -> decltype(work()) {
   }
 }
 
+/// Largest heat time coefficient the tools accept (t = C · h̄², h̄ the Laplacian's mean edge
+/// length): 10⁴, a diffusion length of 100 edges. Far beyond it the heat is nearly constant over
+/// the surface and its gradient, the heat method's distance direction (paper §2, eq. 7), is
+/// rounding noise: the diagrams and meshes fall apart while every check still passes.
+constexpr double kMaxTimeCoefficient = 1e4;
+
+/// Checks --t-coef: a finite number in (0, kMaxTimeCoefficient]. Throws heatcvt::InvalidInputError.
+void check_time_coefficient(double coefficient);
+
 /// Fails fast, before any work, when an output could not be written: its directory is missing
 /// or not writable, or (when `extensions` is non-empty, e.g. {".ply", ".obj"}) its extension is
 /// not one of them. Throws heatcvt::InvalidInputError "<path>: <problem>". Empty paths pass.
