@@ -133,6 +133,15 @@ TEST(Hardening, ZeroAreaMeshIsAnErrorForNaturalNeighbours) {
     expect_bad_input(test::run_tool("nncoords", dir.path("needle.obj") + " --sites " + dir.path("s.txt") +
                                                     " --weights " + dir.path("w.txt") + extra),
                      "nncoords", dir.path("needle.obj"), dir, 2);
+  // The mesh tools say so before any heat step.
+  test::write_text_file(dir.path("point.obj"), "v 1 1 1\nv 1 1 1\nv 1 1 1\nv 1 1 1\nf 1 2 3\nf 1 3 4\n");
+  for (const char* mesh : {"needle.obj", "point.obj"}) {
+    const auto r = test::run_tool("meshcvt", dir.path(mesh) + " -n 2 -o " + dir.path("o.obj"));
+    expect_bad_input(r, "meshcvt", dir.path(mesh), dir, 3);
+    EXPECT_NE(r.err.find("zero area"), std::string::npos) << r.err;
+    expect_bad_input(test::run_tool("heatvoronoi", dir.path(mesh) + " --sites 2 -o " + dir.path("o.ply")), "heatvoronoi",
+                     dir.path(mesh), dir, 3);
+  }
 }
 
 // --- 2. command-line misuse ---------------------------------------------------------------------

@@ -185,6 +185,13 @@ void validate_mesh(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const s
         throw InvalidInputError(what + ": face " + std::to_string(f) + " references vertex " +
                                 std::to_string(F(f, k)) + " but there are only " +
                                 std::to_string(V.rows()) + " vertices");
+  bool any_area = false;
+  for (int f = 0; f < F.rows() && !any_area; ++f) {
+    const Eigen::Vector3d e1 = (V.row(F(f, 1)) - V.row(F(f, 0))).transpose(), e2 = (V.row(F(f, 2)) - V.row(F(f, 0))).transpose();
+    any_area = e1.cross(e2).squaredNorm() > 0;
+  }
+  if (!any_area)
+    throw InvalidInputError(what + ": every face has zero area (the vertices are coincident or collinear)");
 }
 
 }  // namespace heatcvt

@@ -71,7 +71,8 @@ struct MeshTopology {
 /// not counted, components are edge-connected sets of faces.
 MeshTopology mesh_topology(const Eigen::MatrixX3i& F, int num_vertices);
 
-/// Throws InvalidInputError when V has NaN/inf, F is empty or indexes out of range.
+/// Throws InvalidInputError when V has NaN/inf, F is empty or indexes out of range, or every face
+/// has zero area (coincident or collinear vertices: no surface to diffuse heat on).
 /// `what` names the mesh (usually its file name) in the message.
 void validate_mesh(const Eigen::MatrixX3d& V, const Eigen::MatrixX3i& F, const std::string& what = "mesh");
 
