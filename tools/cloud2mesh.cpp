@@ -367,7 +367,7 @@ void add_reconstruction_options(CLI::App& app, Settings& s) {
       ->capture_default_str();
   app.add_option("--voxel", s.opt.voxel_size, "voxel-grid downsampling size in input units; 0 = off")
       ->capture_default_str();
-  app.add_option("--t-coef", s.opt.time_coefficient, "time step t = C * (mean edge length)^2, C at most 1e4")->capture_default_str();
+  cli::add_time_coefficient_option(app, s.opt.time_coefficient);
   app.add_option("--seed", s.opt.seed, "seed of the initial sites")->capture_default_str();
   app.add_option("--count-retries", s.opt.count_retries,
                  "where the mesh is more than --retry-count-error * -n off the count, or leaves more than a fifth of "

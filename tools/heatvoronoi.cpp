@@ -146,7 +146,7 @@ int main(int argc, char** argv) {
   sites_opt->excludes(file_opt);
   file_opt->excludes(sites_opt);
   app.add_option("--seed", seed, "random seed for --sites")->capture_default_str();
-  app.add_option("--t-coef", t_coef, "time step t = C * (mean edge length)^2, C at most 1e4")->capture_default_str();
+  cli::add_time_coefficient_option(app, t_coef);
   app.add_option("--centroid-steps", centroid_steps, "implicit heat steps for the centroids (h <- u)")->capture_default_str();
   app.add_option("--edges", edges_path, "write the Voronoi edges as OBJ polylines");
   app.add_option("--centroids", centroids_path, "write one heat centroid per cell as 'x y z'");

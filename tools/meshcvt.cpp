@@ -112,7 +112,7 @@ void add_lloyd_options(CLI::App& app, Settings& s) {
       ->capture_default_str()
       ->check(CLI::IsMember({"random", "farthest"}));
   app.add_option("--seed", s.seed, "random seed of the initial sites")->capture_default_str();
-  app.add_option("--t-coef", s.t_coef, "time step t = C * (mean edge length)^2, C at most 1e4")->capture_default_str();
+  cli::add_time_coefficient_option(app, s.t_coef);
   app.add_option("--threads", s.threads, "worker threads (0 = all cores); results do not depend on it")
       ->capture_default_str();
   app.add_option("--cells", s.cells_path, "also write the tessellated input with a cell id per face (.ply)");

@@ -76,7 +76,7 @@ void add_options(CLI::App& app, Settings& s) {
   out_opt->needs(values_opt);
   weights_opt->excludes(values_opt);
   values_opt->excludes(weights_opt);
-  app.add_option("--t-coef", s.t_coef, "time step t = C * (mean edge length)^2, C at most 1e4")->capture_default_str();
+  cli::add_time_coefficient_option(app, s.t_coef);
   app.add_option("--samples", s.samples, "vertices computed exactly before propagation (0 = max(500, #V/20))")
       ->capture_default_str();
   app.add_flag("--exact", s.exact, "exact coordinates at every vertex (one diffusion per vertex; slow)");

@@ -98,6 +98,12 @@ void check_time_coefficient(double coefficient) {
   }
 }
 
+CLI::Option* add_time_coefficient_option(CLI::App& app, double& coefficient) {
+  std::ostringstream help;
+  help << "time step t = C * (mean edge length)^2, C at most " << kMaxTimeCoefficient;
+  return app.add_option("--t-coef", coefficient, help.str())->capture_default_str();
+}
+
 void keep_freed_memory() {
   mallopt(M_MMAP_THRESHOLD, static_cast<int>(kAllocatorRetainBytes));
   mallopt(M_TRIM_THRESHOLD, static_cast<int>(kAllocatorRetainBytes));

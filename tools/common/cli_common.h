@@ -106,6 +106,9 @@ constexpr double kMaxTimeCoefficient = 1e4;
 /// Checks --t-coef: a finite number in (0, kMaxTimeCoefficient]. Throws heatcvt::InvalidInputError.
 void check_time_coefficient(double coefficient);
 
+/// Adds the --t-coef option (the heat time coefficient, its bound in the help) bound to `coefficient`.
+CLI::Option* add_time_coefficient_option(CLI::App& app, double& coefficient);
+
 /// Fails fast, before any work, when an output could not be written: its directory is missing
 /// or not writable, or (when `extensions` is non-empty, e.g. {".ply", ".obj"}) its extension is
 /// not one of them. Throws heatcvt::InvalidInputError "<path>: <problem>". Empty paths pass.
