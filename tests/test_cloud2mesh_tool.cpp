@@ -306,6 +306,7 @@ TEST(Cloud2MeshTool, NonsenseOptions) {
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--adaptive nan"), {"--adaptive"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--adaptive 1 --size-ratio 0.9"), {"--size-ratio"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--threads -1"), {"--threads"}, dir, 1);
+  expect_clean_failure(test::run_tool("cloud2mesh", base + "--threads 1000000"), {"--threads"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--relaxation 2"), {"--relaxation"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--surface-lloyd -1"), {"--surface-lloyd"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--mean-tolerance -1"), {"--mean-tolerance"}, dir, 1);

@@ -289,6 +289,31 @@ TEST(CloudStream, ACompressedPcdWithoutCompressedBytesIsRefused) {
   EXPECT_EQ(whole.rfind(corrupt + ": ", 0), 0u) << whole;
 }
 
+TEST(CloudStream, AnAsciiPcdWithMorePointsThanItsHeaderSaysIsRefused) {
+  // Header says 2 points, the body holds 3: the third would be dropped silently. Blank lines
+  // after the last point are fine.
+  test::ScratchDir dir("cloud_stream_extra_rows");
+  const std::string head = "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\n"
+                           "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n";
+  const std::string extra = dir.path("extra.pcd"), blank = dir.path("blank.pcd");
+  { std::ofstream(extra) << head << "0 0 0\n1 0 0\n0 1 0\n"; }
+  { std::ofstream(blank) << head << "0 0 0\n1 0 0\n\n  \n"; }
+  const std::string streamed = error_of([&] {
+    CloudChunkReader r(extra);
+    CloudChunk c;
+    while (r.next(c)) {
+    }
+  });
+  EXPECT_EQ(streamed.rfind(extra + ": line 13: data beyond the 2 points", 0), 0u) << streamed;
+  EXPECT_EQ(streamed, error_of([&] { read_cloud(extra); }));
+  EXPECT_EQ(read_cloud(blank).P.rows(), 2);
+  CloudChunkReader r(blank);
+  CloudChunk c;
+  Eigen::Index rows = 0;
+  while (r.next(c)) rows += c.P.rows();
+  EXPECT_EQ(rows, 2);
+}
+
 TEST(CloudStream, BadInputsGiveReadCloudsErrors) {
   test::ScratchDir dir("cloud_stream_bad");
   const std::string missing = dir.path("missing.ply");

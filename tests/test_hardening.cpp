@@ -21,6 +21,7 @@
 #include "heatcvt/mesh_io.h"
 #include "heatcvt/natural_neighbour.h"
 #include "heatcvt/normalize.h"
+#include "heatcvt/parallel.h"
 #include "heatcvt/pcl/heat_cvt_reconstruction.h"
 #include "heatcvt/reconstruct.h"
 #include "heatcvt/shapes.h"
@@ -677,4 +678,14 @@ TEST(Hardening, OneNeighbourRangeInTheLibraryAndTheTool) {
   EXPECT_NE(help.out.find("[" + std::to_string(ReconstructionOptions::min_neighbors) + ", " +
                           std::to_string(ReconstructionOptions::max_neighbors) + "]"),
             std::string::npos);
+}
+
+// A thread count far beyond any machine is reduced to kMaxThreads, not handed to OpenMP; 0 means
+// every hardware thread, and a count within the bound is kept.
+TEST(Hardening, AThreadCountBeyondTheBoundIsReducedToIt) {
+  EXPECT_EQ(resolve_threads(1000000), kMaxThreads);
+  EXPECT_EQ(resolve_threads(kMaxThreads), kMaxThreads);
+  EXPECT_EQ(resolve_threads(3), 3);
+  EXPECT_GE(resolve_threads(0), 1);
+  EXPECT_LE(resolve_threads(0), kMaxThreads);
 }

@@ -145,6 +145,7 @@ TEST(HeatVoronoiTool, ImpossibleOptions) {
   expect_clean_failure(test::run_tool("heatvoronoi", base + " --sites 0"), {"--sites"}, dir, 1);
   expect_clean_failure(test::run_tool("heatvoronoi", base + " --t-coef -2"), {"--t-coef"}, dir, 1);
   expect_clean_failure(test::run_tool("heatvoronoi", base + " --t-coef 1e10"), {"--t-coef"}, dir, 1);
+  expect_clean_failure(test::run_tool("heatvoronoi", base + " --threads 1000000"), {"--threads"}, dir, 1);
   test::write_text_file(dir.path("s.txt"), "0 0 0\n1 2\n");
   expect_clean_failure(test::run_tool("heatvoronoi", base + " --sites-file " + dir.path("s.txt")),
                        {dir.path("s.txt"), "line 2"}, dir, 2);

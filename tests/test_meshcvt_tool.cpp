@@ -105,6 +105,34 @@ void expect_border_on_input(const std::string& file, int sites) {
 
 }  // namespace
 
+// spot written as a triangle soup (each face with its own three vertices, as some exporters write):
+// welded back, it is remeshed as the closed genus-0 surface, without a warning per face.
+TEST(MeshcvtTool, ATriangleSoupIsWeldedAndRemeshedAsTheClosedSurface) {
+  test::ScratchDir dir("meshcvt");
+  const TriangleMesh spot = read_mesh(test::data_path("meshes/spot.obj"));
+  TriangleMesh soup;
+  soup.V.resize(3 * spot.F.rows(), 3);
+  soup.F.resize(spot.F.rows(), 3);
+  for (Eigen::Index f = 0; f < spot.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      soup.V.row(3 * f + k) = spot.V.row(spot.F(f, k));
+      soup.F(f, k) = static_cast<int>(3 * f + k);
+    }
+  const std::string in = dir.path("soup.obj"), out = dir.path("out.ply");
+  write_mesh(in, soup.V, soup.F);
+  const auto r = test::run_tool("meshcvt", in + " -n 500 -o " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("welded"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("has no site"), std::string::npos) << r.err;
+  const TriangleMesh dual = read_mesh(out);
+  const ValidationReport rep = validate_triangle_mesh(dual.V, dual.F);
+  EXPECT_TRUE(rep.ok()) << rep.summary();
+  EXPECT_EQ(rep.components, 1);
+  EXPECT_EQ(rep.boundary_loops, 0);
+  EXPECT_EQ(rep.euler_characteristic, 2);
+  EXPECT_NEAR(dual.V.rows(), 500, 0.02 * 500);
+}
+
 TEST(MeshcvtTool, OpenHemisphereKeepsItsBoundaryLoop) { expect_open_mesh_kept("hemisphere_open.obj", 300, true); }
 
 // Every vertex of the input (of a face) lies within one site spacing sqrt(area / sites) of the
@@ -335,6 +363,7 @@ TEST(MeshcvtTool, BadOptions) {
   fails("-n 3 --t-coef 0", "--t-coef");
   fails("-n 3 --t-coef 1e10", "--t-coef");
   fails("-n 3 --threads -1", "--threads");
+  fails("-n 3 --threads 1000000", "--threads");
   fails("-n 3 --relaxation 2", "--relaxation");
   fails("-n 3 --target-phi-m 70", "--target-phi-m");
   fails("-n 3 --init sideways", "--init");

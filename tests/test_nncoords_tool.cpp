@@ -130,6 +130,9 @@ TEST(NncoordsTool, MissingAndMalformedFiles) {
   expect_clean_failure(test::run_tool("nncoords", s.mesh + " --sites " + s.sites + " --weights " + s.dir.path("w.txt") +
                                                       " --t-coef 1e10"),
                        {"--t-coef"}, s.dir, 4);
+  expect_clean_failure(test::run_tool("nncoords", s.mesh + " --sites " + s.sites + " --weights " + s.dir.path("w.txt") +
+                                                      " --threads 1000000"),
+                       {"--threads"}, s.dir, 4);
 }
 
 TEST(NncoordsTool, BadSites) {

@@ -76,7 +76,7 @@ void check_options(const ReconstructionOptions& opt) {
     throw InvalidInputError("--size-ratio must be a number >= 1");
   if (!(opt.voxel_size >= 0) || !std::isfinite(opt.voxel_size)) throw InvalidInputError("--voxel must be >= 0");
   cli::check_time_coefficient(opt.time_coefficient);
-  if (opt.threads < 0) throw InvalidInputError("--threads must be >= 0");
+  cli::check_threads(opt.threads);
   if (opt.surface_lloyd_iterations < 0) throw InvalidInputError("--surface-lloyd must be >= 0");
   if (!(opt.cvt_points_per_site == 0 || opt.cvt_points_per_site >= 3) || !std::isfinite(opt.cvt_points_per_site))
     throw InvalidInputError("--points-per-site must be 0 (every point) or at least 3");
@@ -410,7 +410,7 @@ void add_reconstruction_options(CLI::App& app, Settings& s) {
       ->capture_default_str();
   app.add_flag("--no-smooth-cvt-points", [&](std::int64_t) { s.opt.smooth_cvt_points = false; },
                "build the Laplacian on the raw CVT points instead of their projections onto the fitted surface");
-  app.add_option("--threads", s.opt.threads, "worker threads (0 = all cores)")->capture_default_str();
+  cli::add_threads_option(app, s.opt.threads);
   app.add_option("--report", s.report_path, "write a JSON report");
   app.add_flag("-q,--quiet", s.quiet, "no progress and no summary");
 }

@@ -151,11 +151,11 @@ int main(int argc, char** argv) {
   app.add_option("--edges", edges_path, "write the Voronoi edges as OBJ polylines");
   app.add_option("--centroids", centroids_path, "write one heat centroid per cell as 'x y z'");
   app.add_option("--report", report_path, "write a JSON report");
-  app.add_option("--threads", threads, "worker threads (0 = all cores)")->capture_default_str();
+  cli::add_threads_option(app, threads);
   app.add_flag("-q,--quiet", quiet, "no progress output on stderr");
   return cli::parse_and_run(app, argc, argv, "heatvoronoi", [&]() -> int {
     cli::check_time_coefficient(t_coef);
-    if (threads < 0) throw InvalidInputError("--threads must be >= 0");
+    cli::check_threads(threads);
     if (centroid_steps < 1) throw InvalidInputError("--centroid-steps must be >= 1");
     cli::check_output_path(cells_path, {".ply", ".obj", ".off", ".stl"});
     cli::check_output_path(edges_path, {".obj"});

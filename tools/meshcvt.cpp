@@ -19,6 +19,7 @@
 #include "heatcvt/mesh_io.h"
 #include "heatcvt/remesh.h"
 #include "heatcvt/validate.h"
+#include "heatcvt/weld.h"
 #include "report_json.h"
 
 using namespace heatcvt;
@@ -113,8 +114,7 @@ void add_lloyd_options(CLI::App& app, Settings& s) {
       ->check(CLI::IsMember({"random", "farthest"}));
   app.add_option("--seed", s.seed, "random seed of the initial sites")->capture_default_str();
   cli::add_time_coefficient_option(app, s.t_coef);
-  app.add_option("--threads", s.threads, "worker threads (0 = all cores); results do not depend on it")
-      ->capture_default_str();
+  cli::add_threads_option(app, s.threads);
   app.add_option("--cells", s.cells_path, "also write the tessellated input with a cell id per face (.ply)");
   app.add_option("--report", s.report_path, "also write the final report as JSON");
   app.add_option("--relaxation", s.relaxation,
@@ -207,7 +207,7 @@ void check_settings(const Settings& s) {
   if (!(s.adaptive.max_size_ratio >= 1) || !std::isfinite(s.adaptive.max_size_ratio))
     throw InvalidInputError("--size-ratio must be a number >= 1");
   cli::check_time_coefficient(s.t_coef);
-  if (s.threads < 0) throw InvalidInputError("--threads must be >= 0");
+  cli::check_threads(s.threads);
   if (!(s.min_vertices_per_site >= 0) || !std::isfinite(s.min_vertices_per_site))
     throw InvalidInputError("--min-vertices-per-site must be a number >= 0");
   if (!(s.flat_angle_deg >= 0 && s.flat_angle_deg < 90))
@@ -266,6 +266,15 @@ RemeshOptions remesh_options(const Settings& s) {
 TriangleMesh read_input(const Settings& s, SurfaceDescription& input) {
   TriangleMesh mesh = read_mesh(s.mesh_path);
   validate_mesh(mesh.V, mesh.F, s.mesh_path);
+  const WeldStats weld = weld_coincident_borders(mesh);
+  if (weld.welded)
+    cli::log_line(s.quiet, "welded " + std::to_string(weld.welded) + " boundary vertices of " + s.mesh_path +
+                               " onto others at the same position (unwelded seams or a triangle soup)");
+  if (weld.refused)
+    cli::log_line(s.quiet, "warning: " + std::to_string(weld.refused) + " boundary vertices of " + s.mesh_path +
+                               " share a position but stay apart: welding them would give " +
+                               std::to_string(weld.bad_edges) + " edges more than two faces and collapse " +
+                               std::to_string(weld.bad_faces) + " faces");
   input = describe_surface(mesh);
   cli::log_line(s.quiet, "read " + s.mesh_path + ": " + std::to_string(mesh.V.rows()) + " vertices, " +
                              std::to_string(mesh.F.rows()) + " faces, " + input.genus_text() +
@@ -296,6 +305,9 @@ RemeshResult run_remesh(const TriangleMesh& mesh, const RemeshOptions& remesh, c
   return res;
 }
 
+// Components without a site named one by one on stderr; the rest are counted in one line.
+constexpr std::size_t kMaxListedComponents = 10;
+
 // Notes on stderr what the run did to the input: refinement, degenerate faces, unreached components.
 void log_input_notes(const RemeshResult& res, const Settings& s) {
   if (res.reoriented_faces)
@@ -319,9 +331,13 @@ void log_input_notes(const RemeshResult& res, const Settings& s) {
   if (res.degenerate_faces)
     cli::log_line(s.quiet, "warning: " + std::to_string(res.degenerate_faces) + " degenerate faces in " +
                                s.mesh_path + " carry no heat conduction");
-  for (int comp : res.cvt.diagram.unreached_components)
-    cli::log_line(s.quiet, "warning: connected component " + std::to_string(comp) + " of " + s.mesh_path +
+  const std::vector<int>& unreached = res.cvt.diagram.unreached_components;
+  for (std::size_t i = 0; i < unreached.size() && i < kMaxListedComponents; ++i)
+    cli::log_line(s.quiet, "warning: connected component " + std::to_string(unreached[i]) + " of " + s.mesh_path +
                                " has no site and gets no cell");
+  if (unreached.size() > kMaxListedComponents)
+    cli::log_line(s.quiet, "warning: " + std::to_string(unreached.size() - kMaxListedComponents) +
+                               " more components of " + s.mesh_path + " have no site");
 }
 
 // Timings and counts of a run that the report and the summary both give.

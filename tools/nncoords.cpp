@@ -82,7 +82,7 @@ void add_options(CLI::App& app, Settings& s) {
   app.add_flag("--exact", s.exact, "exact coordinates at every vertex (one diffusion per vertex; slow)");
   app.add_option("--snap-tolerance", s.snap, "sites farther than this fraction of the bounding-box diagonal from the surface are an error")
       ->capture_default_str();
-  app.add_option("--threads", s.threads, "worker threads (0 = all cores)")->capture_default_str();
+  cli::add_threads_option(app, s.threads);
   app.add_option("--report", s.report_path, "write a JSON report");
   app.add_flag("-q,--quiet", s.quiet, "no progress output on stderr");
   app.callback([&s]() {
@@ -94,7 +94,7 @@ void add_options(CLI::App& app, Settings& s) {
 // Option checks before any work, naming the option at fault; then the output paths.
 void check_settings(const Settings& s) {
   cli::check_time_coefficient(s.t_coef);
-  if (s.threads < 0) throw InvalidInputError("--threads must be >= 0");
+  cli::check_threads(s.threads);
   if (s.samples < 0) throw InvalidInputError("--samples must be >= 0");
   if (!(s.snap > 0) || !std::isfinite(s.snap)) throw InvalidInputError("--snap-tolerance must be a positive number");
   cli::check_output_path(s.out_path, {".ply"});

@@ -108,7 +108,8 @@ PointCloud read_xyz(const std::string& path, CloudReadReport& rep) {
 // PCD
 
 // Checks every line of an ASCII PCD body: the first `points` non-blank lines must hold exactly
-// `values_per_point` numbers each (read_pcd_ascii_line). `line_no` is the number of header lines.
+// `values_per_point` numbers each (read_pcd_ascii_line), and nothing but blank lines may follow
+// them (check_pcd_ascii_tail). `line_no` is the number of header lines.
 void check_ascii_pcd_body(const std::string& path, std::istream& in, long long points, long long values_per_point,
                           int line_no) {
   std::string line;
@@ -121,6 +122,7 @@ void check_ascii_pcd_body(const std::string& path, std::istream& in, long long p
   }
   if (seen < points)
     fail(path, "truncated: header announces " + std::to_string(points) + " points, file holds " + std::to_string(seen));
+  detail::check_pcd_ascii_tail(path, line_no, points, [&](std::string& l) { return static_cast<bool>(std::getline(in, l)); });
 }
 
 // Checks the PCD header and the data size before handing the file to PCL, so that corrupt or

@@ -101,6 +101,10 @@ class PcdDecoder : public CloudChunkReader::Decoder {
       ++next_record_;
       ++n;
     }
+    if (kind_ == "ascii" && next_record_ == points_ && !tail_checked_) {
+      tail_checked_ = true;
+      detail::check_pcd_ascii_tail(src.path(), line_no_, points_, [&](std::string& l) { return src.getline(l); });
+    }
     return n;
   }
 
@@ -119,6 +123,7 @@ class PcdDecoder : public CloudChunkReader::Decoder {
   int header_lines_ = 0;
   long line_no_ = 0;
   long long next_record_ = 0;
+  bool tail_checked_ = false;  // ascii: the lines after the last point were checked (blank)
   std::vector<char> record_;
   std::vector<char> block_;                  // binary_compressed: the decompressed block
   std::vector<std::size_t> column_start_;    // binary_compressed: start of each field's column

@@ -122,6 +122,17 @@ void check_pcd_body_size(const std::string& path, const PcdHeader& h, long long 
   }
 }
 
+void check_pcd_ascii_tail(const std::string& path, long line_no, long long points,
+                          const std::function<bool(std::string&)>& getline) {
+  std::string line;
+  while (getline(line)) {
+    ++line_no;
+    if (line.find_first_not_of(" \t\r") != std::string::npos)
+      fail(path, "line " + std::to_string(line_no) + ": data beyond the " + std::to_string(points) +
+                     " points the header announces (POINTS, WIDTH x HEIGHT)");
+  }
+}
+
 void pcd_ascii_number_error(const std::string& path, long line_no, std::string_view tok) {
   fail(path, "line " + std::to_string(line_no) + ": malformed number " + quote_excerpt(tok) +
                  (tok.find(',') != std::string_view::npos ? " (decimal commas are not allowed)" : ""));

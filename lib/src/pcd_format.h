@@ -49,6 +49,13 @@ void check_pcd_body_size(const std::string& path, const PcdHeader& h, long long 
 /// Fails at `line_no`: the line holds `cols` numbers, not `values_per_point`.
 [[noreturn]] void pcd_ascii_columns_error(const std::string& path, long line_no, long long cols, long long values_per_point);
 
+/// Checks that an ascii body ends after its `points` points: every line `getline` still yields
+/// (numbered on from `line_no`, the last line read) must be blank. A count in the header smaller
+/// than the data (POINTS or WIDTH × HEIGHT not updated after an edit) would otherwise drop the
+/// rest of the cloud silently, as PCL's reader does. Fails "path: line N: data beyond ...".
+void check_pcd_ascii_tail(const std::string& path, long line_no, long long points,
+                          const std::function<bool(std::string&)>& getline);
+
 /// Parses one ascii body line strictly (PCL accepts non-numeric tokens and short lines silently):
 /// calls on_value(token) for each number ("nan" allowed, as PCL writes it) and returns how many
 /// there are; fails at `line_no` on a token that is not a number, or when a non-blank line does

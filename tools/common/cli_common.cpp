@@ -13,6 +13,7 @@
 
 #include "heatcvt/atomic_file.h"
 #include "heatcvt/errors.h"
+#include "heatcvt/parallel.h"
 #include <exception>
 #include <iostream>
 
@@ -102,6 +103,19 @@ CLI::Option* add_time_coefficient_option(CLI::App& app, double& coefficient) {
   std::ostringstream help;
   help << "time step t = C * (mean edge length)^2, C at most " << kMaxTimeCoefficient;
   return app.add_option("--t-coef", coefficient, help.str())->capture_default_str();
+}
+
+void check_threads(int threads) {
+  if (threads < 0 || threads > kMaxThreads)
+    throw InvalidInputError("--threads must be 0 (all cores) or a count of at most " + std::to_string(kMaxThreads) +
+                            " (got " + std::to_string(threads) + ")");
+}
+
+CLI::Option* add_threads_option(CLI::App& app, int& threads) {
+  return app
+      .add_option("--threads", threads,
+                  "worker threads, 0 = all cores, at most " + std::to_string(kMaxThreads) + "; results do not depend on it")
+      ->capture_default_str();
 }
 
 void keep_freed_memory() {

@@ -109,6 +109,12 @@ void check_time_coefficient(double coefficient);
 /// Adds the --t-coef option (the heat time coefficient, its bound in the help) bound to `coefficient`.
 CLI::Option* add_time_coefficient_option(CLI::App& app, double& coefficient);
 
+/// Checks --threads: 0 (all cores) up to heatcvt::kMaxThreads. Throws heatcvt::InvalidInputError.
+void check_threads(int threads);
+
+/// Adds the --threads option (0 = all cores, its bound in the help) bound to `threads`.
+CLI::Option* add_threads_option(CLI::App& app, int& threads);
+
 /// Fails fast, before any work, when an output could not be written: its directory is missing
 /// or not writable, or (when `extensions` is non-empty, e.g. {".ply", ".obj"}) its extension is
 /// not one of them. Throws heatcvt::InvalidInputError "<path>: <problem>". Empty paths pass.

@@ -44,6 +44,7 @@
 #include "heatcvt/validate.h"
 #include "heatcvt/vertex_attributes.h"
 #include "heatcvt/voronoi.h"
+#include "heatcvt/weld.h"
 
 namespace heatcvt {
 
