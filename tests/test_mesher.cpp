@@ -1198,6 +1198,31 @@ TEST(CoverageRepair, PutsAVertexBackOnATipThatTheMeshCutOff) {
   EXPECT_EQ(r.vertices, spike.coarse.num_vertices());
 }
 
+// The spiked sphere's samples with those of a second, unmeshed copy beside it: half the samples
+// are uncovered, a missing piece and not a tip, and the repair leaves the mesh as it is; with
+// max_uncovered_fraction = 1 the same call moves vertices onto the tip.
+TEST(CoverageRepair, LeavesAMeshThatMissesAWholePieceAsItIs) {
+  const SpikeOnAFace spike = spike_on_a_face(0.35, 48);
+  const MeshSurfaceProjector surface(spike.fine.V, spike.fine.F);
+  Eigen::MatrixX3d samples(2 * spike.fine.V.rows(), 3);
+  samples << spike.fine.V, spike.fine.V.rowwise() + Eigen::RowVector3d(5, 0, 0);
+  const CoverageRepairOptions o;
+  WorkingMesh w = spike.coarse;
+  const CoverageRepairStats st = repair_coverage(w, surface, samples, spike.spacing, o);
+  ASSERT_GT(st.uncovered_before, o.max_uncovered_fraction * static_cast<double>(samples.rows()));
+  EXPECT_TRUE(st.skipped);
+  EXPECT_EQ(st.moves, 0);
+  EXPECT_EQ(st.uncovered_after, st.uncovered_before);
+  EXPECT_EQ(w.V, spike.coarse.V);
+  EXPECT_EQ(face_matrix(w), face_matrix(spike.coarse));
+  CoverageRepairOptions every = o;
+  every.max_uncovered_fraction = 1;
+  WorkingMesh tried = spike.coarse;
+  const CoverageRepairStats all = repair_coverage(tried, surface, samples, spike.spacing, every);
+  EXPECT_FALSE(all.skipped);
+  EXPECT_GT(all.moves, 0);
+}
+
 // Every vertex of `w` on the surface `fine` (to rounding), and `w` a valid mesh of `vertices`.
 void expect_valid_on_surface(const WorkingMesh& w, const TriangleMesh& fine, int vertices) {
   const std::vector<SurfacePoint> on = closest_surface_points(fine.V, fine.F, w.V);

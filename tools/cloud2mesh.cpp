@@ -125,6 +125,7 @@ cli::Json make_report(const std::string& cloud_path, const std::vector<std::stri
   j["points_stray"] = res.points_stray;
   j["points_voxel_removed"] = res.points_voxel_removed;
   j["points_used"] = res.points_used;
+  j["points_cvt"] = res.points_cvt;
   j["sites"] = opt.sites;
   j["iterations"] = res.iterations;
   j["neighbors"] = opt.neighbors;
@@ -170,6 +171,7 @@ cli::Json make_report(const std::string& cloud_path, const std::vector<std::stri
   j["cloud_volumetric"] = res.cloud_coverage.volumetric();
   j["tip_moves"] = res.coverage.moves;
   j["tip_vertices_inserted"] = res.coverage.inserted;
+  j["tip_repair_skipped"] = res.coverage.skipped;
   j["tip_uncovered_before"] = res.coverage.uncovered_before;
   j["tip_uncovered_after"] = res.coverage.uncovered_after;
   j["blas"] = heatcvt::blas_description();
@@ -586,6 +588,10 @@ void print_summary(const Settings& s, const std::string& cloud_path, const Recon
                 "parts longer than a moved vertex reaches (%d CVT points farther than half a spacing from it "
                 "before, %d after)\n",
                 res.coverage.moves, res.coverage.inserted, res.coverage.uncovered_before, res.coverage.uncovered_after);
+  if (res.coverage.skipped)
+    std::printf("  tips: not repaired: %d CVT points farther than half a spacing from the mesh, more than a tip "
+                "leaves (the mesh misses whole parts; see the coverage line)\n",
+                res.coverage.uncovered_before);
   // The point Laplacian resolves a heat cell from about 10 points (ReconstructionOptions::
   // cvt_points_per_site); far fewer leave holes and slivers the mesher can only patch.
   const double points_per_site = static_cast<double>(res.points_used) / opt.sites;

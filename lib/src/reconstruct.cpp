@@ -62,6 +62,8 @@ void check_options(const ReconstructionOptions& o) {
   if (!(o.coverage.max_grown_fraction >= 0 && o.coverage.max_grown_fraction <= 1))
     bad("coverage.max_grown_fraction must be in [0, 1]");
   if (o.coverage.grow_rounds < 0) bad("coverage.grow_rounds must be >= 0");
+  if (!(o.coverage.max_uncovered_fraction >= 0 && o.coverage.max_uncovered_fraction <= 1))
+    bad("coverage.max_uncovered_fraction must be in [0, 1]");
   if (!(o.coverage.grow_step > 0) || !std::isfinite(o.coverage.grow_step)) bad("coverage.grow_step must be a finite number > 0");
   if (!(o.time_coefficient > 0) || !std::isfinite(o.time_coefficient)) bad("time_coefficient must be > 0");
   if (o.threads < 0) bad("threads must be >= 0");

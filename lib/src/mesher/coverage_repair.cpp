@@ -516,6 +516,12 @@ CoverageRepairStats repair_coverage(WorkingMesh& mesh, const SurfaceProjector& s
   };
   stats.gap_before = gaps_ptr->largest;
   stats.uncovered_before = uncovered(*gaps_ptr);
+  if (stats.uncovered_before > options.max_uncovered_fraction * static_cast<double>(samples.rows())) {
+    stats.skipped = true;
+    stats.gap_after = stats.gap_before;
+    stats.uncovered_after = stats.uncovered_before;
+    return stats;
+  }
   // With keep_narrowest_round, the state of the narrowest largest gap so far is kept to return.
   double best_gap = gaps_ptr->largest;
   int best_uncovered = stats.uncovered_before, best_moves = 0, best_inserted = 0;
