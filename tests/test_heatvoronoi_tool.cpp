@@ -146,9 +146,18 @@ TEST(HeatVoronoiTool, ImpossibleOptions) {
   expect_clean_failure(test::run_tool("heatvoronoi", base + " --t-coef -2"), {"--t-coef"}, dir, 1);
   expect_clean_failure(test::run_tool("heatvoronoi", base + " --t-coef 1e10"), {"--t-coef"}, dir, 1);
   expect_clean_failure(test::run_tool("heatvoronoi", base + " --threads 1000000"), {"--threads"}, dir, 1);
+  // A site far off the surface (another mesh's, other units) is an error, not snapped silently;
+  // --snap-tolerance lets it through.
+  test::write_text_file(dir.path("far.txt"), "0 0 0\n5 5 5\n");
+  expect_clean_failure(test::run_tool("heatvoronoi", base + " --sites-file " + dir.path("far.txt")),
+                       {dir.path("far.txt"), "site 2", "off the surface"}, dir, 2);
+  EXPECT_EQ(test::run_tool("heatvoronoi", base + " -q --snap-tolerance 10 --sites-file " + dir.path("far.txt")).exit_code, 0);
+  std::remove(dir.path("o.ply").c_str());
+  expect_clean_failure(test::run_tool("heatvoronoi", base + " --snap-tolerance 0 --sites-file " + dir.path("far.txt")),
+                       {"--snap-tolerance"}, dir, 2);
   test::write_text_file(dir.path("s.txt"), "0 0 0\n1 2\n");
   expect_clean_failure(test::run_tool("heatvoronoi", base + " --sites-file " + dir.path("s.txt")),
-                       {dir.path("s.txt"), "line 2"}, dir, 2);
+                       {dir.path("s.txt"), "line 2"}, dir, 3);
 }
 
 TEST(HeatVoronoiTool, UnwritableOutputLeavesNothing) {

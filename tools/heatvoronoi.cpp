@@ -135,7 +135,7 @@ int main(int argc, char** argv) {
   std::string mesh_path, cells_path, sites_file, edges_path, centroids_path, report_path;
   int num_sites = 20, threads = 0, centroid_steps = 1;
   unsigned seed = 1;
-  double t_coef = 1.0;
+  double t_coef = 1.0, snap = cli::kDefaultSnapTolerance;
   bool quiet = false;
   app.add_option("MESH", mesh_path, "input triangle mesh (.obj .off .ply .stl)")->required();
   app.add_option("-o,--output", cells_path, "output: tessellated mesh with a cell id and colour per face (.ply recommended)")
@@ -143,6 +143,7 @@ int main(int argc, char** argv) {
   auto* sites_opt = app.add_option("--sites", num_sites, "number of random generators (distinct vertices)")
                         ->capture_default_str();
   auto* file_opt = app.add_option("--sites-file", sites_file, "generators, one 'x y z' per line, snapped to the surface");
+  cli::add_snap_tolerance_option(app, snap);
   sites_opt->excludes(file_opt);
   file_opt->excludes(sites_opt);
   app.add_option("--seed", seed, "random seed for --sites")->capture_default_str();
@@ -156,6 +157,7 @@ int main(int argc, char** argv) {
   return cli::parse_and_run(app, argc, argv, "heatvoronoi", [&]() -> int {
     cli::check_time_coefficient(t_coef);
     cli::check_threads(threads);
+    cli::check_snap_tolerance(snap);
     if (centroid_steps < 1) throw InvalidInputError("--centroid-steps must be >= 1");
     cli::check_output_path(cells_path, {".ply", ".obj", ".off", ".stl"});
     cli::check_output_path(edges_path, {".obj"});
@@ -176,7 +178,7 @@ int main(int argc, char** argv) {
 
     std::vector<SurfacePoint> sites;
     if (!sites_file.empty()) {
-      sites = cli::read_snapped_sites(sites_file, mesh.V, mesh.F, frame);
+      sites = cli::read_snapped_sites(sites_file, mesh.V, mesh.F, frame, snap);
     } else {
       if (num_sites < 1) throw InvalidInputError("--sites must be at least 1");
       if (num_sites > nv)

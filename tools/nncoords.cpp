@@ -60,7 +60,7 @@ void write_weights(const std::string& path, const VertexWeights& W) {
 // The command line of nncoords.
 struct Settings {
   std::string mesh_path, sites_path, values_path, out_path, weights_path, report_path;
-  double t_coef = NaturalNeighbourOptions{}.time_coefficient, snap = 1e-3;
+  double t_coef = NaturalNeighbourOptions{}.time_coefficient, snap = cli::kDefaultSnapTolerance;
   int threads = NaturalNeighbourOptions{}.threads, samples = NaturalNeighbourOptions{}.samples;
   bool quiet = false, exact = false;
 };
@@ -80,8 +80,7 @@ void add_options(CLI::App& app, Settings& s) {
   app.add_option("--samples", s.samples, "vertices computed exactly before propagation (0 = max(500, #V/20))")
       ->capture_default_str();
   app.add_flag("--exact", s.exact, "exact coordinates at every vertex (one diffusion per vertex; slow)");
-  app.add_option("--snap-tolerance", s.snap, "sites farther than this fraction of the bounding-box diagonal from the surface are an error")
-      ->capture_default_str();
+  cli::add_snap_tolerance_option(app, s.snap);
   cli::add_threads_option(app, s.threads);
   app.add_option("--report", s.report_path, "write a JSON report");
   app.add_flag("-q,--quiet", s.quiet, "no progress output on stderr");
@@ -96,7 +95,7 @@ void check_settings(const Settings& s) {
   cli::check_time_coefficient(s.t_coef);
   cli::check_threads(s.threads);
   if (s.samples < 0) throw InvalidInputError("--samples must be >= 0");
-  if (!(s.snap > 0) || !std::isfinite(s.snap)) throw InvalidInputError("--snap-tolerance must be a positive number");
+  cli::check_snap_tolerance(s.snap);
   cli::check_output_path(s.out_path, {".ply"});
   cli::check_output_path(s.weights_path, {".txt"});
   cli::check_output_path(s.report_path, {".json"});

@@ -4,7 +4,20 @@
 #include "heatcvt/atomic_file.h"
 #include "heatcvt/errors.h"
 
+#include <cmath>
+
 namespace heatcvt::cli {
+
+CLI::Option* add_snap_tolerance_option(CLI::App& app, double& tolerance) {
+  return app
+      .add_option("--snap-tolerance", tolerance,
+                  "sites farther than this fraction of the bounding-box diagonal from the surface are an error")
+      ->capture_default_str();
+}
+
+void check_snap_tolerance(double tolerance) {
+  if (!(tolerance > 0) || !std::isfinite(tolerance)) throw InvalidInputError("--snap-tolerance must be a positive number");
+}
 
 std::vector<SurfacePoint> read_snapped_sites(const std::string& path, const Eigen::MatrixX3d& V,
                                              const Eigen::MatrixX3i& F, const NormalizationFrame& frame,
