@@ -19,6 +19,7 @@
 #include "heatcvt/shapes.h"
 #include "heatcvt/validate.h"
 #include "test_support.h"
+#include "triangle_soup.h"
 
 using namespace heatcvt;
 
@@ -110,14 +111,7 @@ void expect_border_on_input(const std::string& file, int sites) {
 TEST(MeshcvtTool, ATriangleSoupIsWeldedAndRemeshedAsTheClosedSurface) {
   test::ScratchDir dir("meshcvt");
   const TriangleMesh spot = read_mesh(test::data_path("meshes/spot.obj"));
-  TriangleMesh soup;
-  soup.V.resize(3 * spot.F.rows(), 3);
-  soup.F.resize(spot.F.rows(), 3);
-  for (Eigen::Index f = 0; f < spot.F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      soup.V.row(3 * f + k) = spot.V.row(spot.F(f, k));
-      soup.F(f, k) = static_cast<int>(3 * f + k);
-    }
+  const TriangleMesh soup = test::triangle_soup(spot);
   const std::string in = dir.path("soup.obj"), out = dir.path("out.ply");
   write_mesh(in, soup.V, soup.F);
   const auto r = test::run_tool("meshcvt", in + " -n 500 -o " + out);

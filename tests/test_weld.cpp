@@ -1,28 +1,15 @@
-// weld_coincident_borders() (weld.h): a triangle soup and a mesh split along a seam come back as
-// the closed surface they were cut from; sheets that would share an edge three times, and
-// interior duplicates, are left apart.
+// weld_coincident_borders() (weld.h): a triangle soup comes back as the closed surface it was cut
+// from; sheets that would share an edge three times, and vertices off the border, are left apart.
 #include <gtest/gtest.h>
 
 #include "heatcvt/mesh.h"
 #include "heatcvt/shapes.h"
 #include "heatcvt/weld.h"
+#include "triangle_soup.h"
 
 using namespace heatcvt;
 
 namespace {
-
-// Every face with its own three vertices.
-TriangleMesh soup_of(const TriangleMesh& m) {
-  TriangleMesh s;
-  s.V.resize(3 * m.F.rows(), 3);
-  s.F.resize(m.F.rows(), 3);
-  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      s.V.row(3 * f + k) = m.V.row(m.F(f, k));
-      s.F(f, k) = static_cast<int>(3 * f + k);
-    }
-  return s;
-}
 
 MeshTopology topology(const TriangleMesh& m) { return mesh_topology(m.F, static_cast<int>(m.V.rows())); }
 
@@ -30,7 +17,7 @@ MeshTopology topology(const TriangleMesh& m) { return mesh_topology(m.F, static_
 
 TEST(Weld, ATriangleSoupOfASphereIsTheClosedSphereAgain) {
   const TriangleMesh sphere = random_sphere_mesh(400, 3);
-  TriangleMesh soup = soup_of(sphere);
+  TriangleMesh soup = test::triangle_soup(sphere);
   const MeshTopology before = topology(soup);
   ASSERT_EQ(before.components, sphere.F.rows()) << "precondition: one piece per face";
   const WeldStats w = weld_coincident_borders(soup);
