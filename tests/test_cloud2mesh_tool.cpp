@@ -123,10 +123,15 @@ TEST(Cloud2MeshTool, EverySharedCloudSmallSiteCount) {
   for (const auto& f : files) {
     SCOPED_TRACE(f);
     const std::string out = dir.path(std::filesystem::path(f).stem().string() + ".ply");
+    const std::string report = dir.path(std::filesystem::path(f).stem().string() + ".json");
     auto r = test::run_tool("cloud2mesh", "'" + f + "' -n " + std::to_string(kSweepSites) +
                                               " -i 5 -k 12 --stream-above 200000 --stream-per-site 0 -o '" + out +
-                                              "' -q --threads 2");
-    ASSERT_EQ(r.exit_code, 0) << r.err;
+                                              "' --report '" + report + "' -q --threads 2");
+    // Every check passes but, on a cloud the mesh covers in part at this coarse count (blobby.xyz
+    // fills a volume), the coverage: that one alone fails, with exit status 3.
+    const std::vector<std::string> failed = test::failed_checks(test::read_file(report));
+    EXPECT_TRUE(failed.empty() || failed == std::vector<std::string>{"covers_cloud"}) << testing::PrintToString(failed);
+    ASSERT_EQ(r.exit_code, failed.empty() ? 0 : 3) << r.err;
     EXPECT_TRUE(r.err.empty()) << r.err;
     const TriangleMesh m = read_mesh(out);
     ValidationOptions vo;

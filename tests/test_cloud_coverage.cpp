@@ -10,6 +10,8 @@
 #include "heatcvt/cloud_coverage.h"
 #include "heatcvt/cloud_io.h"
 #include "heatcvt/errors.h"
+#include "heatcvt/mesh_io.h"
+#include "heatcvt/validate.h"
 #include "heatcvt/reconstruct.h"
 #include "test_support.h"
 
@@ -156,6 +158,36 @@ TEST(CloudCoverage, AReconstructionThatLeavesOutAClusterSmallerThanASpacingSaysS
   const ReconstructionResult s = reconstruct_surface(P.topRows(2500), o);
   EXPECT_FALSE(s.cloud_coverage.partial());
   EXPECT_LT(s.cloud_coverage.uncovered_share, 0.02);
+}
+
+// cloud2mesh fails its covers_cloud check (exit status 3, outputs written) where the mesh leaves
+// out most of the cloud, here the small sphere of the cloud above, and passes it on that sphere
+// alone.
+TEST(CloudCoverage, Cloud2meshFailsItsCoverageCheckWhereTheMeshLeavesOutAPartOfTheCloud) {
+  test::ScratchDir dir("coverage_check");
+  PointCloud both;
+  both.P.resize(3000, 3);
+  both.P << sphere_points(2500, 1, Eigen::Vector3d::Zero(), 8), sphere_points(500, 100, Eigen::Vector3d(300, 0, 0), 9);
+  write_cloud_xyz(dir.path("both.xyz"), both);
+  PointCloud small;
+  small.P = both.P.topRows(2500);
+  write_cloud_xyz(dir.path("small.xyz"), small);
+  for (const std::string name : {"both", "small"}) {
+    SCOPED_TRACE(name);
+    const test::CommandResult r =
+        test::run_tool("cloud2mesh", dir.path(name + ".xyz") + " -n 300 -o " + dir.path(name + ".ply") +
+                                         " --report " + dir.path(name + ".json") + " --quiet");
+    const std::string json = test::read_file(dir.path(name + ".json"));
+    const bool partial = name == "both";
+    EXPECT_EQ(r.exit_code, partial ? 3 : 0) << r.err;
+    EXPECT_EQ(test::json_number(json, "exit_status"), partial ? 3 : 0);
+    EXPECT_NE(json.find(std::string("\"cloud_covered_in_part\": ") + (partial ? "true" : "false")), std::string::npos);
+    EXPECT_NE(json.find("\"name\": \"covers_cloud\""), std::string::npos) << json;
+    EXPECT_EQ(test::failed_checks(json), partial ? std::vector<std::string>{"covers_cloud"} : std::vector<std::string>{});
+    // Every mesh check passes on both: only the coverage tells the partial mesh.
+    const TriangleMesh m = read_mesh(dir.path(name + ".ply"));
+    EXPECT_TRUE(validate_triangle_mesh(m.V, m.F).ok());
+  }
 }
 
 // An unevenly dense RGB-D fragment whose sparse floor the dual of the first start sites leaves

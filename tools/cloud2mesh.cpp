@@ -549,6 +549,19 @@ void print_cloud_coverage(const CloudCoverage& c) {
   std::printf("\n");
 }
 
+// The check that the mesh covers the cloud: at most CloudCoverageOptions::partial_share of the
+// points farther than a site spacing from it (cloud_coverage.h). Every mesh check can pass on a
+// mesh of one part of the cloud (a cluster below the spacing, a sheet the dual lost); the run then
+// ends with exit status 3, as for any failed check. Empty where the coverage was not measured.
+std::vector<cli::CheckRecord> coverage_check(const CloudCoverage& c) {
+  if (c.queries == 0) return {};
+  char detail[256];
+  std::snprintf(detail, sizeof detail,
+                "%.1f %% of the %d points measured farther than one site spacing from the mesh (at most %.0f %%)",
+                100.0 * c.uncovered_share, c.queries, 100.0 * c.partial_share);
+  return {{"covers_cloud", !c.partial(), true, detail}};
+}
+
 // Prints the summary of a run on stdout: points, times, the mesh, its quality and border, the checks.
 void print_summary(const Settings& s, const std::string& cloud_path, const Reconstruction& rec, double per_iter,
                    double total_s, const std::vector<cli::CheckRecord>& checks) {
@@ -633,7 +646,8 @@ int run(const Settings& s) {
   const double total_s = cli::seconds_since(t_start);
   const double per_iter = seconds_per_iteration(rec.res);
   const MeshAttributes attributes = output_attributes(s, rec);
-  const std::vector<cli::CheckRecord> checks = cli::check_records(rec.res.validation);
+  std::vector<cli::CheckRecord> checks = cli::check_records(rec.res.validation);
+  for (cli::CheckRecord& c : coverage_check(rec.res.cloud_coverage)) checks.push_back(std::move(c));
   cli::Json j = make_report(cloud_path, {s.out_path, s.report_path}, rec.rr, s.opt, rec.res, per_iter, total_s);
   add_run_figures(j, scans.size(), s.opt.sites, rec);
   const int status = cli::finish_report(j, rec.res.stage_seconds, checks);

@@ -133,6 +133,7 @@ WorkingMesh working_mesh(const TriangleMesh& m) {
 }  // namespace heatcvt::test
 
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <regex>
 #include <sstream>
 #include <unistd.h>
@@ -203,6 +204,18 @@ double json_number(const std::string& json, const std::string& key) {
     return std::nan("");
   }
   return std::stod(m[1].str());
+}
+
+std::vector<std::string> failed_checks(const std::string& json) {
+  const nlohmann::json report = nlohmann::json::parse(json, nullptr, false);
+  if (report.is_discarded() || !report.contains("checks") || report["checks"].empty()) {
+    ADD_FAILURE() << "no checks in:\n" << json;
+    return {"<no checks>"};
+  }
+  std::vector<std::string> failed;
+  for (const auto& c : report["checks"])
+    if (!(c["passed"].is_boolean() && c["passed"].get<bool>())) failed.push_back(c["name"].get<std::string>());
+  return failed;
 }
 
 void expect_tool_failure(const std::string& tool, const CommandResult& r, const std::vector<std::string>& needles,

@@ -86,6 +86,10 @@ std::string read_file(const std::string& path);
 /// when there is none.
 double json_number(const std::string& json, const std::string& key);
 
+/// The names of the checks a tool's `--report` JSON text lists as failed or not run ("passed" not
+/// true), in the report's order; fails the test and returns {"<no checks>"} when it lists none.
+std::vector<std::string> failed_checks(const std::string& json);
+
 /// The contract of a tool on bad input: a non-zero exit, exactly one line mentioning "error" on
 /// stderr, which starts with "<tool>: error: " and contains every needle, and `dir` holding
 /// `expected_entries` entries afterwards (no output or temporary left behind).
