@@ -220,6 +220,36 @@ TEST(CloudCoverage, APartialMeshIsRebuiltFromOtherStartSites) {
   EXPECT_TRUE(one.mesh.V == r.mesh.V && one.mesh.F == r.mesh.F);
 }
 
+// A torus whose tube is about 3 site spacings round at the count asked for: the cells of the
+// count wrap around the tube and their dual breaks into pieces that leave most of the cloud out,
+// whatever the start sites. The run on twice the sites (ReconstructionOptions::finer_retry_factor)
+// resolves the tube: one closed piece of the torus's genus covering the whole cloud.
+TEST(CloudCoverage, APartTooThinForTheCountsCellsIsMeshedFromFinerSites) {
+  const TriangleMesh thin = test::torus(400, 24, 1.0, 0.02);
+  const Eigen::MatrixX3d P = sample_surface(thin.V, thin.F, 20000, 3);
+  ReconstructionOptions coarse;
+  coarse.sites = 500;
+  coarse.finer_retry_factor = 1;
+  const ReconstructionResult first = reconstruct_surface(P, coarse);
+  // Precondition: at the count alone (with its retries from other start sites) the mesh covers the
+  // cloud in part.
+  ASSERT_TRUE(first.cloud_coverage.partial()) << first.cloud_coverage.uncovered_share;
+  ASSERT_EQ(first.finer_retry_sites, 0);
+  ReconstructionOptions finer = coarse;
+  finer.finer_retry_factor = ReconstructionOptions{}.finer_retry_factor;
+  const ReconstructionResult r = reconstruct_surface(P, finer);
+  EXPECT_EQ(r.finer_retry_sites, 1000);
+  EXPECT_FALSE(r.cloud_coverage.partial()) << r.cloud_coverage.uncovered_share;
+  EXPECT_LT(r.cloud_coverage.uncovered_share, 0.02);
+  ValidationOptions closed;
+  const ValidationReport v = validate_triangle_mesh(r.mesh.V, r.mesh.F, closed);
+  EXPECT_TRUE(v.ok()) << v.summary();
+  EXPECT_EQ(v.components, 1);
+  EXPECT_EQ(v.genus, 1);
+  EXPECT_LE(r.mesh.V.rows(), 1000 + 1000 / 50);
+  EXPECT_GE(r.min_angle_deg, 25.0);
+}
+
 TEST(CloudCoverage, Cloud2meshWarnsOfACloudThatFillsAVolumeAndNotOfAScan) {
   test::ScratchDir dir("coverage_tool");
   {

@@ -89,6 +89,8 @@ void check_options(const ReconstructionOptions& opt) {
     throw InvalidInputError("--tip-growth must be >= 0");
   if (!(opt.retry_count_error >= 0) || !std::isfinite(opt.retry_count_error))
     throw InvalidInputError("--retry-count-error must be >= 0");
+  if (!(opt.finer_retry_factor >= 1) || !std::isfinite(opt.finer_retry_factor))
+    throw InvalidInputError("--finer-retry must be >= 1");
   if (opt.max_hole_edges < 0) throw InvalidInputError("--max-hole-edges must be >= 0");
   if (opt.relaxation_iterations < 0) throw InvalidInputError("--polish-iterations must be >= 0");
   if (opt.denoise_neighbors < 2) throw InvalidInputError("--denoise-k must be >= 2");
@@ -147,6 +149,7 @@ cli::Json make_report(const std::string& cloud_path, const std::vector<std::stri
   j["pieces_removed"] = res.pieces_removed;
   j["sized"] = res.sized;
   j["count_retries"] = res.count_retries;
+  j["finer_retry_sites"] = res.finer_retry_sites;
   j["seed_used"] = res.seed_used;
   j["crossing_after_sizing"] = res.crossing_after_sizing;
   j["flying_faces_removed"] = res.flying_faces;
@@ -379,6 +382,12 @@ void add_reconstruction_options(CLI::App& app, Settings& s) {
       ->capture_default_str();
   app.add_option("--retry-count-error", s.opt.retry_count_error, "see --count-retries (a fraction of -n)")
       ->capture_default_str();
+  app.add_option("--finer-retry", s.opt.finer_retry_factor,
+                 "where the mesh still leaves more than a fifth of the points out after --count-retries (by the same "
+                 "rule), reconstruct once more on this many times the sites, sized to -n, and keep it where it is "
+                 "better (parts too thin for the cells of -n); only where the cloud has 10 points per finer site "
+                 "(1 = never)")
+      ->capture_default_str();
   app.add_option("--tip-growth", s.opt.coverage.grow_gap,
                  "where CVT points stay more than this many site spacings from the mesh after the tips' vertices "
                  "were moved (a claw or finger several spacings long, cut off whole), vertices are inserted there "
@@ -583,7 +592,12 @@ void print_summary(const Settings& s, const std::string& cloud_path, const Recon
               static_cast<long>(res.mesh.V.rows()), static_cast<long>(res.mesh.F.rows()), val.components,
               val.boundary_loops, val.genus, res.holes_filled, res.unused_sites, res.pieces_removed,
               res.flying_faces, res.sized ? ", sized to -n" : "");
-  if (res.count_retries > 0)
+  if (res.count_retries > 0 && res.finer_retry_sites > 0)
+    std::printf("  retries: %d more CVT and mesher runs for a mesh far off -n or covering the cloud in part; kept "
+                "the one on %d CVT sites (parts too thin for the cells of -n), %s\n",
+                res.count_retries, res.finer_retry_sites,
+                res.sized ? "sized to -n" : "which the sizing could not coarsen to -n without breaking them");
+  else if (res.count_retries > 0)
     std::printf("  retries: %d more CVT and mesher runs for a mesh far off -n or covering the cloud in part; kept "
                 "the one from seed %u\n",
                 res.count_retries, res.seed_used);

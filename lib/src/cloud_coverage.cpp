@@ -137,7 +137,9 @@ CloudCoverage cloud_coverage(const TriangleMesh& mesh, const Eigen::MatrixX3d& P
   for (Eigen::Index i = 0, r = 0; i < Q.rows(); ++i)
     if (far[static_cast<std::size_t>(i)]) U.row(r++) = Q.row(i);
   double points = 0, diagonal = 0;
-  largest_group(U, options.group_spacings * out.spacing, out, points, diagonal);
+  // Joined at the larger of the two spacings: a mesh of a small part of the cloud, sized to all the
+  // vertices asked for, has edges far shorter than the spacing the points were sampled for.
+  largest_group(U, options.group_spacings * std::max(out.spacing, site_spacing), out, points, diagonal);
   out.largest_group_share = points / static_cast<double>(Q.rows());
   out.largest_group_spacings = diagonal / out.spacing;
   return out;

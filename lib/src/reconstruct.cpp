@@ -10,6 +10,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <optional>
 #include <chrono>
 #include <functional>
 #include <cstdlib>
@@ -48,6 +49,7 @@ void check_options(const ReconstructionOptions& o) {
   if (o.sites < 4) bad("sites = " + std::to_string(o.sites) + " (need at least 4)");
   if (o.iterations < 0) bad("iterations = " + std::to_string(o.iterations) + " (must be >= 0)");
   if (o.count_retries < 0) bad("count_retries = " + std::to_string(o.count_retries) + " (must be >= 0)");
+  if (!(o.finer_retry_factor >= 1) || !std::isfinite(o.finer_retry_factor)) bad("finer_retry_factor must be >= 1");
   if (!(o.retry_count_error >= 0) || !std::isfinite(o.retry_count_error)) bad("retry_count_error must be >= 0");
   if (!(o.lloyd_mean_tolerance >= 0) || !std::isfinite(o.lloyd_mean_tolerance)) bad("lloyd_mean_tolerance must be >= 0");
   if (o.neighbors < o.min_neighbors || o.neighbors > o.max_neighbors)
@@ -605,6 +607,11 @@ bool partial_other_starts_may_mend(const ReconstructionResult& r) {
   return c.partial() && !c.volumetric() && c.largest_group_spacings >= 1;
 }
 
+// The fewest CVT points per site of the run on finer sites (finer_options()): the point
+// Laplacian resolves a cell from about 10 (ReconstructionOptions::cvt_points_per_site), and at 5
+// the dual of a tube about 3 site spacings round at twice the count already breaks.
+constexpr double kFinerRetryMinPointsPerSite = 10;
+
 // Whether `a` is a better result than `b`: it passes every check where `b` does not, then it
 // covers the cloud whole where `b` does not, then it is nearer the count, then its φmin is larger.
 bool better_result(const ReconstructionResult& a, const ReconstructionResult& b, const ReconstructionOptions& options) {
@@ -686,10 +693,12 @@ CvtOptions reconstruction_cvt_options(const ReconstructionOptions& options) {
   return copt;
 }
 
-ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const ReconstructionOptions& options,
-                                         const ReconstructionCallback& progress) {
+namespace {
+
+// Steps 1-5 of reconstruct_surface() with the retries from other start sites.
+ReconstructionResult reconstruct_with_retries(const Eigen::MatrixX3d& P_in, const ReconstructionOptions& options,
+                                              const ReconstructionCallback& progress) {
   const auto t_start = Clock::now();
-  check_options(options);
   auto report = [&](const std::string& stage, double f) {
     if (progress) progress(stage, std::clamp(f, 0.0, 1.0));
   };
@@ -759,6 +768,58 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   res = mesh_with_retries(in, options, report, std::move(res));
   res.total_seconds = since(t_start);
   return res;
+}
+
+// The options of the run on finer sites (ReconstructionOptions::finer_retry_factor) after
+// `first`: the CVT on factor × sites with its own CVT points, the mesh sized to the count asked
+// for, no retries of its own; none where `first` covers the cloud whole or other sites cannot
+// reach what it leaves out (partial_other_starts_may_mend()), where the factor is 1 or the
+// retries are off, or where the cloud has too few points for the finer sites' CVT points
+// (cvt_points_per_site each, every point where that is 0).
+std::optional<ReconstructionOptions> finer_options(const ReconstructionResult& first, const ReconstructionOptions& options) {
+  const int finer = static_cast<int>(std::lround(options.finer_retry_factor * options.sites));
+  const double points_needed = std::max(options.cvt_points_per_site, kFinerRetryMinPointsPerSite) * finer;
+  if (options.count_retries == 0 || finer <= options.sites || first.points_used < points_needed ||
+      !partial_other_starts_may_mend(first))
+    return std::nullopt;
+  ReconstructionOptions again = options;
+  again.sites = finer;
+  again.mesher.sizing.target_vertices = requested_vertices(options);
+  again.count_retries = 0;
+  again.finer_retry_factor = 1;
+  return again;
+}
+
+}  // namespace
+
+ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const ReconstructionOptions& options,
+                                         const ReconstructionCallback& progress) {
+  const auto t_start = Clock::now();
+  check_options(options);
+  ReconstructionResult best = reconstruct_with_retries(P_in, options, progress);
+  const std::optional<ReconstructionOptions> finer = finer_options(best, options);
+  if (!finer) return best;
+  // A part too thin for the count's cells: the whole reconstruction once more on finer sites.
+  std::optional<ReconstructionResult> r;
+  try {
+    const std::string prefix = "on " + std::to_string(finer->sites) + " sites: ";
+    r = reconstruct_with_retries(P_in, *finer, [&](const std::string& stage, double f) {
+      if (progress) progress(prefix + stage, f);
+    });
+  } catch (const Error&) {  // nothing extracted from the finer sites: the result so far stays
+  }
+  std::vector<std::pair<std::string, double>> seconds = std::move(best.stage_seconds);
+  if (r)
+    for (const auto& [name, t] : r->stage_seconds) seconds.emplace_back("finer: " + name, t);
+  const int retries = best.count_retries + 1;
+  if (r && better_result(*r, best, options)) {
+    best = std::move(*r);
+    best.finer_retry_sites = finer->sites;
+  }
+  best.count_retries = retries;
+  best.stage_seconds = std::move(seconds);
+  best.total_seconds = since(t_start);
+  return best;
 }
 
 }  // namespace heatcvt

@@ -25,7 +25,8 @@ struct CloudCoverageOptions {
   /// A point is covered where the mesh passes within this many site spacings (the mesh's mean edge
   /// length) of it. Default 1.
   double covered_spacings = 1.0;
-  /// Uncovered points closer than this many site spacings belong to one group. Default 1.
+  /// Uncovered points closer than this many site spacings (the larger of the mesh's mean edge
+  /// length and the spacing asked for) belong to one group. Default 1.
   double group_spacings = 1.0;
   /// A share of uncovered points above which a reconstruction covers the cloud only in part
   /// (CloudCoverage::partial()). Default 0.2: a fifth of the cloud missing is a part of the scene
@@ -79,7 +80,9 @@ void check_cloud_coverage_options(const CloudCoverageOptions& options);
 /// Coverage of the points P (#P by 3, finite, the frame of `mesh`) by `mesh`: points within
 /// covered_spacings of the mesh's mean edge length; the thickness at `site_spacing`, the spacing
 /// asked for (sqrt(area / sites); 0 = the mesh's mean edge length), which a mesh of one small part
-/// of the cloud does not have.
+/// of the cloud does not have; the uncovered points grouped at group_spacings of the larger of the
+/// two (where the sizing gave all the vertices asked for to a small part, its edges are far
+/// shorter than the spacing, and by them every point left out would be alone in its group).
 /// \throw InvalidInputError for a mesh without faces, a site_spacing that is negative or not
 /// finite, or bad options.
 CloudCoverage cloud_coverage(const TriangleMesh& mesh, const Eigen::MatrixX3d& P, double site_spacing = 0,

@@ -206,6 +206,15 @@ struct ReconstructionOptions {
   int count_retries = 2;
   /// See `count_retries` (a fraction of the count asked for). Default 0.25.
   double retry_count_error = 0.25;
+  /// Where every run of `count_retries` still covers the cloud only in part where other sites may
+  /// reach the rest (the same rule), the whole reconstruction runs once more with this many times
+  /// the sites (and CVT points for them) and its mesh sized to the count asked for (the sizing of
+  /// mesher.sizing): a part too thin for the count's cells (a tube about 3 site spacings round,
+  /// whose cells wrap around it and whose dual breaks) is resolved by the finer cells, and the
+  /// sizing then coarsens the whole surface. The result is kept by the rule of `count_retries`.
+  /// It runs only where the cloud holds cvt_points_per_site (at least 10) points per finer site,
+  /// and not where count_retries is 0. 1 = no such run. Default 2.
+  double finer_retry_factor = 2.0;
   /// How the result's coverage of the points used is measured (ReconstructionResult::
   /// cloud_coverage, cloud_coverage.h). Defaults as CloudCoverageOptions; `threads` is taken
   /// from this struct's.
@@ -280,6 +289,9 @@ struct ReconstructionResult {
   /// (ReconstructionOptions::count_retries), and the seed of the start sites of the result kept.
   int count_retries = 0;
   std::uint32_t seed_used = 1;
+  /// The sites of the CVT of the result kept where it came from the run of
+  /// ReconstructionOptions::finer_retry_factor (0 where it did not).
+  int finer_retry_sites = 0;
   /// How much of the points used (after the clean-up) the mesh covers, how thick they lie at its
   /// spacing and the largest group it leaves out, in input units (cloud_coverage.h): every check
   /// can pass on a mesh of one part of the cloud.
