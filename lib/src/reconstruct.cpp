@@ -774,8 +774,8 @@ ReconstructionResult reconstruct_with_retries(const Eigen::MatrixX3d& P_in, cons
 // `first`: the CVT on factor × sites with its own CVT points, the mesh sized to the count asked
 // for, no retries of its own; none where `first` covers the cloud whole or other sites cannot
 // reach what it leaves out (partial_other_starts_may_mend()), where the factor is 1 or the
-// retries are off, or where the cloud has too few points for the finer sites' CVT points
-// (cvt_points_per_site each, every point where that is 0).
+// retries are off, or where the cloud has fewer than max(cvt_points_per_site,
+// kFinerRetryMinPointsPerSite) points per finer site.
 std::optional<ReconstructionOptions> finer_options(const ReconstructionResult& first, const ReconstructionOptions& options) {
   const int finer = static_cast<int>(std::lround(options.finer_retry_factor * options.sites));
   const double points_needed = std::max(options.cvt_points_per_site, kFinerRetryMinPointsPerSite) * finer;
