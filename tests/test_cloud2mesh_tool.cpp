@@ -322,6 +322,8 @@ TEST(Cloud2MeshTool, NonsenseOptions) {
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--retry-count-error nan"), {"--retry-count-error"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--finer-retry 0.5"), {"--finer-retry"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--finer-retry nan"), {"--finer-retry"}, dir, 1);
+  expect_clean_failure(test::run_tool("cloud2mesh", base + "--dense-pieces 1.5"), {"--dense-pieces"}, dir, 1);
+  expect_clean_failure(test::run_tool("cloud2mesh", base + "--dense-pieces nan"), {"--dense-pieces"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--tip-growth -1"), {"--tip-growth"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--tip-growth nan"), {"--tip-growth"}, dir, 1);
   expect_clean_failure(test::run_tool("cloud2mesh", base + "--t-coef 1e10"), {"--t-coef"}, dir, 1);

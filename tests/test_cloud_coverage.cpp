@@ -139,13 +139,15 @@ TEST(CloudCoverage, BadOptionsAndAnEmptyMeshAreRefused) {
 }
 
 // A cluster far smaller than the site spacing -n gives the whole cloud: the area shares give it
-// no site, so the mesh leaves it out, and the result says so (the largest uncovered group, under
-// one spacing across, holds most of the points).
+// no site, so without its own sites (ReconstructionOptions::dense_pieces, off here) the mesh
+// leaves it out, and the result says so (the largest uncovered group, under one spacing across,
+// holds most of the points). With them it is covered.
 TEST(CloudCoverage, AReconstructionThatLeavesOutAClusterSmallerThanASpacingSaysSo) {
   Eigen::MatrixX3d P(3000, 3);
   P << sphere_points(2500, 1, Eigen::Vector3d::Zero(), 8), sphere_points(500, 100, Eigen::Vector3d(300, 0, 0), 9);
   ReconstructionOptions o;
   o.sites = 300;
+  o.dense_pieces.min_point_fraction = 0;
   const ReconstructionResult r = reconstruct_surface(P, o);
   const CloudCoverage& c = r.cloud_coverage;
   // Precondition: the small sphere is below one site spacing of the whole mesh.
@@ -154,15 +156,20 @@ TEST(CloudCoverage, AReconstructionThatLeavesOutAClusterSmallerThanASpacingSaysS
   EXPECT_GE(c.largest_group_share, 0.8);
   EXPECT_LT(c.largest_group_spacings, 1.0);
   EXPECT_FALSE(c.volumetric());
-  // The small sphere alone is meshed whole.
+  // The small sphere alone is meshed whole, and so it is beside the other on its own sites.
   const ReconstructionResult s = reconstruct_surface(P.topRows(2500), o);
   EXPECT_FALSE(s.cloud_coverage.partial());
   EXPECT_LT(s.cloud_coverage.uncovered_share, 0.02);
+  ReconstructionOptions with_pieces;
+  with_pieces.sites = 300;
+  const ReconstructionResult both = reconstruct_surface(P, with_pieces);
+  EXPECT_EQ(both.dense_pieces, 1);
+  EXPECT_LT(both.cloud_coverage.uncovered_share, 0.02);
 }
 
 // cloud2mesh fails its covers_cloud check (exit status 3, outputs written) where the mesh leaves
-// out most of the cloud, here the small sphere of the cloud above, and passes it on that sphere
-// alone.
+// out most of the cloud, here the small sphere of the cloud above (with --dense-pieces 0, which
+// would mesh it on its own sites: test_dense_pieces.cpp), and passes it on that sphere alone.
 TEST(CloudCoverage, Cloud2meshFailsItsCoverageCheckWhereTheMeshLeavesOutAPartOfTheCloud) {
   test::ScratchDir dir("coverage_check");
   PointCloud both;
@@ -176,7 +183,7 @@ TEST(CloudCoverage, Cloud2meshFailsItsCoverageCheckWhereTheMeshLeavesOutAPartOfT
     SCOPED_TRACE(name);
     const test::CommandResult r =
         test::run_tool("cloud2mesh", dir.path(name + ".xyz") + " -n 300 -o " + dir.path(name + ".ply") +
-                                         " --report " + dir.path(name + ".json") + " --quiet");
+                                         " --report " + dir.path(name + ".json") + " --quiet --dense-pieces 0");
     const std::string json = test::read_file(dir.path(name + ".json"));
     const bool partial = name == "both";
     EXPECT_EQ(r.exit_code, partial ? 3 : 0) << r.err;

@@ -91,6 +91,8 @@ void check_options(const ReconstructionOptions& opt) {
     throw InvalidInputError("--retry-count-error must be >= 0");
   if (!(opt.finer_retry_factor >= 1) || !std::isfinite(opt.finer_retry_factor))
     throw InvalidInputError("--finer-retry must be >= 1");
+  if (!(opt.dense_pieces.min_point_fraction >= 0 && opt.dense_pieces.min_point_fraction <= 1))
+    throw InvalidInputError("--dense-pieces must be in [0, 1]");
   if (opt.max_hole_edges < 0) throw InvalidInputError("--max-hole-edges must be >= 0");
   if (opt.relaxation_iterations < 0) throw InvalidInputError("--polish-iterations must be >= 0");
   if (opt.denoise_neighbors < 2) throw InvalidInputError("--denoise-k must be >= 2");
@@ -150,6 +152,7 @@ cli::Json make_report(const std::string& cloud_path, const std::vector<std::stri
   j["sized"] = res.sized;
   j["count_retries"] = res.count_retries;
   j["finer_retry_sites"] = res.finer_retry_sites;
+  j["dense_pieces"] = res.dense_pieces;
   j["seed_used"] = res.seed_used;
   j["crossing_after_sizing"] = res.crossing_after_sizing;
   j["flying_faces_removed"] = res.flying_faces;
@@ -388,6 +391,11 @@ void add_reconstruction_options(CLI::App& app, Settings& s) {
                  "better (parts too thin for the cells of -n); only where the cloud has 10 points per finer site "
                  "(1 = never)")
       ->capture_default_str();
+  app.add_option("--dense-pieces", s.opt.dense_pieces.min_point_fraction,
+                 "a separate part holding at least this fraction of the points but too little of the area for a "
+                 "piece of its own at -n (a small object scanned closely beside a large one) is meshed on its own "
+                 "sites, at least 24 and 2 % of -n, and the rest on the sites left; 0 = never")
+      ->capture_default_str();
   app.add_option("--tip-growth", s.opt.coverage.grow_gap,
                  "where CVT points stay more than this many site spacings from the mesh after the tips' vertices "
                  "were moved (a claw or finger several spacings long, cut off whole), vertices are inserted there "
@@ -601,6 +609,10 @@ void print_summary(const Settings& s, const std::string& cloud_path, const Recon
     std::printf("  retries: %d more CVT and mesher runs for a mesh far off -n or covering the cloud in part; kept "
                 "the one from seed %u\n",
                 res.count_retries, res.seed_used);
+  if (res.dense_pieces > 0)
+    std::printf("  dense pieces: %d parts holding many points on little area meshed on their own sites, the rest "
+                "on the sites left\n",
+                res.dense_pieces);
   const std::string boundary = val.boundary_loops > 0 ? format_angle(res.boundary_min_angle_deg) : "none";
   std::printf("  quality: phi_min %.2f deg (boundary triangles %s), phi_m %.2f deg\n", res.min_angle_deg,
               boundary.c_str(), res.mean_min_angle_deg);

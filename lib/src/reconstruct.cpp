@@ -80,6 +80,7 @@ void check_options(const ReconstructionOptions& o) {
     bad("cvt_points_per_site must be 0 (every point) or at least 3");
   if (o.denoise && o.denoise_neighbors < 2) bad("denoise_neighbors must be >= 2");
   check_stray_point_options(o.stray);
+  check_dense_piece_options(o.dense_pieces);
   check_cloud_coverage_options(o.cloud_coverage);
   if (o.denoise && (!(o.denoise_stddev > 0) || !std::isfinite(o.denoise_stddev))) bad("denoise_stddev must be > 0");
   const CloudPreparationOptions& c = o.cloud;
@@ -695,9 +696,52 @@ CvtOptions reconstruction_cvt_options(const ReconstructionOptions& options) {
 
 namespace {
 
-// Steps 1-5 of reconstruct_surface() with the retries from other start sites.
+// A cloud split into its dense pieces (dense_pieces.h) and the rest, in the input's units, with
+// what the whole cloud's clean-up did (`prepared`'s point counts) and the area of its CVT
+// points' triangles (input units²).
+struct DenseSplit {
+  std::vector<Eigen::MatrixX3d> pieces;
+  std::vector<int> sites;
+  Eigen::MatrixX3d rest, used;
+  double area = 0;
+  ReconstructionResult prepared;
+};
+
+// Whether the CVT points cp of the prepared points P (in `frame`) on triangles T hold dense
+// pieces; if so, `split` gets them and the rest.
+bool split_dense_pieces(const CvtPoints& cp, const Eigen::MatrixX3i& T, const Eigen::MatrixX3d& P,
+                        const CloudFrame& frame, const ReconstructionOptions& options, DenseSplit& split) {
+  const int n = static_cast<int>(P.rows());
+  const auto cvt_point = [&](int i) { return cp.subsampled ? cp.voxel_point[i] : i; };
+  std::vector<int> weight(cp.sub.size(), 0);
+  for (int i = 0; i < n; ++i) ++weight[cvt_point(i)];
+  const DensePieces found = dense_pieces(cp.PC, T, weight, options.sites, options.mesher.min_piece_vertex_fraction,
+                                         options.dense_pieces);
+  if (found.count() == 0) return false;
+  Eigen::MatrixX3d used = P;
+  restore_frame(used, frame);
+  std::vector<std::vector<int>> rows(found.count() + 1);  // the pieces', then the rest's
+  for (int i = 0; i < n; ++i) {
+    const int k = found.piece[cvt_point(i)];
+    rows[k >= 0 ? k : found.count()].push_back(i);
+  }
+  const auto gather = [&](const std::vector<int>& r) {
+    Eigen::MatrixX3d Q(static_cast<Eigen::Index>(r.size()), 3);
+    for (size_t j = 0; j < r.size(); ++j) Q.row(static_cast<Eigen::Index>(j)) = used.row(r[j]);
+    return Q;
+  };
+  for (int k = 0; k < found.count(); ++k) split.pieces.push_back(gather(rows[k]));
+  split.rest = gather(rows.back());
+  split.sites = found.sites;
+  split.area = surface_area(cp.PC, T) * frame.scale * frame.scale;
+  split.used = std::move(used);
+  return true;
+}
+
+// Steps 1-5 of reconstruct_surface() with the retries from other start sites. With `split`, a
+// cloud with dense pieces stops after its point Laplacian and returns them in `split` instead.
 ReconstructionResult reconstruct_with_retries(const Eigen::MatrixX3d& P_in, const ReconstructionOptions& options,
-                                              const ReconstructionCallback& progress) {
+                                              const ReconstructionCallback& progress, DenseSplit* split) {
   const auto t_start = Clock::now();
   auto report = [&](const std::string& stage, double f) {
     if (progress) progress(stage, std::clamp(f, 0.0, 1.0));
@@ -751,6 +795,10 @@ ReconstructionResult reconstruct_with_retries(const Eigen::MatrixX3d& P_in, cons
                                                : std::move(pl.laplacian);
   res.laplacian_seconds = since(t0);
   report("laplacian", 1);
+  if (split && split_dense_pieces(cp, T, P, cloud.frame, options, *split)) {
+    split->prepared = std::move(res);
+    return {};
+  }
   // The adaptive sizing on the CVT points (adaptive_sizing.h): the CVT's density and the
   // mesher's relative sizes.
   std::unique_ptr<SurfaceSizing> sizing;
@@ -790,13 +838,13 @@ std::optional<ReconstructionOptions> finer_options(const ReconstructionResult& f
   return again;
 }
 
-}  // namespace
-
-ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const ReconstructionOptions& options,
-                                         const ReconstructionCallback& progress) {
+// reconstruct_with_retries(), then where its result covers the cloud in part, the run on finer
+// sites (finer_options()); `split` as reconstruct_with_retries()'s.
+ReconstructionResult reconstruct_whole(const Eigen::MatrixX3d& P_in, const ReconstructionOptions& options,
+                                       const ReconstructionCallback& progress, DenseSplit* split) {
   const auto t_start = Clock::now();
-  check_options(options);
-  ReconstructionResult best = reconstruct_with_retries(P_in, options, progress);
+  ReconstructionResult best = reconstruct_with_retries(P_in, options, progress, split);
+  if (split && !split->pieces.empty()) return best;
   const std::optional<ReconstructionOptions> finer = finer_options(best, options);
   if (!finer) return best;
   // A part too thin for the count's cells: the whole reconstruction once more on finer sites.
@@ -805,7 +853,7 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
     const std::string prefix = "on " + std::to_string(finer->sites) + " sites: ";
     r = reconstruct_with_retries(P_in, *finer, [&](const std::string& stage, double f) {
       if (progress) progress(prefix + stage, f);
-    });
+    }, nullptr);
   } catch (const Error&) {  // nothing extracted from the finer sites: the result so far stays
   }
   std::vector<std::pair<std::string, double>> seconds = std::move(best.stage_seconds);
@@ -820,6 +868,118 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   best.stage_seconds = std::move(seconds);
   best.total_seconds = since(t_start);
   return best;
+}
+
+// The options of one part of a split cloud on `sites` sites (and `target` vertices where the
+// sizing has a target): its points were cleaned up with the whole cloud.
+ReconstructionOptions part_options(const ReconstructionOptions& options, int sites, int target) {
+  ReconstructionOptions o = options;
+  o.sites = sites;
+  if (o.mesher.sizing.target_vertices > 0) o.mesher.sizing.target_vertices = target;
+  o.denoise = false;
+  o.voxel_size = 0;
+  o.stray.ratio = 0;
+  o.stray.sparse_group_fraction = 0;
+  o.stray.min_group_points = 0;
+  return o;
+}
+
+// Adds the counts of `b`'s run to `a`'s, and its mesh to `a`'s mesh.
+void add_part(ReconstructionResult& a, ReconstructionResult&& b, const std::string& name) {
+  const Eigen::Index nv = a.mesh.V.rows(), nf = a.mesh.F.rows();
+  a.mesh.V.conservativeResize(nv + b.mesh.V.rows(), 3);
+  a.mesh.V.bottomRows(b.mesh.V.rows()) = b.mesh.V;
+  a.mesh.F.conservativeResize(nf + b.mesh.F.rows(), 3);
+  a.mesh.F.bottomRows(b.mesh.F.rows()) = b.mesh.F.array() + static_cast<int>(nv);
+  using R = ReconstructionResult;
+  for (int R::*m : {&R::points_used, &R::points_cvt, &R::points_stray, &R::candidate_triangles, &R::rejected_triangles,
+                    &R::removed_triangles, &R::holes_filled, &R::star_triangles, &R::trimmed_faces, &R::pieces_removed,
+                    &R::flipped_edges, &R::unused_sites, &R::collapsed_edges, &R::split_edges, &R::flying_faces,
+                    &R::faces_turned_outward, &R::count_retries})
+    a.*m += b.*m;
+  a.filled_hole_edges.insert(a.filled_hole_edges.end(), b.filled_hole_edges.begin(), b.filled_hole_edges.end());
+  a.polish_fallback |= b.polish_fallback;
+  a.angle_polish_undone |= b.angle_polish_undone;
+  a.sized |= b.sized;
+  a.crossing_after_sizing += b.crossing_after_sizing;
+  a.size_ratio = std::max(a.size_ratio, b.size_ratio);
+  a.laplacian_seconds += b.laplacian_seconds, a.factor_seconds += b.factor_seconds, a.cvt_seconds += b.cvt_seconds;
+  BorderFit& f = a.border;
+  const BorderFit& g = b.border;
+  const auto mean = [](double x, int wx, double y, int wy) { return wx + wy > 0 ? (x * wx + y * wy) / (wx + wy) : 0.0; };
+  f.edge_covered = mean(f.edge_covered, f.edge_points, g.edge_covered, g.edge_points);
+  f.mesh_border_on_edge = mean(f.mesh_border_on_edge, f.mesh_border_vertices, g.mesh_border_on_edge, g.mesh_border_vertices);
+  f.edge_distance = std::max(f.edge_distance, g.edge_distance);
+  f.mesh_border_distance = std::max(f.mesh_border_distance, g.mesh_border_distance);
+  f.edge_points += g.edge_points, f.mesh_border_vertices += g.mesh_border_vertices;
+  CoverageRepairStats& c = a.coverage;
+  c.uncovered_before += b.coverage.uncovered_before, c.uncovered_after += b.coverage.uncovered_after;
+  c.moves += b.coverage.moves, c.inserted += b.coverage.inserted;
+  c.gap_before = std::max(c.gap_before, b.coverage.gap_before), c.gap_after = std::max(c.gap_after, b.coverage.gap_after);
+  a.finer_retry_sites = std::max(a.finer_retry_sites, b.finer_retry_sites);
+  for (const auto& [stage, t] : b.stage_seconds) a.stage_seconds.emplace_back(name + ": " + stage, t);
+}
+
+// The rest of a split cloud and each dense piece meshed on its own sites, joined into one result
+// whose quality, validation and coverage are those of the joined mesh. A piece whose run fails
+// (nothing extracted) is left out: the coverage then says what it leaves.
+ReconstructionResult reconstruct_split(DenseSplit& split, const ReconstructionOptions& options,
+                                       const ReconstructionCallback& progress) {
+  const auto prefixed = [&](const std::string& name) -> ReconstructionCallback {
+    return [&, name](const std::string& stage, double f) {
+      if (progress) progress(name + ": " + stage, f);
+    };
+  };
+  const int piece_sites = std::accumulate(split.sites.begin(), split.sites.end(), 0);
+  const int asked = requested_vertices(options);
+  ReconstructionResult out = reconstruct_whole(
+      split.rest, part_options(options, options.sites - piece_sites, asked - piece_sites), prefixed("rest"), nullptr);
+  for (auto& [stage, t] : out.stage_seconds) stage = "rest: " + stage;
+  for (int k = 0; k < static_cast<int>(split.pieces.size()); ++k) {
+    const std::string name = "piece " + std::to_string(k + 1);
+    try {
+      add_part(out, reconstruct_whole(split.pieces[k], part_options(options, split.sites[k], split.sites[k]),
+                                      prefixed(name), nullptr),
+               name);
+      ++out.dense_pieces;
+    } catch (const Error&) {
+      ++out.pieces_removed;
+    }
+  }
+  const ReconstructionResult& p = split.prepared;
+  out.points_input = p.points_input, out.points_merged = p.points_merged, out.points_denoised = p.points_denoised;
+  out.points_voxel_removed = p.points_voxel_removed, out.points_stray += p.points_stray;
+  out.stage_seconds.insert(out.stage_seconds.begin(), p.stage_seconds.begin(), p.stage_seconds.end());
+  const TriangleQuality tq = triangle_quality(out.mesh.V, out.mesh.F);
+  out.min_angle_deg = tq.min_angle_deg;
+  out.mean_min_angle_deg = tq.mean_min_angle_deg;
+  out.boundary_min_angle_deg = tq.boundary_min_angle_deg;
+  ValidationOptions vopt;
+  vopt.require_closed = false;
+  out.validation = validate_triangle_mesh(out.mesh.V, out.mesh.F, vopt);
+  CloudCoverageOptions coverage_options = options.cloud_coverage;
+  coverage_options.threads = options.threads;
+  out.cloud_coverage = cloud_coverage(out.mesh, split.used, std::sqrt(split.area / asked), coverage_options);
+  return out;
+}
+
+}  // namespace
+
+ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const ReconstructionOptions& options,
+                                         const ReconstructionCallback& progress) {
+  const auto t_start = Clock::now();
+  check_options(options);
+  DenseSplit split;
+  ReconstructionResult r = reconstruct_whole(P_in, options, progress, options.dense_pieces.enabled() ? &split : nullptr);
+  if (!split.pieces.empty()) {
+    try {
+      r = reconstruct_split(split, options, progress);
+    } catch (const Error&) {  // the rest of the cloud gave no mesh on its sites: the whole cloud as one
+      r = reconstruct_whole(P_in, options, progress, nullptr);
+    }
+  }
+  r.total_seconds = since(t_start);
+  return r;
 }
 
 }  // namespace heatcvt

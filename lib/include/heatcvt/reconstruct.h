@@ -14,6 +14,7 @@
 #include "heatcvt/adaptive_sizing.h"
 #include "heatcvt/cloud_coverage.h"
 #include "heatcvt/cvt.h"
+#include "heatcvt/dense_pieces.h"
 #include "heatcvt/mesh.h"
 #include "heatcvt/mesher/coverage_repair.h"
 #include "heatcvt/mesher/projector.h"
@@ -219,6 +220,11 @@ struct ReconstructionOptions {
   /// cloud_coverage, cloud_coverage.h). Defaults as CloudCoverageOptions; `threads` is taken
   /// from this struct's.
   CloudCoverageOptions cloud_coverage;
+  /// Separate parts holding a large share of the points on too small a share of the area for a
+  /// piece of their own (dense_pieces.h) are meshed on their own sites, and the rest of the cloud
+  /// on the sites left; the meshes are joined and checked as one. min_point_fraction 0 turns it
+  /// off. Defaults as DensePieceOptions.
+  DensePieceOptions dense_pieces;
 };
 
 /// The CVT options reconstruct_surface() runs centroidal_voronoi() with (sites, iterations,
@@ -296,6 +302,10 @@ struct ReconstructionResult {
   /// spacing and the largest group it leaves out, in input units (cloud_coverage.h): every check
   /// can pass on a mesh of one part of the cloud.
   CloudCoverage cloud_coverage;
+  /// Pieces meshed on their own sites (ReconstructionOptions::dense_pieces); 0 where none was.
+  /// The other fields then describe the joined result: counts summed over the runs, the quality,
+  /// validation and coverage of the joined mesh.
+  int dense_pieces = 0;
 };
 
 /// Reconstructs a surface from the points P (#P by 3; NaN-free, duplicates allowed).

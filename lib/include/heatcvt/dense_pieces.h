@@ -1,0 +1,60 @@
+#pragma once
+/// \file dense_pieces.h
+/// Dense pieces of a cloud: separate parts that hold a large share of its points on a small share
+/// of its area (a small object scanned closely beside a large one, a close-up merged into a room
+/// scan). The CVT spreads its sites by area, so such a part gets a few sites, too few for a mesh
+/// of its own, and the mesher drops it as a small piece (SurfaceMesherOptions::
+/// min_piece_vertex_fraction): a large part of the data is left out. reconstruct_surface() meshes
+/// each dense piece on its own sites, enough for a closed piece with the shape targets, and the
+/// rest of the cloud on the sites left.
+///
+/// The pieces are the connected components of the CVT points' triangles (the point Laplacian's
+/// local triangulations: points in different pieces share no kNN neighbourhood). A component c
+/// with area A_c gets about sites · A_c / A sites from the CVT; it is dense when that is below
+/// its floor m = max(min_sites, ⌈2 · min_piece_vertex_fraction · sites⌉), it holds at least
+/// min_point_fraction of the cloud's points and at least min_points_per_site · m of them. The
+/// component of the largest area is the rest and never a dense piece.
+#include <Eigen/Core>
+
+#include <vector>
+
+namespace heatcvt {
+
+/// Options of the dense-piece rule (see the file comment).
+struct DensePieceOptions {
+  /// A component is dense only when it holds at least this fraction of the cloud's points: parts
+  /// holding fewer are clutter the mesher may drop (its smallest piece is 1 % of the vertices).
+  /// 0 turns the rule off. Default 0.05.
+  double min_point_fraction = 0.05;
+  /// The fewest sites a dense piece is meshed on (a closed piece of 24 vertices has 44 triangles,
+  /// enough for the angle targets on a sphere-like part). Default 24.
+  int min_sites = 24;
+  /// A dense piece needs at least this many of its points per site, as the CVT points do
+  /// (ReconstructionOptions::cvt_points_per_site). Default 10.
+  double min_points_per_site = 10;
+  /// The dense pieces together take at most this fraction of the sites, those with the most points
+  /// first; the rest of the cloud keeps the others. Default 0.5.
+  double max_site_fraction = 0.5;
+  bool enabled() const { return min_point_fraction > 0; }
+};
+
+/// \throw InvalidInputError on min_point_fraction or max_site_fraction outside [0, 1], min_sites
+/// < 4 or a negative or non-finite min_points_per_site.
+void check_dense_piece_options(const DensePieceOptions& options);
+
+/// The dense pieces found: a piece index per point (−1 for the rest) and each piece's sites.
+struct DensePieces {
+  std::vector<int> piece;  ///< per point of the triangles, its piece or −1
+  std::vector<int> sites;  ///< per piece, the sites to mesh it on (its floor m)
+  int count() const { return static_cast<int>(sites.size()); }
+};
+
+/// Dense pieces of the triangles T over the points PC, where point i stands for weight[i] points
+/// of the cloud (a voxel's points, or 1), for a reconstruction on `sites` sites whose mesher drops
+/// pieces below min_piece_vertex_fraction of the vertices. No piece where the rule is off.
+/// Deterministic: pieces are ordered by their first point.
+/// \throw InvalidInputError on bad options, a weight per point missing or an index of T out of range.
+DensePieces dense_pieces(const Eigen::MatrixX3d& PC, const Eigen::MatrixX3i& T, const std::vector<int>& weight,
+                         int sites, double min_piece_vertex_fraction, const DensePieceOptions& options);
+
+}  // namespace heatcvt

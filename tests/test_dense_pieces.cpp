@@ -1,0 +1,202 @@
+// Dense pieces (dense_pieces.h): separate parts holding many points on little area, found on
+// triangulated spheres built in code, and meshed on their own sites by reconstruct_surface() and
+// cloud2mesh.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "heatcvt/cloud_io.h"
+#include "heatcvt/dense_pieces.h"
+#include "heatcvt/errors.h"
+#include "heatcvt/mesh_io.h"
+#include "heatcvt/reconstruct.h"
+#include "heatcvt/shapes.h"
+#include "heatcvt/validate.h"
+#include "test_support.h"
+
+namespace heatcvt {
+namespace {
+
+// Spheres of radii r[k] about centres c[k] (random_sphere_mesh() of `vertices` vertices each) as
+// one triangle set, with the weight w[k] on each vertex of sphere k.
+struct Spheres {
+  Eigen::MatrixX3d V;
+  Eigen::MatrixX3i F;
+  std::vector<int> weight;
+};
+
+Spheres spheres(const std::vector<double>& r, const std::vector<Eigen::Vector3d>& c, const std::vector<int>& w,
+                int vertices) {
+  Spheres s;
+  const TriangleMesh unit = random_sphere_mesh(vertices - 6, 3);
+  const Eigen::Index nv = unit.V.rows(), nf = unit.F.rows();
+  s.V.resize(nv * static_cast<Eigen::Index>(r.size()), 3);
+  s.F.resize(nf * static_cast<Eigen::Index>(r.size()), 3);
+  for (size_t k = 0; k < r.size(); ++k) {
+    const Eigen::Index k_ = static_cast<Eigen::Index>(k);
+    s.V.middleRows(k_ * nv, nv) = (r[k] * unit.V).rowwise() + c[k].transpose();
+    s.F.middleRows(k_ * nf, nf) = unit.F.array() + static_cast<int>(k_ * nv);
+    s.weight.insert(s.weight.end(), static_cast<size_t>(nv), w[k]);
+  }
+  return s;
+}
+
+// `n` points uniformly on the sphere of radius r about c (seeded).
+Eigen::MatrixX3d sphere_points(int n, double r, const Eigen::Vector3d& c, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0, 1);
+  Eigen::MatrixX3d P(n, 3);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d d(g(rng), g(rng), g(rng));
+    P.row(i) = (c + r * d.normalized()).transpose();
+  }
+  return P;
+}
+
+int count_pieces(const DensePieces& d, int piece) {
+  return static_cast<int>(std::count(d.piece.begin(), d.piece.end(), piece));
+}
+
+// A sphere of radius 1 beside one of radius 10, their points as dense as each other per vertex
+// (1 cloud point per vertex, 500 vertices each): at 300 sites the small one gets 300 / 101 ≈ 3
+// sites by area but holds half the points: a dense piece on the floor of 24 sites. With 6 points
+// a vertex on the large sphere, the small one holds 1/7 of them: still dense; with 30, 1/31 <
+// 5 %: not. The large sphere is never a piece.
+TEST(DensePieces, ASmallSphereHoldingMuchOfTheCloudIsAPieceOfItsOwn) {
+  const std::vector<double> radii{1, 10};
+  const std::vector<Eigen::Vector3d> centres{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(30, 0, 0)};
+  const Spheres half = spheres(radii, centres, {1, 1}, 500);
+  const DensePieces d = dense_pieces(half.V, half.F, half.weight, 300, 0.01, {});
+  ASSERT_EQ(d.count(), 1);
+  EXPECT_EQ(d.sites[0], 24);
+  EXPECT_EQ(count_pieces(d, 0), 500);
+  for (int i = 0; i < 500; ++i) EXPECT_EQ(d.piece[i], 0);  // the small sphere's vertices come first
+  EXPECT_EQ(count_pieces(d, -1), 500);
+
+  EXPECT_EQ(dense_pieces(half.V, half.F, spheres(radii, centres, {1, 6}, 500).weight, 300, 0.01, {}).count(), 1);
+  EXPECT_EQ(dense_pieces(half.V, half.F, spheres(radii, centres, {1, 30}, 500).weight, 300, 0.01, {}).count(), 0);
+  // The floor grows with the mesher's smallest piece: 2 × 1 % of 3,000 sites.
+  const DensePieces at3000 = dense_pieces(half.V, half.F, std::vector<int>(1000, 10), 3000, 0.01, {});
+  ASSERT_EQ(at3000.count(), 1);
+  EXPECT_EQ(at3000.sites[0], 60);
+  // Its share by area reaches the floor at 24 · 101 ≈ 2,424 sites, and then it is no piece.
+  DensePieceOptions fixed_floor;
+  fixed_floor.min_sites = 24;
+  EXPECT_EQ(dense_pieces(half.V, half.F, std::vector<int>(1000, 10), 2500, 0, fixed_floor).count(), 0);
+  EXPECT_EQ(dense_pieces(half.V, half.F, std::vector<int>(1000, 10), 2300, 0, fixed_floor).count(), 1);
+  // Too few points for the floor's sites (504 at 21 a site): no piece.
+  DensePieceOptions many_per_site;
+  many_per_site.min_points_per_site = 21;
+  EXPECT_EQ(dense_pieces(half.V, half.F, half.weight, 300, 0.01, many_per_site).count(), 0);
+  DensePieceOptions off;
+  off.min_point_fraction = 0;
+  EXPECT_EQ(dense_pieces(half.V, half.F, half.weight, 300, 0.01, off).count(), 0);
+  EXPECT_EQ(count_pieces(dense_pieces(half.V, half.F, half.weight, 300, 0.01, off), -1), 1000);
+}
+
+// Six small dense spheres beside a large one at 200 sites: each wants 24 sites, the budget of
+// half the sites holds 4 of them, those with the most points.
+TEST(DensePieces, ThePiecesTakeAtMostTheirShareOfTheSites) {
+  std::vector<double> radii{10};
+  std::vector<Eigen::Vector3d> centres{Eigen::Vector3d::Zero()};
+  std::vector<int> weight{1};
+  for (int k = 0; k < 6; ++k) {
+    radii.push_back(1);
+    centres.emplace_back(20 + 5 * k, 0, 0);
+    weight.push_back(k == 2 ? 3 : 2);
+  }
+  const Spheres s = spheres(radii, centres, weight, 200);
+  const DensePieces d = dense_pieces(s.V, s.F, s.weight, 200, 0.01, {});
+  ASSERT_EQ(d.count(), 4);
+  for (int k = 0; k < d.count(); ++k) EXPECT_EQ(d.sites[k], 24);
+  for (int i = 0; i < 200; ++i) EXPECT_EQ(d.piece[i], -1);  // the large sphere is the rest
+  EXPECT_EQ(d.piece[3 * 200], 2);  // the sphere with the most points is in, the last one is not
+  EXPECT_EQ(d.piece[6 * 200], -1);
+  DensePieceOptions wider;
+  wider.max_site_fraction = 0.8;
+  EXPECT_EQ(dense_pieces(s.V, s.F, s.weight, 200, 0.01, wider).count(), 6);
+}
+
+TEST(DensePieces, BadOptionsAndInputsThrow) {
+  const Spheres s = spheres({1, 10}, {Eigen::Vector3d::Zero(), Eigen::Vector3d(30, 0, 0)}, {1, 1}, 100);
+  auto with = [](auto set) {
+    DensePieceOptions o;
+    set(o);
+    return o;
+  };
+  EXPECT_THROW(dense_pieces(s.V, s.F, s.weight, 300, 0.01, with([](auto& o) { o.min_point_fraction = 2; })), InvalidInputError);
+  EXPECT_THROW(dense_pieces(s.V, s.F, s.weight, 300, 0.01, with([](auto& o) { o.max_site_fraction = -1; })), InvalidInputError);
+  EXPECT_THROW(dense_pieces(s.V, s.F, s.weight, 300, 0.01, with([](auto& o) { o.min_sites = 3; })), InvalidInputError);
+  EXPECT_THROW(dense_pieces(s.V, s.F, s.weight, 300, 0.01, with([](auto& o) { o.min_points_per_site = NAN; })),
+               InvalidInputError);
+  EXPECT_THROW(dense_pieces(s.V, s.F, std::vector<int>(5, 1), 300, 0.01, {}), InvalidInputError);
+  Eigen::MatrixX3i bad = s.F;
+  bad(0, 0) = 1000;
+  EXPECT_THROW(dense_pieces(s.V, bad, s.weight, 300, 0.01, {}), InvalidInputError);
+}
+
+// The cloud of the first test sampled: 2,500 points on each sphere, at 300 sites. Without the
+// rule the small sphere gets about 3 sites and is dropped (half the points left out); with it,
+// two closed spheres at the count with the shape targets, covering the cloud.
+TEST(DensePieces, ASmallDenseSphereBesideALargeOneIsMeshedWithIt) {
+  Eigen::MatrixX3d P(5000, 3);
+  P << sphere_points(2500, 1, Eigen::Vector3d::Zero(), 5), sphere_points(2500, 10, Eigen::Vector3d(30, 0, 0), 6);
+  ReconstructionOptions options;
+  options.sites = 300;
+  options.threads = 2;
+  ReconstructionOptions off = options;
+  off.dense_pieces.min_point_fraction = 0;
+  const ReconstructionResult without = reconstruct_surface(P, off);
+  ASSERT_EQ(without.validation.components, 1) << "precondition: the small sphere is dropped without the rule";
+  ASSERT_TRUE(without.cloud_coverage.partial());
+
+  const ReconstructionResult with = reconstruct_surface(P, options);
+  EXPECT_EQ(with.dense_pieces, 1);
+  EXPECT_TRUE(with.validation.ok()) << with.validation.summary();
+  EXPECT_EQ(with.validation.components, 2);
+  EXPECT_EQ(with.validation.boundary_loops, 0);
+  EXPECT_EQ(with.validation.genus, 0);
+  EXPECT_NEAR(static_cast<double>(with.mesh.V.rows()), 300, 6);
+  EXPECT_GE(with.min_angle_deg, 25.0);
+  EXPECT_GE(with.mean_min_angle_deg, 52.0);
+  EXPECT_FALSE(with.cloud_coverage.partial()) << with.cloud_coverage.uncovered_share;
+  EXPECT_EQ(with.points_used, 5000);
+  // The small sphere's vertices lie on it.
+  int on_small = 0;
+  for (Eigen::Index v = 0; v < with.mesh.V.rows(); ++v)
+    if (with.mesh.V.row(v).norm() < 1.5) {
+      ++on_small;
+      EXPECT_NEAR(with.mesh.V.row(v).norm(), 1.0, 0.02);
+    }
+  EXPECT_NEAR(on_small, 24, 2);  // the floor, within the count the piece's own run reaches
+}
+
+// The same through cloud2mesh: exit 0, every check passed, the report names the piece; with
+// --dense-pieces 0 the small sphere is left out and the coverage check fails (exit 3).
+TEST(DensePieces, Cloud2meshMeshesTheDensePieceAndSaysSo) {
+  test::ScratchDir dir("dense_pieces");
+  PointCloud cloud;
+  cloud.P.resize(5000, 3);
+  cloud.P << sphere_points(2500, 1, Eigen::Vector3d::Zero(), 5), sphere_points(2500, 10, Eigen::Vector3d(30, 0, 0), 6);
+  write_cloud_xyz(dir.path("two.xyz"), cloud);
+  for (const std::string flag : {"", " --dense-pieces 0"}) {
+    SCOPED_TRACE(flag);
+    const test::CommandResult r = test::run_tool(
+        "cloud2mesh", dir.path("two.xyz") + " -n 300 -o " + dir.path("two.ply") + " --report " + dir.path("two.json") + flag);
+    const std::string json = test::read_file(dir.path("two.json"));
+    const bool on = flag.empty();
+    EXPECT_EQ(r.exit_code, on ? 0 : 3) << r.err;
+    EXPECT_EQ(test::json_number(json, "dense_pieces"), on ? 1 : 0);
+    EXPECT_EQ(test::failed_checks(json), on ? std::vector<std::string>{} : std::vector<std::string>{"covers_cloud"});
+    EXPECT_EQ(r.out.find("dense pieces: 1") != std::string::npos, on) << r.out;
+    EXPECT_EQ(validate_triangle_mesh(read_mesh(dir.path("two.ply")).V, read_mesh(dir.path("two.ply")).F).components,
+              on ? 2 : 1);
+  }
+}
+
+}  // namespace
+}  // namespace heatcvt
