@@ -566,6 +566,24 @@ void print_cloud_coverage(const CloudCoverage& c) {
   std::printf("\n");
 }
 
+// A warning where the mesh is off -n by more than the sizing's tolerance (IsotropicRemeshOptions::
+// count_tolerance), with what explains it: the run on finer sites kept at its finer count, sites
+// left in no triangle and small pieces dropped, or no remesh at the count that passed the checks.
+void print_count_warning(const ReconstructionResult& res, const ReconstructionOptions& opt) {
+  const long vertices = static_cast<long>(res.mesh.V.rows());
+  if (std::abs(static_cast<double>(vertices - opt.sites)) <= opt.mesher.sizing.count_tolerance * opt.sites) return;
+  std::printf("  warning: %ld vertices for the %d asked for (%+.0f %%): ", vertices, opt.sites,
+              100.0 * static_cast<double>(vertices - opt.sites) / opt.sites);
+  if (res.finer_retry_sites > 0 && !res.sized)
+    std::printf("the mesh on %d sites was kept (parts too thin for the cells of -n) and could not be coarsened to -n "
+                "without breaking them\n",
+                res.finer_retry_sites);
+  else
+    std::printf("%d sites left in no triangle, %d small pieces dropped, and no remesh at -n passed the checks%s\n",
+                res.unused_sites, res.pieces_removed,
+                vertices < opt.sites ? " (a smaller -n, or --keep-small, may meet it)" : "");
+}
+
 // The check that the mesh covers the cloud: at most CloudCoverageOptions::partial_share of the
 // points farther than a site spacing from it (cloud_coverage.h). Every mesh check can pass on a
 // mesh of one part of the cloud (a cluster below the spacing, a sheet the dual lost); the run then
@@ -622,6 +640,7 @@ void print_summary(const Settings& s, const std::string& cloud_path, const Recon
                 100.0 * res.border.mesh_border_on_edge, res.border.mesh_border_vertices,
                 res.border.mesh_border_distance, 100.0 * res.border.edge_covered, res.border.edge_points);
   print_cloud_coverage(res.cloud_coverage);
+  print_count_warning(res, opt);
   if (res.coverage.moves > 0)
     std::printf("  tips: %d vertices moved onto the fitted surface the mesh had cut off, %d of them inserted on "
                 "parts longer than a moved vertex reaches (%d CVT points farther than half a spacing from it "
