@@ -13,7 +13,9 @@
 #include "heatcvt/dense_pieces.h"
 #include "heatcvt/errors.h"
 #include "heatcvt/mesh_io.h"
+#include "heatcvt/noise_estimate.h"
 #include "heatcvt/reconstruct.h"
+#include "heatcvt/reconstruct_stream.h"
 #include "heatcvt/shapes.h"
 #include "heatcvt/validate.h"
 #include "test_support.h"
@@ -96,6 +98,23 @@ TEST(DensePieces, ASmallSphereHoldingMuchOfTheCloudIsAPieceOfItsOwn) {
   off.min_point_fraction = 0;
   EXPECT_EQ(dense_pieces(half.V, half.F, half.weight, 300, 0.01, off).count(), 0);
   EXPECT_EQ(count_pieces(dense_pieces(half.V, half.F, half.weight, 300, 0.01, off), -1), 1000);
+}
+
+// The cheap test before the components: at 3,000 sites a dense piece has less than 60 / 3,000 of
+// the area, so with 10,000 points of the same area it holds at most 200 of them and 5 % of the
+// weight. Equal weights: impossible; 300 points ten times as heavy: possible.
+TEST(DensePieces, TheWeightsAloneRuleOutADensePiece) {
+  std::vector<int> weight(10000, 1);
+  EXPECT_FALSE(dense_piece_possible(weight, 3000, 0.01, {}));
+  for (int i = 0; i < 300; ++i) weight[i * 7] = 10;
+  EXPECT_TRUE(dense_piece_possible(weight, 3000, 0.01, {}));
+  // At 300 sites a piece may hold 8 % of the area: any 8 % of equal weights is more than 5 %.
+  EXPECT_TRUE(dense_piece_possible(std::vector<int>(10000, 1), 300, 0.01, {}));
+  DensePieceOptions off;
+  off.min_point_fraction = 0;
+  EXPECT_FALSE(dense_piece_possible(weight, 3000, 0.01, off));
+  EXPECT_EQ(dense_piece_sites(3000, 0.01, {}), 60);
+  EXPECT_EQ(dense_piece_sites(300, 0.01, {}), 24);
 }
 
 // Six small dense spheres beside a large one at 200 sites: each wants 24 sites, the budget of
@@ -196,6 +215,80 @@ TEST(DensePieces, Cloud2meshMeshesTheDensePieceAndSaysSo) {
     EXPECT_EQ(validate_triangle_mesh(read_mesh(dir.path("two.ply")).V, read_mesh(dir.path("two.ply")).F).components,
               on ? 2 : 1);
   }
+}
+
+// 25,000 points on each sphere at 300 sites: 167 points a site, so the cloud is streamed into a
+// voxel summary, whose evenly spaced voxel points give the small sphere about 3 sites' worth. Its
+// voxels (26-connected) hold half the points: it is read again into a summary of its own and
+// meshed on 24 sites. Chunk sizes do not change the mesh.
+TEST(DensePieces, AStreamedCloudReadsItsDensePieceAgain) {
+  test::ScratchDir dir("dense_stream");
+  PointCloud cloud;
+  cloud.P.resize(50000, 3);
+  cloud.P << sphere_points(25000, 1, Eigen::Vector3d::Zero(), 7), sphere_points(25000, 10, Eigen::Vector3d(30, 0, 0), 8);
+  write_cloud_xyz(dir.path("two.xyz"), cloud);
+  ReconstructionOptions options;
+  options.sites = 300;
+  options.threads = 2;
+  StreamOptions stream;
+  // Precondition: the cloud is past the raw limit (40 points a site), so it is summarised.
+  ASSERT_LT(raw_point_limit(stream, options.sites), 50000);
+  ReconstructionOptions off = options;
+  off.dense_pieces.min_point_fraction = 0;
+  const StreamedReconstruction without = reconstruct_surface_streamed(dir.path("two.xyz"), off, stream);
+  ASSERT_TRUE(without.summarised);
+  ASSERT_EQ(without.result.validation.components, 1) << "precondition: the small sphere is dropped without the rule";
+
+  const StreamedReconstruction with = reconstruct_surface_streamed(dir.path("two.xyz"), options, stream);
+  const ReconstructionResult& r = with.result;
+  EXPECT_TRUE(with.summarised);
+  EXPECT_EQ(with.passes, without.passes + 1);
+  EXPECT_EQ(r.dense_pieces, 1);
+  EXPECT_TRUE(r.validation.ok()) << r.validation.summary();
+  EXPECT_EQ(r.validation.components, 2);
+  EXPECT_EQ(r.validation.boundary_loops, 0);
+  EXPECT_NEAR(static_cast<double>(r.mesh.V.rows()), 300, 6);
+  EXPECT_GE(r.min_angle_deg, 25.0);
+  EXPECT_GE(r.mean_min_angle_deg, 52.0);
+  EXPECT_FALSE(r.cloud_coverage.partial());
+  // The small sphere's vertices lie on it, within 5 % of its radius: the summary's points sit
+  // inside a curved surface by part of the sagitta of their 3×3×3-voxel plane fits, and 24 sites
+  // on a unit sphere are 0.7 radii apart.
+  int on_small = 0;
+  for (Eigen::Index v = 0; v < r.mesh.V.rows(); ++v)
+    if (r.mesh.V.row(v).norm() < 1.5) {
+      ++on_small;
+      EXPECT_NEAR(r.mesh.V.row(v).norm(), 1.0, 0.05);
+    }
+  EXPECT_NEAR(on_small, 24, 2);
+  StreamOptions small_chunks = stream;
+  small_chunks.chunk_points = 777;
+  const StreamedReconstruction chunked = reconstruct_surface_streamed(dir.path("two.xyz"), options, small_chunks);
+  EXPECT_EQ(chunked.result.mesh.V, r.mesh.V);
+  EXPECT_EQ(chunked.result.mesh.F, r.mesh.F);
+}
+
+// The noise estimate fits at most max_fit_points per query: on a noisy plane with about 3,000
+// points within each query's radius, the strided 1,000 give the deviation within 5 % of every
+// point's, and a cluster far smaller than the radius no longer costs a fit of all its points.
+TEST(DensePieces, TheNoiseEstimateFitsAStrideOfALargeNeighbourhood) {
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::normal_distribution<double> g(0, 0.01);
+  Eigen::MatrixX3d P(30000, 3);
+  for (Eigen::Index i = 0; i < P.rows(); ++i) P.row(i) << u(rng), u(rng), g(rng);
+  NoiseEstimateOptions all;
+  all.max_fit_points = 0;
+  const NoiseEstimate every = estimate_noise(P, 0.18, all);
+  const NoiseEstimate strided = estimate_noise(P, 0.18);
+  ASSERT_GT(every.sigma, 0.0);
+  EXPECT_NEAR(strided.sigma, every.sigma, 0.05 * every.sigma);
+  EXPECT_NEAR(strided.sigma, 0.01, 0.0015);
+  NoiseEstimateOptions bad;
+  bad.max_fit_points = 10;  // fewer than min_neighbors
+  EXPECT_THROW(estimate_noise(P, 0.18, bad), InvalidInputError);
+  bad.max_fit_points = -1;
+  EXPECT_THROW(estimate_noise(P, 0.18, bad), InvalidInputError);
 }
 
 }  // namespace

@@ -98,8 +98,10 @@ std::vector<int> rows_within(const Eigen::MatrixX3d& P, const CellRows& near, do
 NoiseEstimate estimate_noise(const Eigen::MatrixX3d& P, double spacing, const NoiseEstimateOptions& options) {
   if (!(spacing > 0) || !std::isfinite(spacing))
     throw InvalidInputError("estimate_noise: spacing must be finite and > 0, got " + std::to_string(spacing));
-  if (options.queries < 1 || !(options.radius_spacings > 0) || options.min_neighbors < 6)
-    throw InvalidInputError("estimate_noise: queries must be >= 1, radius_spacings > 0 and min_neighbors >= 6");
+  if (options.queries < 1 || !(options.radius_spacings > 0) || options.min_neighbors < 6 || options.max_fit_points < 0 ||
+      (options.max_fit_points > 0 && options.max_fit_points < options.min_neighbors))
+    throw InvalidInputError("estimate_noise: queries must be >= 1, radius_spacings > 0, min_neighbors >= 6 and "
+                            "max_fit_points 0 or at least min_neighbors");
   NoiseEstimate out;
   const Eigen::Index n = P.rows();
   if (n < options.min_neighbors) return out;
@@ -112,7 +114,12 @@ NoiseEstimate estimate_noise(const Eigen::MatrixX3d& P, double spacing, const No
   std::vector<double> residual(static_cast<std::size_t>(queries), -1.0);
 #pragma omp parallel for schedule(dynamic, 16) num_threads(resolve_threads(options.threads))
   for (int q = 0; q < queries; ++q) {
-    const std::vector<int> nb = rows_within(P, near, cell, query_rows[static_cast<std::size_t>(q)], radius);
+    std::vector<int> nb = rows_within(P, near, cell, query_rows[static_cast<std::size_t>(q)], radius);
+    const std::size_t found = nb.size(), keep = static_cast<std::size_t>(options.max_fit_points);
+    if (keep > 0 && found > keep) {
+      for (std::size_t k = 0; k < keep; ++k) nb[k] = nb[k * found / keep];
+      nb.resize(keep);
+    }
     if (static_cast<int>(nb.size()) >= options.min_neighbors)
       residual[static_cast<std::size_t>(q)] = quadratic_residual(P, nb, radius);
   }

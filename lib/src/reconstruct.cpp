@@ -871,11 +871,12 @@ ReconstructionResult reconstruct_whole(const Eigen::MatrixX3d& P_in, const Recon
 }
 
 // The options of one part of a split cloud on `sites` sites (and `target` vertices where the
-// sizing has a target): its points were cleaned up with the whole cloud.
-ReconstructionOptions part_options(const ReconstructionOptions& options, int sites, int target) {
+// sizing has a target); where its points were `cleaned` up with the whole cloud, none of its own.
+ReconstructionOptions part_options(const ReconstructionOptions& options, int sites, int target, bool cleaned) {
   ReconstructionOptions o = options;
   o.sites = sites;
   if (o.mesher.sizing.target_vertices > 0) o.mesher.sizing.target_vertices = target;
+  if (!cleaned) return o;
   o.denoise = false;
   o.voxel_size = 0;
   o.stray.ratio = 0;
@@ -920,25 +921,28 @@ void add_part(ReconstructionResult& a, ReconstructionResult&& b, const std::stri
   for (const auto& [stage, t] : b.stage_seconds) a.stage_seconds.emplace_back(name + ": " + stage, t);
 }
 
-// The rest of a split cloud and each dense piece meshed on its own sites, joined into one result
-// whose quality, validation and coverage are those of the joined mesh. A piece whose run fails
-// (nothing extracted) is left out: the coverage then says what it leaves.
-ReconstructionResult reconstruct_split(DenseSplit& split, const ReconstructionOptions& options,
-                                       const ReconstructionCallback& progress) {
+// The rest of a split cloud and each dense piece meshed on its own sites (reconstruct_parts();
+// `cleaned`: their points were cleaned up with the whole cloud, so none of their own), the
+// coverage measured on `used` at the spacing sqrt(area / the count asked for), with the
+// joined mesh's area where `area` is 0.
+ReconstructionResult join_parts(const Eigen::MatrixX3d& rest, const std::vector<Eigen::MatrixX3d>& pieces,
+                                const std::vector<int>& piece_sites, const ReconstructionOptions& options,
+                                const ReconstructionCallback& progress, const Eigen::MatrixX3d& used, double area,
+                                bool cleaned) {
   const auto prefixed = [&](const std::string& name) -> ReconstructionCallback {
     return [&, name](const std::string& stage, double f) {
       if (progress) progress(name + ": " + stage, f);
     };
   };
-  const int piece_sites = std::accumulate(split.sites.begin(), split.sites.end(), 0);
+  const int taken = std::accumulate(piece_sites.begin(), piece_sites.end(), 0);
   const int asked = requested_vertices(options);
-  ReconstructionResult out = reconstruct_whole(
-      split.rest, part_options(options, options.sites - piece_sites, asked - piece_sites), prefixed("rest"), nullptr);
+  ReconstructionResult out =
+      reconstruct_whole(rest, part_options(options, options.sites - taken, asked - taken, cleaned), prefixed("rest"), nullptr);
   for (auto& [stage, t] : out.stage_seconds) stage = "rest: " + stage;
-  for (int k = 0; k < static_cast<int>(split.pieces.size()); ++k) {
+  for (size_t k = 0; k < pieces.size(); ++k) {
     const std::string name = "piece " + std::to_string(k + 1);
     try {
-      add_part(out, reconstruct_whole(split.pieces[k], part_options(options, split.sites[k], split.sites[k]),
+      add_part(out, reconstruct_whole(pieces[k], part_options(options, piece_sites[k], piece_sites[k], cleaned),
                                       prefixed(name), nullptr),
                name);
       ++out.dense_pieces;
@@ -946,10 +950,6 @@ ReconstructionResult reconstruct_split(DenseSplit& split, const ReconstructionOp
       ++out.pieces_removed;
     }
   }
-  const ReconstructionResult& p = split.prepared;
-  out.points_input = p.points_input, out.points_merged = p.points_merged, out.points_denoised = p.points_denoised;
-  out.points_voxel_removed = p.points_voxel_removed, out.points_stray += p.points_stray;
-  out.stage_seconds.insert(out.stage_seconds.begin(), p.stage_seconds.begin(), p.stage_seconds.end());
   const TriangleQuality tq = triangle_quality(out.mesh.V, out.mesh.F);
   out.min_angle_deg = tq.min_angle_deg;
   out.mean_min_angle_deg = tq.mean_min_angle_deg;
@@ -959,7 +959,19 @@ ReconstructionResult reconstruct_split(DenseSplit& split, const ReconstructionOp
   out.validation = validate_triangle_mesh(out.mesh.V, out.mesh.F, vopt);
   CloudCoverageOptions coverage_options = options.cloud_coverage;
   coverage_options.threads = options.threads;
-  out.cloud_coverage = cloud_coverage(out.mesh, split.used, std::sqrt(split.area / asked), coverage_options);
+  if (!(area > 0)) area = surface_area(out.mesh.V, out.mesh.F);
+  out.cloud_coverage = cloud_coverage(out.mesh, used, std::sqrt(area / asked), coverage_options);
+  return out;
+}
+
+// join_parts() on a split cloud, with the whole cloud's clean-up counts and stage times.
+ReconstructionResult reconstruct_split(const DenseSplit& split, const ReconstructionOptions& options,
+                                       const ReconstructionCallback& progress) {
+  ReconstructionResult out = join_parts(split.rest, split.pieces, split.sites, options, progress, split.used, split.area, true);
+  const ReconstructionResult& p = split.prepared;
+  out.points_input = p.points_input, out.points_merged = p.points_merged, out.points_denoised = p.points_denoised;
+  out.points_voxel_removed = p.points_voxel_removed, out.points_stray += p.points_stray;
+  out.stage_seconds.insert(out.stage_seconds.begin(), p.stage_seconds.begin(), p.stage_seconds.end());
   return out;
 }
 
@@ -980,6 +992,30 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   }
   r.total_seconds = since(t_start);
   return r;
+}
+
+ReconstructionResult reconstruct_parts(const Eigen::MatrixX3d& rest, const std::vector<Eigen::MatrixX3d>& pieces,
+                                       const std::vector<int>& piece_sites, const ReconstructionOptions& options,
+                                       const ReconstructionCallback& progress) {
+  const auto t_start = Clock::now();
+  check_options(options);
+  if (piece_sites.size() != pieces.size()) throw InvalidInputError("reconstruct_parts: one site count per piece is needed");
+  int taken = 0;
+  Eigen::Index rows = rest.rows();
+  for (size_t k = 0; k < pieces.size(); ++k) {
+    if (piece_sites[k] < 4) throw InvalidInputError("reconstruct_parts: a piece needs at least 4 sites");
+    taken += piece_sites[k];
+    rows += pieces[k].rows();
+  }
+  if (options.sites - taken < 4) throw InvalidInputError("reconstruct_parts: the pieces leave the rest fewer than 4 sites");
+  Eigen::MatrixX3d used(rows, 3);
+  used.topRows(rest.rows()) = rest;
+  rows = rest.rows();
+  for (const Eigen::MatrixX3d& piece : pieces) used.middleRows(rows, piece.rows()) = piece, rows += piece.rows();
+  ReconstructionResult out = join_parts(rest, pieces, piece_sites, options, progress, used, 0, false);
+  out.points_input = static_cast<int>(used.rows());
+  out.total_seconds = since(t_start);
+  return out;
 }
 
 }  // namespace heatcvt

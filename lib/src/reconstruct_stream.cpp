@@ -2,12 +2,16 @@
 #include "heatcvt/reconstruct_stream.h"
 
 #include <algorithm>
+#include <array>
+#include <cstdint>
+#include <unordered_map>
 #include <chrono>
 #include <cmath>
 #include <memory>
 #include <random>
 #include <vector>
 
+#include "heatcvt/dense_pieces.h"
 #include "heatcvt/errors.h"
 
 namespace heatcvt {
@@ -119,27 +123,43 @@ StreamedReconstruction reconstruct_raw(const CloudChunkSource& source, PointClou
 
 }  // namespace
 
+namespace {
+
+// The points a summary is reconstructed from (StreamOptions::project_to_surface: its surface
+// points, else its plain means with their normals) with their mean colours.
+PointCloud summary_cloud(const VoxelSummary& summary, const ReconstructionOptions& options, const StreamOptions& stream) {
+  PointCloud cloud;
+  if (stream.project_to_surface) {
+    const double target = static_cast<double>(options.sites) * stream.voxel.points_per_site;
+    cloud.P = summary.surface_points(static_cast<Eigen::Index>(std::ceil(target)), nullptr, &cloud.C, stream.surface_fit);
+  } else {
+    cloud.P = summary.points();
+    cloud.N = summary.normals();
+    cloud.C = summary.colours();
+  }
+  return cloud;
+}
+
+// The reconstruction's options on a summary's points.
+ReconstructionOptions summary_options(const ReconstructionOptions& options, const StreamOptions& stream) {
+  ReconstructionOptions subset = options;
+  subset.cvt_points_per_site = 0;  // the voxel means already are the uniform subset
+  subset.spatial_site_order = true;  // large site counts: keep each cell's data close in memory
+  subset.surface_lloyd_mean_tolerance = stream.surface_lloyd_mean_tolerance;
+  return subset;
+}
+
+}  // namespace
+
 StreamedReconstruction reconstruct_surface_from_summary(const VoxelSummary& summary, const ReconstructionOptions& options,
                                                         const StreamOptions& stream, const ReconstructionCallback& progress) {
   if (summary.voxels() == 0) throw InvalidInputError("reconstruct_surface_from_summary: the summary holds no point");
   StreamedReconstruction out;
   if (progress) progress("preprocess", 0.0);
   const auto t0 = std::chrono::steady_clock::now();
-  if (stream.project_to_surface) {
-    const double target = static_cast<double>(options.sites) * stream.voxel.points_per_site;
-    out.cloud.P = summary.surface_points(static_cast<Eigen::Index>(std::ceil(target)), nullptr, &out.cloud.C,
-                                         stream.surface_fit);
-  } else {
-    out.cloud.P = summary.points();
-    out.cloud.N = summary.normals();
-    out.cloud.C = summary.colours();
-  }
-  ReconstructionOptions subset = options;
-  subset.cvt_points_per_site = 0;  // the voxel means already are the uniform subset
-  subset.spatial_site_order = true;  // large site counts: keep each cell's data close in memory
-  subset.surface_lloyd_mean_tolerance = stream.surface_lloyd_mean_tolerance;
+  out.cloud = summary_cloud(summary, options, stream);
   const double summary_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  out.result = reconstruct_surface(out.cloud.P, subset, progress);
+  out.result = reconstruct_surface(out.cloud.P, summary_options(options, stream), progress);
   out.result.stage_seconds.insert(out.result.stage_seconds.begin(), {"voxel surface points", summary_seconds});
   out.summarised = true;
   out.voxel_size = summary.voxel_size();
@@ -173,6 +193,179 @@ ReconstructionOptions noise_limited_options(const Eigen::MatrixX3d& sample, cons
     if (out.mesher.sizing.target_vertices == 0) out.mesher.sizing.target_vertices = options.sites;
     if (out.mesher.split.max_vertices == 0) out.mesher.split.max_vertices = options.sites + options.sites / 50;
   }
+  return out;
+}
+
+}  // namespace
+
+namespace {
+
+using Cell = std::array<std::int64_t, 3>;
+
+struct CellHash {
+  std::size_t operator()(const Cell& c) const {
+    return static_cast<std::size_t>((static_cast<std::uint64_t>(c[0]) * 0x9E3779B97F4A7C15ULL) ^
+                                    (static_cast<std::uint64_t>(c[1]) * 0xC2B2AE3D27D4EB4FULL) ^
+                                    (static_cast<std::uint64_t>(c[2]) * 0x165667B19E3779F9ULL));
+  }
+};
+
+Cell cell_of(const Eigen::Vector3d& x, double inv_h) {
+  return {static_cast<std::int64_t>(std::floor(x[0] * inv_h)), static_cast<std::int64_t>(std::floor(x[1] * inv_h)),
+          static_cast<std::int64_t>(std::floor(x[2] * inv_h))};
+}
+
+// The dense pieces of a summary (dense_pieces.h) as its voxels' pieces: the 26-connected
+// components of its voxels, each voxel of the same area (a surface occupies about area / h²
+// voxels) and weighted by its point count. The cell of each voxel of a piece maps to the piece.
+std::unordered_map<Cell, int, CellHash> summary_dense_pieces(const VoxelSummary& summary,
+                                                             const ReconstructionOptions& options, DensePieces& found) {
+  std::unordered_map<Cell, int, CellHash> piece_of;
+  if (!options.dense_pieces.enabled()) return piece_of;
+  const Eigen::VectorXi counts = summary.counts();
+  const std::vector<int> weight(counts.data(), counts.data() + counts.size());
+  if (!dense_piece_possible(weight, options.sites, options.mesher.min_piece_vertex_fraction, options.dense_pieces))
+    return piece_of;
+  const Eigen::Matrix<std::int64_t, Eigen::Dynamic, 3> cells = summary.cells();
+  found = dense_pieces_of_components(voxel_components(cells), std::vector<double>(weight.size(), 1.0), weight,
+                                     options.sites, options.mesher.min_piece_vertex_fraction, options.dense_pieces);
+  for (Eigen::Index v = 0; v < cells.rows(); ++v)
+    if (found.piece[static_cast<std::size_t>(v)] >= 0)
+      piece_of.emplace(Cell{cells(v, 0), cells(v, 1), cells(v, 2)}, found.piece[static_cast<std::size_t>(v)]);
+  return piece_of;
+}
+
+// The piece of a point near the summary's voxels: that of its own cell, else of the first of the
+// 26 around it that has one (a surface point moved onto its local plane may leave its voxel),
+// else −1.
+int piece_near(const std::unordered_map<Cell, int, CellHash>& piece_of, const Eigen::Vector3d& x, double inv_h) {
+  const Cell c = cell_of(x, inv_h);
+  if (const auto it = piece_of.find(c); it != piece_of.end()) return it->second;
+  for (int dx = -1; dx <= 1; ++dx)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dz = -1; dz <= 1; ++dz)
+        if (const auto it = piece_of.find(Cell{c[0] + dx, c[1] + dy, c[2] + dz}); it != piece_of.end()) return it->second;
+  return -1;
+}
+
+// One more pass over the source: the points in each dense piece's voxels into a summary of their
+// own, at a voxel size fine enough for stream.voxel.points_per_site voxel points per site of the
+// piece (fine_voxel_factor² times that many voxels, as the first summary), then its points.
+std::vector<PointCloud> dense_piece_clouds(CloudChunkSource& source, const VoxelSummary& summary,
+                                           const std::unordered_map<Cell, int, CellHash>& piece_of,
+                                           const DensePieces& found, const ReconstructionOptions& options,
+                                           const StreamOptions& stream) {
+  const double h = summary.voxel_size(), inv_h = 1.0 / h;
+  std::vector<long> voxels(static_cast<std::size_t>(found.count()), 0);
+  for (const auto& [cell, k] : piece_of) ++voxels[static_cast<std::size_t>(k)];
+  std::vector<VoxelSummary> pieces;
+  for (int k = 0; k < found.count(); ++k) {
+    const double wanted = stream.fine_voxel_factor * stream.fine_voxel_factor * stream.voxel.points_per_site *
+                          found.sites[static_cast<std::size_t>(k)];
+    pieces.emplace_back(h * std::min(1.0, std::sqrt(voxels[static_cast<std::size_t>(k)] / wanted)), options.threads);
+  }
+  source.rewind();
+  CloudChunk chunk;
+  std::vector<std::vector<Eigen::Index>> rows(pieces.size());
+  while (source.next(chunk)) {
+    for (auto& r : rows) r.clear();
+    for (Eigen::Index i = 0; i < chunk.rows(); ++i) {
+      if (!chunk.P.row(i).allFinite()) continue;
+      if (const auto it = piece_of.find(cell_of(chunk.P.row(i).transpose(), inv_h)); it != piece_of.end())
+        rows[static_cast<std::size_t>(it->second)].push_back(i);
+    }
+    for (size_t k = 0; k < pieces.size(); ++k) {
+      if (rows[k].empty()) continue;
+      CloudChunk part;
+      part.P = chunk.P(rows[k], Eigen::all);
+      if (chunk.has_colours()) part.C = chunk.C(rows[k], Eigen::all);
+      pieces[k].add(part);
+    }
+  }
+  std::vector<PointCloud> clouds;
+  for (int k = 0; k < found.count(); ++k) {
+    ReconstructionOptions piece = options;
+    piece.sites = found.sites[static_cast<std::size_t>(k)];
+    clouds.push_back(summary_cloud(pieces[static_cast<std::size_t>(k)], piece, stream));
+  }
+  return clouds;
+}
+
+// The rows of `cloud` (points, normals and colours where present) where keep[i].
+PointCloud rows_kept(const PointCloud& cloud, const std::vector<char>& keep) {
+  std::vector<Eigen::Index> rows;
+  for (size_t i = 0; i < keep.size(); ++i)
+    if (keep[i]) rows.push_back(static_cast<Eigen::Index>(i));
+  PointCloud out;
+  out.P = cloud.P(rows, Eigen::all);
+  if (cloud.N.rows() == cloud.P.rows()) out.N = cloud.N(rows, Eigen::all);
+  if (cloud.C.rows() == cloud.P.rows()) out.C = cloud.C(rows, Eigen::all);
+  return out;
+}
+
+// A summary with dense pieces: the rest from its points outside the pieces' voxels, each piece
+// from its own points read again (dense_piece_clouds()), joined by reconstruct_parts(). The
+// cloud returned holds every part's points (colours where every part has them, no normals).
+StreamedReconstruction reconstruct_summary_in_parts(CloudChunkSource& source, const VoxelSummary& summary,
+                                                    const std::unordered_map<Cell, int, CellHash>& piece_of,
+                                                    const DensePieces& found, const ReconstructionOptions& options,
+                                                    const StreamOptions& stream, const ReconstructionCallback& progress) {
+  if (progress) progress("preprocess", 0.0);
+  const auto t0 = std::chrono::steady_clock::now();
+  const PointCloud whole = summary_cloud(summary, options, stream);
+  const double inv_h = 1.0 / summary.voxel_size();
+  std::vector<char> in_rest(static_cast<std::size_t>(whole.P.rows()));
+  for (Eigen::Index i = 0; i < whole.P.rows(); ++i)
+    in_rest[static_cast<std::size_t>(i)] = piece_near(piece_of, whole.P.row(i).transpose(), inv_h) < 0;
+  const PointCloud rest = rows_kept(whole, in_rest);
+  const std::vector<PointCloud> pieces = dense_piece_clouds(source, summary, piece_of, found, options, stream);
+  const double summary_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::vector<Eigen::MatrixX3d> piece_points;
+  StreamedReconstruction out;
+  out.cloud.P = rest.P;
+  bool coloured = rest.C.rows() == rest.P.rows();
+  for (const PointCloud& piece : pieces) {
+    piece_points.push_back(piece.P);
+    coloured = coloured && piece.C.rows() == piece.P.rows();
+  }
+  out.result = reconstruct_parts(rest.P, piece_points, found.sites, summary_options(options, stream), progress);
+  out.result.stage_seconds.insert(out.result.stage_seconds.begin(), {"voxel surface points and dense pieces", summary_seconds});
+  for (const PointCloud& piece : pieces) {
+    const Eigen::Index r = out.cloud.P.rows();
+    out.cloud.P.conservativeResize(r + piece.P.rows(), 3);
+    out.cloud.P.bottomRows(piece.P.rows()) = piece.P;
+  }
+  if (coloured) {
+    out.cloud.C = rest.C;
+    for (const PointCloud& piece : pieces) {
+      const Eigen::Index r = out.cloud.C.rows();
+      out.cloud.C.conservativeResize(r + piece.C.rows(), 3);
+      out.cloud.C.bottomRows(piece.C.rows()) = piece.C;
+    }
+  }
+  out.summarised = true;
+  out.voxel_size = summary.voxel_size();
+  out.cvt_sites = options.sites;
+  return out;
+}
+
+// reconstruct_surface_from_summary(), or where the summary has dense pieces, its reconstruction
+// in parts (one more pass over the source: `passes` grows by one).
+StreamedReconstruction from_summary(CloudChunkSource& source, const VoxelSummary& summary,
+                                    const ReconstructionOptions& options, const StreamOptions& stream,
+                                    const ReconstructionCallback& progress, int& passes) {
+  const auto t0 = std::chrono::steady_clock::now();
+  DensePieces found;
+  const std::unordered_map<Cell, int, CellHash> piece_of = summary_dense_pieces(summary, options, found);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  StreamedReconstruction out;
+  if (found.count() == 0) {
+    out = reconstruct_surface_from_summary(summary, options, stream, progress);
+  } else {
+    ++passes;
+    out = reconstruct_summary_in_parts(source, summary, piece_of, found, options, stream, progress);
+  }
+  out.result.stage_seconds.insert(out.result.stage_seconds.begin(), {"dense pieces of the voxels", seconds});
   return out;
 }
 
@@ -233,16 +426,18 @@ StreamedReconstruction reconstruct_surface_streamed(CloudChunkSource& source, co
     summary = std::make_unique<VoxelSummary>(h, options.threads);
     source.rewind();  // pass 2: every point into the summary
     while (source.next(chunk)) summary->add(chunk);
-    StreamedReconstruction out = reconstruct_surface_from_summary(*summary, cvt, stream, progress);
+    int passes = 2;
+    StreamedReconstruction out = from_summary(source, *summary, cvt, stream, progress, passes);
     out.points_read = points;
-    out.passes = 2;
+    out.passes = passes;
     out.noise_spacings = noise_spacings;
     if (estimate) out.result.stage_seconds.insert(out.result.stage_seconds.begin(), {"noise estimate", noise_seconds});
     return out;
   }
-  StreamedReconstruction out = reconstruct_surface_from_summary(*summary, options, stream, progress);
+  int passes = 1;
+  StreamedReconstruction out = from_summary(source, *summary, options, stream, progress, passes);
   out.points_read = points;
-  out.passes = 1;
+  out.passes = passes;
   return out;
 }
 

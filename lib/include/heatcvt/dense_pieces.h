@@ -16,6 +16,7 @@
 /// component of the largest area is the rest and never a dense piece.
 #include <Eigen/Core>
 
+#include <cstdint>
 #include <vector>
 
 namespace heatcvt {
@@ -42,6 +43,16 @@ struct DensePieceOptions {
 /// < 4 or a negative or non-finite min_points_per_site.
 void check_dense_piece_options(const DensePieceOptions& options);
 
+/// The floor m of the file comment: the sites each dense piece is meshed on.
+int dense_piece_sites(int sites, double min_piece_vertex_fraction, const DensePieceOptions& options);
+
+/// Whether any set of pieces could hold a dense one, from the weights alone: a dense piece has
+/// less than m / sites of the area, so where every point has the same area, it holds at most
+/// ⌈#points · m / sites⌉ points and at least min_point_fraction of the weight; false when even
+/// the heaviest points that many cannot (a cheap test before the components are built).
+bool dense_piece_possible(const std::vector<int>& weight, int sites, double min_piece_vertex_fraction,
+                          const DensePieceOptions& options);
+
 /// The dense pieces found: a piece index per point (−1 for the rest) and each piece's sites.
 struct DensePieces {
   std::vector<int> piece;  ///< per point of the triangles, its piece or −1
@@ -56,5 +67,18 @@ struct DensePieces {
 /// \throw InvalidInputError on bad options, a weight per point missing or an index of T out of range.
 DensePieces dense_pieces(const Eigen::MatrixX3d& PC, const Eigen::MatrixX3i& T, const std::vector<int>& weight,
                          int sites, double min_piece_vertex_fraction, const DensePieceOptions& options);
+
+/// The same rule on pieces given by a label per point (component[i] ≥ 0, or −1 for a point on
+/// none, which belongs to the rest), each point carrying area[i] of the surface and weight[i]
+/// points of the cloud. dense_pieces() calls it with the triangles' components and lumped areas;
+/// the streamed path with the 26-connected components of its voxels.
+/// \throw InvalidInputError on bad options or inputs of different lengths.
+DensePieces dense_pieces_of_components(const std::vector<int>& component, const std::vector<double>& area,
+                                       const std::vector<int>& weight, int sites, double min_piece_vertex_fraction,
+                                       const DensePieceOptions& options);
+
+/// Labels of the 26-connected components of the voxel cells (#cells by 3 integer cells, distinct),
+/// numbered from 0 in the order of their first cell.
+std::vector<int> voxel_components(const Eigen::Matrix<std::int64_t, Eigen::Dynamic, 3>& cells);
 
 }  // namespace heatcvt

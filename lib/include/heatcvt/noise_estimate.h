@@ -22,6 +22,10 @@ struct NoiseEstimateOptions {
   double radius_spacings = 1.0;
   /// Queries with fewer points within the radius are skipped (sparse or stray points). Default 20.
   int min_neighbors = 20;
+  /// A query with more points within the radius fits this many of them, evenly strided over
+  /// their rows (a dense cluster smaller than the radius would have every query on it fit all
+  /// of its points: quadratic time). 0 = every point. Default 1000.
+  int max_fit_points = 1000;
   int threads = 0;  ///< OpenMP threads (0 = all cores); the result does not depend on it.
 };
 

@@ -349,6 +349,20 @@ struct ReconstructionResult {
 ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P, const ReconstructionOptions& options = {},
                                          const ReconstructionCallback& progress = {});
 
+/// A cloud reconstructed in parts (the dense pieces' path, dense_pieces.h): `rest` on
+/// options.sites − Σ piece_sites sites (the sizing's target, where set, lowered by as much) and
+/// each of `pieces` on its own piece_sites[k] sites, each as reconstruct_surface() (its clean-up,
+/// retries and run on finer sites) but with no dense pieces of its own. The meshes are
+/// joined into one result: counts summed over the runs; the quality, CGAL validation and coverage
+/// of the joined mesh (coverage of every part's points, at the spacing of the joined mesh's area
+/// over the count); `dense_pieces` = the pieces meshed. A piece whose run fails is left out and
+/// counted in pieces_removed; a failure of the rest's run is thrown.
+/// \throw InvalidInputError as reconstruct_surface(), or where the pieces take all the sites or
+///        their sites do not match them.
+ReconstructionResult reconstruct_parts(const Eigen::MatrixX3d& rest, const std::vector<Eigen::MatrixX3d>& pieces,
+                                       const std::vector<int>& piece_sites, const ReconstructionOptions& options,
+                                       const ReconstructionCallback& progress = {});
+
 /// Area-uniform random points on the triangle mesh (V, F) (std::mt19937 seeded with `seed`), plus
 /// isotropic Gaussian noise of standard deviation `noise_sigma` (input units) per coordinate.
 /// Used to build test and benchmark clouds from meshes. Returns count by 3.

@@ -95,7 +95,9 @@ struct StreamedReconstruction {
   bool summarised = false;       ///< true: voxel means; false: the raw points
   double voxel_size = 0;         ///< of the summary (0 when not summarised)
   std::int64_t points_read = 0;  ///< points handed out by the source (one pass)
-  int passes = 0;                ///< passes over the source (1 or 2)
+  /// Passes over the source: 1 or 2, and one more where dense pieces of the summary
+  /// (ReconstructionOptions::dense_pieces) are read again into summaries of their own.
+  int passes = 0;
   std::int64_t flying_pixels_removed = 0;  ///< by StreamOptions::flying_pixels (path version only)
   /// Noise σ of the cloud in requested site spacings (StreamOptions::max_noise_spacings; 0 when
   /// not estimated: the raw path, an explicit voxel size, or the limit off).
