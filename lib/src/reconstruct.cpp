@@ -984,11 +984,18 @@ ReconstructionResult reconstruct_surface(const Eigen::MatrixX3d& P_in, const Rec
   DenseSplit split;
   ReconstructionResult r = reconstruct_whole(P_in, options, progress, options.dense_pieces.enabled() ? &split : nullptr);
   if (!split.pieces.empty()) {
+    // The whole cloud as one where the rest gives no mesh on its sites, or where the parts' meshes,
+    // each checked on its own, fail the checks joined (parts a spacing apart whose faces cross).
+    std::optional<ReconstructionResult> parts;
     try {
-      r = reconstruct_split(split, options, progress);
-    } catch (const Error&) {  // the rest of the cloud gave no mesh on its sites: the whole cloud as one
-      r = reconstruct_whole(P_in, options, progress, nullptr);
+      parts = reconstruct_split(split, options, progress);
+    } catch (const Error&) {
     }
+    if (!parts || !parts->validation.ok()) {
+      ReconstructionResult whole = reconstruct_whole(P_in, options, progress, nullptr);
+      if (!parts || whole.validation.ok()) parts = std::move(whole);
+    }
+    r = std::move(*parts);
   }
   r.total_seconds = since(t_start);
   return r;

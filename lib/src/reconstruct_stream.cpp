@@ -364,6 +364,11 @@ StreamedReconstruction from_summary(CloudChunkSource& source, const VoxelSummary
   } else {
     ++passes;
     out = reconstruct_summary_in_parts(source, summary, piece_of, found, options, stream, progress);
+    // As reconstruct_surface(): the summary as one where the parts fail the checks joined.
+    if (!out.result.validation.ok()) {
+      StreamedReconstruction whole = reconstruct_surface_from_summary(summary, options, stream, progress);
+      if (whole.result.validation.ok()) out = std::move(whole);
+    }
   }
   out.result.stage_seconds.insert(out.result.stage_seconds.begin(), {"dense pieces of the voxels", seconds});
   return out;

@@ -13,7 +13,9 @@
 /// with area A_c gets about sites · A_c / A sites from the CVT; it is dense when that is below
 /// its floor m = max(min_sites, ⌈2 · min_piece_vertex_fraction · sites⌉), it holds at least
 /// min_point_fraction of the cloud's points and at least min_points_per_site · m of them. The
-/// component of the largest area is the rest and never a dense piece.
+/// component of the largest area is the rest and never a dense piece. Where the joined meshes fail
+/// the checks (parts about a spacing apart whose faces cross) and the cloud meshed as one passes
+/// them, that one is taken instead.
 #include <Eigen/Core>
 
 #include <cstdint>
