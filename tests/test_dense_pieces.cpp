@@ -67,7 +67,8 @@ int count_pieces(const DensePieces& d, int piece) {
 // (1 cloud point per vertex, 500 vertices each): at 300 sites the small one gets 300 / 101 ≈ 3
 // sites by area but holds half the points: a dense piece on the floor of 24 sites. With 6 points
 // a vertex on the large sphere, the small one holds 1/7 of them: still dense; with 30, 1/31 <
-// 5 %: not. The large sphere is never a piece.
+// 5 %: not. The large sphere is never a piece. A part only 2.5 times as dense as its area share
+// is not dense (min_density_ratio 4).
 TEST(DensePieces, ASmallSphereHoldingMuchOfTheCloudIsAPieceOfItsOwn) {
   const std::vector<double> radii{1, 10};
   const std::vector<Eigen::Vector3d> centres{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(30, 0, 0)};
@@ -85,31 +86,44 @@ TEST(DensePieces, ASmallSphereHoldingMuchOfTheCloudIsAPieceOfItsOwn) {
   const DensePieces at3000 = dense_pieces(half.V, half.F, std::vector<int>(1000, 10), 3000, 0.01, {});
   ASSERT_EQ(at3000.count(), 1);
   EXPECT_EQ(at3000.sites[0], 60);
-  // Its share by area reaches the floor at 24 · 101 ≈ 2,424 sites, and then it is no piece.
+  // Its share by area reaches half the floor of 24 at 12 · 101 = 1,212 sites, and then it is no
+  // piece: the mesher keeps a piece of 12 sites as it is.
   DensePieceOptions fixed_floor;
   fixed_floor.min_sites = 24;
-  EXPECT_EQ(dense_pieces(half.V, half.F, std::vector<int>(1000, 10), 2500, 0, fixed_floor).count(), 0);
+  EXPECT_EQ(dense_pieces(half.V, half.F, std::vector<int>(1000, 10), 1300, 0, fixed_floor).count(), 0);
+  EXPECT_EQ(dense_pieces(half.V, half.F, std::vector<int>(1000, 10), 1100, 0, fixed_floor).count(), 1);
+  fixed_floor.split_below = 1;
   EXPECT_EQ(dense_pieces(half.V, half.F, std::vector<int>(1000, 10), 2300, 0, fixed_floor).count(), 1);
   // Too few points for the floor's sites (504 at 21 a site): no piece.
   DensePieceOptions many_per_site;
   many_per_site.min_points_per_site = 21;
   EXPECT_EQ(dense_pieces(half.V, half.F, half.weight, 300, 0.01, many_per_site).count(), 0);
+  // Radii 1 and 3 at 100 sites: the small sphere has a tenth of the area (10 sites). With 2 cloud
+  // points a vertex against 1 it holds 2/3 of the points, 6.7 times its area share: dense; with 1
+  // against 3, a quarter: 2.5 times, not dense unless min_density_ratio allows it.
+  const Spheres near = spheres({1, 3}, centres, {1, 1}, 500);
+  EXPECT_EQ(dense_pieces(near.V, near.F, spheres({1, 3}, centres, {2, 1}, 500).weight, 100, 0.01, {}).count(), 1);
+  const std::vector<int> quarter = spheres({1, 3}, centres, {1, 3}, 500).weight;
+  EXPECT_EQ(dense_pieces(near.V, near.F, quarter, 100, 0.01, {}).count(), 0);
+  DensePieceOptions ratio2;
+  ratio2.min_density_ratio = 2;
+  EXPECT_EQ(dense_pieces(near.V, near.F, quarter, 100, 0.01, ratio2).count(), 1);
   DensePieceOptions off;
   off.min_point_fraction = 0;
   EXPECT_EQ(dense_pieces(half.V, half.F, half.weight, 300, 0.01, off).count(), 0);
   EXPECT_EQ(count_pieces(dense_pieces(half.V, half.F, half.weight, 300, 0.01, off), -1), 1000);
 }
 
-// The cheap test before the components: at 3,000 sites a dense piece has less than 60 / 3,000 of
-// the area, so with 10,000 points of the same area it holds at most 200 of them and 5 % of the
-// weight. Equal weights: impossible; 300 points ten times as heavy: possible.
+// The cheap test before the components: at 3,000 sites a dense piece has less than half of 60 /
+// 3,000 of the area, so with 10,000 points of the same area it holds at most 100 of them and 5 %
+// of the weight. Equal weights: impossible; 300 points ten times as heavy: possible.
 TEST(DensePieces, TheWeightsAloneRuleOutADensePiece) {
   std::vector<int> weight(10000, 1);
   EXPECT_FALSE(dense_piece_possible(weight, 3000, 0.01, {}));
   for (int i = 0; i < 300; ++i) weight[i * 7] = 10;
   EXPECT_TRUE(dense_piece_possible(weight, 3000, 0.01, {}));
-  // At 300 sites a piece may hold 8 % of the area: any 8 % of equal weights is more than 5 %.
-  EXPECT_TRUE(dense_piece_possible(std::vector<int>(10000, 1), 300, 0.01, {}));
+  // At 100 sites a piece may hold 12 % of the area: any 12 % of equal weights is more than 5 %.
+  EXPECT_TRUE(dense_piece_possible(std::vector<int>(10000, 1), 100, 0.01, {}));
   DensePieceOptions off;
   off.min_point_fraction = 0;
   EXPECT_FALSE(dense_piece_possible(weight, 3000, 0.01, off));
@@ -150,6 +164,9 @@ TEST(DensePieces, BadOptionsAndInputsThrow) {
   EXPECT_THROW(dense_pieces(s.V, s.F, s.weight, 300, 0.01, with([](auto& o) { o.min_point_fraction = 2; })), InvalidInputError);
   EXPECT_THROW(dense_pieces(s.V, s.F, s.weight, 300, 0.01, with([](auto& o) { o.max_site_fraction = -1; })), InvalidInputError);
   EXPECT_THROW(dense_pieces(s.V, s.F, s.weight, 300, 0.01, with([](auto& o) { o.min_sites = 3; })), InvalidInputError);
+  EXPECT_THROW(dense_pieces(s.V, s.F, s.weight, 300, 0.01, with([](auto& o) { o.min_density_ratio = -1; })),
+               InvalidInputError);
+  EXPECT_THROW(dense_pieces(s.V, s.F, s.weight, 300, 0.01, with([](auto& o) { o.split_below = 0; })), InvalidInputError);
   EXPECT_THROW(dense_pieces(s.V, s.F, s.weight, 300, 0.01, with([](auto& o) { o.min_points_per_site = NAN; })),
                InvalidInputError);
   EXPECT_THROW(dense_pieces(s.V, s.F, std::vector<int>(5, 1), 300, 0.01, {}), InvalidInputError);

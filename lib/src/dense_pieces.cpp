@@ -21,6 +21,8 @@ void check_dense_piece_options(const DensePieceOptions& o) {
   if (o.min_sites < 4) bad("min_sites must be >= 4");
   if (!(o.min_points_per_site >= 0) || !std::isfinite(o.min_points_per_site))
     bad("min_points_per_site must be finite and >= 0");
+  if (!(o.split_below > 0 && o.split_below <= 1)) bad("split_below must be in (0, 1]");
+  if (!(o.min_density_ratio >= 0) || !std::isfinite(o.min_density_ratio)) bad("min_density_ratio must be finite and >= 0");
 }
 
 namespace {
@@ -42,7 +44,8 @@ int dense_piece_sites(int sites, double min_piece_vertex_fraction, const DensePi
 bool dense_piece_possible(const std::vector<int>& weight, int sites, double min_piece_vertex_fraction,
                           const DensePieceOptions& options) {
   if (!options.enabled() || weight.empty() || sites < 1) return false;
-  const double share = static_cast<double>(dense_piece_sites(sites, min_piece_vertex_fraction, options)) / sites;
+  const double share =
+      options.split_below * dense_piece_sites(sites, min_piece_vertex_fraction, options) / static_cast<double>(sites);
   const std::size_t most = std::min(weight.size(), static_cast<std::size_t>(std::ceil(share * weight.size())));
   std::vector<int> w = weight;
   std::nth_element(w.begin(), w.begin() + static_cast<std::ptrdiff_t>(most) - 1, w.end(), std::greater<int>());
@@ -75,7 +78,7 @@ DensePieces dense_pieces_of_components(const std::vector<int>& component, const 
     c.points += weight[i];
     if (c.first < 0) c.first = i;
   }
-  if (!(total_area > 0)) return out;
+  if (!(total_area > 0) || total_points <= 0) return out;
 
   // The rest: the piece of the largest area. Candidates: the others under their floor with the
   // points for it, the most points first (ties: the first point).
@@ -87,9 +90,9 @@ DensePieces dense_pieces_of_components(const std::vector<int>& component, const 
   for (int r = 0; r < labels; ++r) {
     const Component& c = comp[r];
     if (c.first < 0 || r == rest) continue;
-    const double share = sites * c.area / total_area;
-    if (share < floor_sites && c.points >= options.min_point_fraction * static_cast<double>(total_points) &&
-        c.points >= options.min_points_per_site * floor_sites)
+    const double area_share = c.area / total_area, point_share = static_cast<double>(c.points) / total_points;
+    if (sites * area_share < options.split_below * floor_sites && point_share >= options.min_point_fraction &&
+        point_share >= options.min_density_ratio * area_share && c.points >= options.min_points_per_site * floor_sites)
       candidates.push_back(r);
   }
   std::sort(candidates.begin(), candidates.end(), [&](int a, int b) {
