@@ -19,17 +19,7 @@
 namespace heatcvt {
 namespace {
 
-// `n` points uniformly on the sphere of radius r about c (seeded).
-Eigen::MatrixX3d sphere_points(int n, double r, const Eigen::Vector3d& c, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g(0, 1);
-  Eigen::MatrixX3d P(n, 3);
-  for (int i = 0; i < n; ++i) {
-    const Eigen::Vector3d d(g(rng), g(rng), g(rng));
-    P.row(i) = (c + r * d.normalized()).transpose();
-  }
-  return P;
-}
+using test::sphere_points;
 
 // `n` points uniformly in the unit ball (seeded).
 Eigen::MatrixX3d ball_points(int n, unsigned seed) {

@@ -23,6 +23,8 @@
 namespace heatcvt {
 namespace {
 
+using test::sphere_points;
+
 // Spheres of radii r[k] about centres c[k] (random_sphere_mesh() of `vertices` vertices each) as
 // one triangle set, with the weight w[k] on each vertex of sphere k.
 struct Spheres {
@@ -47,16 +49,16 @@ Spheres spheres(const std::vector<double>& r, const std::vector<Eigen::Vector3d>
   return s;
 }
 
-// `n` points uniformly on the sphere of radius r about c (seeded).
-Eigen::MatrixX3d sphere_points(int n, double r, const Eigen::Vector3d& c, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g(0, 1);
-  Eigen::MatrixX3d P(n, 3);
-  for (int i = 0; i < n; ++i) {
-    const Eigen::Vector3d d(g(rng), g(rng), g(rng));
-    P.row(i) = (c + r * d.normalized()).transpose();
-  }
-  return P;
+// The vertices of `mesh` near the unit sphere about the origin (within 1.5), each expected within
+// `tolerance` of it.
+int vertices_on_unit_sphere(const TriangleMesh& mesh, double tolerance) {
+  int near = 0;
+  for (Eigen::Index v = 0; v < mesh.V.rows(); ++v)
+    if (mesh.V.row(v).norm() < 1.5) {
+      ++near;
+      EXPECT_NEAR(mesh.V.row(v).norm(), 1.0, tolerance);
+    }
+  return near;
 }
 
 int count_pieces(const DensePieces& d, int piece) {
@@ -201,14 +203,8 @@ TEST(DensePieces, ASmallDenseSphereBesideALargeOneIsMeshedWithIt) {
   EXPECT_GE(with.mean_min_angle_deg, 52.0);
   EXPECT_FALSE(with.cloud_coverage.partial()) << with.cloud_coverage.uncovered_share;
   EXPECT_EQ(with.points_used, 5000);
-  // The small sphere's vertices lie on it.
-  int on_small = 0;
-  for (Eigen::Index v = 0; v < with.mesh.V.rows(); ++v)
-    if (with.mesh.V.row(v).norm() < 1.5) {
-      ++on_small;
-      EXPECT_NEAR(with.mesh.V.row(v).norm(), 1.0, 0.02);
-    }
-  EXPECT_NEAR(on_small, 24, 2);  // the floor, within the count the piece's own run reaches
+  // The small sphere's vertices lie on it: the floor, within the count the piece's own run reaches.
+  EXPECT_NEAR(vertices_on_unit_sphere(with.mesh, 0.02), 24, 2);
 }
 
 // The same through cloud2mesh: exit 0, every check passed, the report names the piece; with
@@ -271,13 +267,7 @@ TEST(DensePieces, AStreamedCloudReadsItsDensePieceAgain) {
   // The small sphere's vertices lie on it, within 5 % of its radius: the summary's points sit
   // inside a curved surface by part of the sagitta of their 3×3×3-voxel plane fits, and 24 sites
   // on a unit sphere are 0.7 radii apart.
-  int on_small = 0;
-  for (Eigen::Index v = 0; v < r.mesh.V.rows(); ++v)
-    if (r.mesh.V.row(v).norm() < 1.5) {
-      ++on_small;
-      EXPECT_NEAR(r.mesh.V.row(v).norm(), 1.0, 0.05);
-    }
-  EXPECT_NEAR(on_small, 24, 2);
+  EXPECT_NEAR(vertices_on_unit_sphere(r.mesh, 0.05), 24, 2);
   StreamOptions small_chunks = stream;
   small_chunks.chunk_points = 777;
   const StreamedReconstruction chunked = reconstruct_surface_streamed(dir.path("two.xyz"), options, small_chunks);

@@ -363,11 +363,17 @@ StreamedReconstruction from_summary(CloudChunkSource& source, const VoxelSummary
     out = reconstruct_surface_from_summary(summary, options, stream, progress);
   } else {
     ++passes;
-    out = reconstruct_summary_in_parts(source, summary, piece_of, found, options, stream, progress);
-    // As reconstruct_surface(): the summary as one where the parts fail the checks joined.
-    if (!out.result.validation.ok()) {
+    // As reconstruct_surface(): the summary as one where the rest gives no mesh on its sites or
+    // the parts fail the checks joined.
+    bool joined = true;
+    try {
+      out = reconstruct_summary_in_parts(source, summary, piece_of, found, options, stream, progress);
+    } catch (const Error&) {
+      joined = false;
+    }
+    if (!joined || !out.result.validation.ok()) {
       StreamedReconstruction whole = reconstruct_surface_from_summary(summary, options, stream, progress);
-      if (whole.result.validation.ok()) out = std::move(whole);
+      if (!joined || whole.result.validation.ok()) out = std::move(whole);
     }
   }
   out.result.stage_seconds.insert(out.result.stage_seconds.begin(), {"dense pieces of the voxels", seconds});

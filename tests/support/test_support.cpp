@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <random>
 #include <stdexcept>
 #include <sys/wait.h>
 
@@ -89,6 +90,17 @@ TriangleMesh grid(int n, double x0, double x1, double y0, double y1, bool altern
       }
     }
   return m;
+}
+
+Eigen::MatrixX3d sphere_points(int n, double r, const Eigen::Vector3d& c, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0, 1);
+  Eigen::MatrixX3d P(n, 3);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d d(g(rng), g(rng), g(rng));
+    P.row(i) = (c + r * d.normalized()).transpose();
+  }
+  return P;
 }
 
 TriangleMesh torus(int n, int m, double R, double r) {

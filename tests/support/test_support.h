@@ -32,6 +32,10 @@ TriangleMesh grid(int n, double x0 = 0, double x1 = 1, double y0 = 0, double y1 
 /// Torus with radii R, r and n×m vertices.
 TriangleMesh torus(int n, int m, double R = 1.0, double r = 0.4);
 
+/// `n` points uniformly on the sphere of radius r about c (normalised Gaussian vectors,
+/// std::mt19937 seeded with `seed`).
+Eigen::MatrixX3d sphere_points(int n, double r, const Eigen::Vector3d& c, unsigned seed);
+
 /// Scales V so the surface area is exactly `area`.
 void scale_to_area(TriangleMesh& mesh, double area);
 
