@@ -49,6 +49,14 @@ Spheres spheres(const std::vector<double>& r, const std::vector<Eigen::Vector3d>
   return s;
 }
 
+// The cloud of the reconstruction tests: n points on the unit sphere about the origin (seed),
+// then n on the sphere of radius 10 about (30, 0, 0) (seed + 1).
+Eigen::MatrixX3d two_spheres(int n, unsigned seed) {
+  Eigen::MatrixX3d P(2 * n, 3);
+  P << sphere_points(n, 1, Eigen::Vector3d::Zero(), seed), sphere_points(n, 10, Eigen::Vector3d(30, 0, 0), seed + 1);
+  return P;
+}
+
 // The vertices of `mesh` near the unit sphere about the origin (within 1.5), each expected within
 // `tolerance` of it.
 int vertices_on_unit_sphere(const TriangleMesh& mesh, double tolerance) {
@@ -181,8 +189,7 @@ TEST(DensePieces, BadOptionsAndInputsThrow) {
 // rule the small sphere gets about 3 sites and is dropped (half the points left out); with it,
 // two closed spheres at the count with the shape targets, covering the cloud.
 TEST(DensePieces, ASmallDenseSphereBesideALargeOneIsMeshedWithIt) {
-  Eigen::MatrixX3d P(5000, 3);
-  P << sphere_points(2500, 1, Eigen::Vector3d::Zero(), 5), sphere_points(2500, 10, Eigen::Vector3d(30, 0, 0), 6);
+  const Eigen::MatrixX3d P = two_spheres(2500, 5);
   ReconstructionOptions options;
   options.sites = 300;
   options.threads = 2;
@@ -212,8 +219,7 @@ TEST(DensePieces, ASmallDenseSphereBesideALargeOneIsMeshedWithIt) {
 TEST(DensePieces, Cloud2meshMeshesTheDensePieceAndSaysSo) {
   test::ScratchDir dir("dense_pieces");
   PointCloud cloud;
-  cloud.P.resize(5000, 3);
-  cloud.P << sphere_points(2500, 1, Eigen::Vector3d::Zero(), 5), sphere_points(2500, 10, Eigen::Vector3d(30, 0, 0), 6);
+  cloud.P = two_spheres(2500, 5);
   write_cloud_xyz(dir.path("two.xyz"), cloud);
   for (const std::string flag : {"", " --dense-pieces 0"}) {
     SCOPED_TRACE(flag);
@@ -237,8 +243,7 @@ TEST(DensePieces, Cloud2meshMeshesTheDensePieceAndSaysSo) {
 TEST(DensePieces, AStreamedCloudReadsItsDensePieceAgain) {
   test::ScratchDir dir("dense_stream");
   PointCloud cloud;
-  cloud.P.resize(50000, 3);
-  cloud.P << sphere_points(25000, 1, Eigen::Vector3d::Zero(), 7), sphere_points(25000, 10, Eigen::Vector3d(30, 0, 0), 8);
+  cloud.P = two_spheres(25000, 7);
   write_cloud_xyz(dir.path("two.xyz"), cloud);
   ReconstructionOptions options;
   options.sites = 300;
