@@ -125,6 +125,10 @@ cli::Json make_report(const std::string& cloud_path, const std::vector<std::stri
   j["non_finite_dropped"] = rr.non_finite_dropped;
   j["duplicates_merged"] = rr.duplicates_merged;
   j["flying_pixels_removed"] = rr.flying_pixels_removed;
+  j["depth_quantised"] = rr.depth_steps.quantised;
+  j["depth_step_median"] = rr.depth_steps.median_step;
+  j["depth_points_moved"] = static_cast<long>(rr.depth_steps.points_moved);
+  j["depth_mean_move_steps"] = rr.depth_steps.mean_move_steps;
   j["points_denoised"] = res.points_denoised;
   j["points_stray"] = res.points_stray;
   j["points_voxel_removed"] = res.points_voxel_removed;
@@ -226,9 +230,11 @@ bool should_stream(const std::vector<ScanInput>& scans, const ReconstructionOpti
 
 // The streamed reconstruction of one large file, with reading progress (bytes) per pass.
 StreamedReconstruction reconstruct_streamed(const std::string& path, const ReconstructionOptions& opt,
-                                            const FlyingPixelOptions& flying, const StreamOptions& limits, bool quiet) {
+                                            const CloudReadOptions& read, const StreamOptions& limits, bool quiet) {
   StreamOptions stream = limits;
-  stream.flying_pixels = flying;
+  stream.flying_pixels = read.flying_pixels;
+  stream.depth_steps = read.depth_steps;
+  stream.depth_steps.threads = opt.threads;
   // --points-per-site sizes the summary: the voxel points the CVT runs on, per site.
   if (opt.cvt_points_per_site > 0) stream.voxel.points_per_site = opt.cvt_points_per_site;
   std::unique_ptr<cli::Progress> reading;
@@ -317,6 +323,12 @@ void add_input_options(CLI::App& app, Settings& s) {
                  "organised PCD clouds (depth-camera frames): a pixel with fewer than 2 of its 8 grid neighbours "
                  "within this fraction of its range from the sensor (the file's VIEWPOINT) is a flying pixel mixed "
                  "from two depths at an edge, and is dropped; 0 keeps every pixel")
+      ->capture_default_str();
+  app.add_option("--depth-steps", s.read_options.depth_steps.max_distinct_fraction,
+                 "a depth frame in its sensor's frame whose depth takes at most this fraction of the point count "
+                 "as distinct values (the disparity steps of RGB-D and stereo cameras: terraces 1 cm apart at 2 m, "
+                 "10-20 cm at 6 m) has each point's depth refitted on a plane through its image neighbours, moving "
+                 "it along its ray by at most a step; clouds in a world frame are left as they are; 0 = never")
       ->capture_default_str();
   app.add_flag("--normals", s.write_normals, "write per-vertex normals (outward on closed pieces) with the mesh");
   app.add_flag("--keep-small",
@@ -439,6 +451,8 @@ void check_settings(const Settings& s) {
   check_options(s.opt);
   if (const double r = s.read_options.flying_pixels.neighbour_distance_ratio; !(r >= 0) || !std::isfinite(r))
     throw InvalidInputError("--flying-pixels must be a finite number >= 0 (0 keeps every pixel)");
+  if (const double q = s.read_options.depth_steps.max_distinct_fraction; !(q >= 0 && q <= 1))
+    throw InvalidInputError("--depth-steps must be a fraction in [0, 1] (0 = never)");
   if (s.cloud_paths.empty() && s.conf_path.empty())
     throw InvalidInputError("no input: give the clouds as CLOUD arguments or with --conf");
   if (!s.cloud_paths.empty() && !s.conf_path.empty())
@@ -477,7 +491,9 @@ std::string input_label(const std::vector<ScanInput>& scans, const std::string& 
 // Reads the scans whole, checks the merged cloud against the options and reconstructs its surface.
 void reconstruct_whole(const Settings& s, const std::vector<ScanInput>& scans, const std::string& cloud_path,
                        Reconstruction& rec) {
-  rec.cloud = read_scans(scans, &rec.rr, s.read_options);
+  CloudReadOptions read = s.read_options;
+  read.depth_steps.threads = s.opt.threads;
+  rec.cloud = read_scans(scans, &rec.rr, read);
   cli::log_line(s.quiet, "read " + cloud_path + ": " + std::to_string(rec.rr.points_in_file) + " points, " +
                              std::to_string(rec.rr.non_finite_dropped) + " non-finite dropped, " +
                              std::to_string(rec.rr.flying_pixels_removed) + " flying pixels dropped, " +
@@ -500,12 +516,13 @@ Reconstruction reconstruct(const Settings& s, const std::vector<ScanInput>& scan
     throw InvalidInputError("--stream-per-site must be a finite number >= 0");
   rec.stream = should_stream(scans, s.opt, s.stream_limits);
   if (rec.stream) {
-    rec.streamed = reconstruct_streamed(scans[0].path, s.opt, s.read_options.flying_pixels, s.stream_limits, s.quiet);
+    rec.streamed = reconstruct_streamed(scans[0].path, s.opt, s.read_options, s.stream_limits, s.quiet);
     rec.res = std::move(rec.streamed.result);
     rec.cloud = std::move(rec.streamed.cloud);
     rec.rr.format = CloudChunkReader(scans[0].path).format();
     rec.rr.points_in_file = rec.streamed.points_read;
     rec.rr.flying_pixels_removed = static_cast<long>(rec.streamed.flying_pixels_removed);
+    rec.rr.depth_steps = rec.streamed.depth_steps;
   } else {
     reconstruct_whole(s, scans, cloud_path, rec);
   }
@@ -597,6 +614,16 @@ std::vector<cli::CheckRecord> coverage_check(const CloudCoverage& c) {
   return {{"covers_cloud", !c.partial(), true, detail}};
 }
 
+// Prints what the refit of quantised depth found and did (depth_steps.h), where the depth is quantised.
+void print_depth_steps(const DepthStepReport& d) {
+  if (!d.quantised) return;
+  static const char* const axes[] = {"x", "y", "z"};
+  std::printf("  depth steps: the %s depth of this frame takes %ld values (median step %g); %ld points refitted, "
+              "by %.2f steps on average (--depth-steps 0 keeps them)\n",
+              axes[d.axis], static_cast<long>(d.levels), d.median_step, static_cast<long>(d.points_moved),
+              d.mean_move_steps);
+}
+
 // Prints the summary of a run on stdout: points, times, the mesh, its quality and border, the checks.
 void print_summary(const Settings& s, const std::string& cloud_path, const Reconstruction& rec, double per_iter,
                    double total_s, const std::vector<cli::CheckRecord>& checks) {
@@ -610,6 +637,7 @@ void print_summary(const Settings& s, const std::string& cloud_path, const Recon
               "%d outliers removed, %d stray points removed, %d voxel-merged, %d used\n",
               rr.points_in_file, rr.non_finite_dropped, rr.flying_pixels_removed, rr.duplicates_merged + res.points_merged,
               res.points_denoised, res.points_stray, res.points_voxel_removed, res.points_used);
+  print_depth_steps(rr.depth_steps);
   std::printf("  time: Laplacian %.3f s, factor %.3f s, CVT %.3f s (%d heat iterations, %.3f s each), total %.3f s\n",
               res.laplacian_seconds, res.factor_seconds, res.cvt_seconds, res.iterations, per_iter, total_s);
   cli::print_stages(res.stage_seconds);

@@ -262,6 +262,7 @@ PointCloud read_pcd(const std::string& path, CloudReadReport& rep, const FlyingP
   rep.points_in_file = n;
   rep.width = static_cast<int>(blob.width);
   rep.height = static_cast<int>(blob.height);
+  rep.sensor = origin.head<3>().cast<double>();
   if (blob.height > 1)
     rep.flying_pixels_removed = remove_flying_pixels(cloud.P, static_cast<int>(blob.width), static_cast<int>(blob.height),
                                                      origin.head<3>().cast<double>(), flying);
@@ -369,6 +370,7 @@ PointCloud read_cloud(const std::string& path, CloudReadReport* report, const Cl
                             " others (CloudReadOptions::flying_pixels off, cloud2mesh --flying-pixels 0, keeps them)");
   if (cloud.P.rows() == 0)
     throw InvalidInputError(path + ": no finite points (all " + std::to_string(rep.points_in_file) + " points are NaN/inf)");
+  rep.depth_steps = smooth_depth_steps(cloud.P, rep.sensor, options.depth_steps);
   return cloud;
 }
 

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <limits>
+#include <utility>
 
 #include "cloud_stream_detail.h"
 
@@ -176,6 +177,21 @@ std::unique_ptr<CloudChunkReader::Decoder> make_xyz_decoder(const std::string& p
 }
 
 }  // namespace stream_detail
+
+MemoryChunkSource::MemoryChunkSource(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N, const Eigen::MatrixX3d& C,
+                                     std::string name, std::int64_t chunk_points)
+    : P_(P), N_(N), C_(C), name_(std::move(name)), chunk_points_(chunk_points) {
+  if (chunk_points < 1) throw InvalidInputError(name_ + ": chunk_points must be >= 1");
+}
+
+bool MemoryChunkSource::next(CloudChunk& chunk) {
+  const Eigen::Index count = std::min<Eigen::Index>(chunk_points_, P_.rows() - next_);
+  chunk.P = P_.middleRows(next_, count);
+  chunk.N = N_.rows() == P_.rows() ? Eigen::MatrixX3d(N_.middleRows(next_, count)) : Eigen::MatrixX3d();
+  chunk.C = C_.rows() == P_.rows() ? Eigen::MatrixX3d(C_.middleRows(next_, count)) : Eigen::MatrixX3d();
+  next_ += count;
+  return count > 0;
+}
 
 CloudChunkReader::CloudChunkReader(const std::string& path, StreamReaderOptions options)
     : path_(path), options_(std::move(options)) {

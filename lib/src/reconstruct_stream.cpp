@@ -462,6 +462,22 @@ StreamedReconstruction reconstruct_surface_streamed(const std::string& path, con
     reader_options.progress = [&](const StreamProgress& p) { stream.progress(reader_seen ? reader_seen->passes() : 1, p); };
   CloudChunkReader reader(path, reader_options);
   reader_seen = &reader;
+  if (reader.grid_height() > 1 && stream.depth_steps.enabled()) {
+    // A depth frame: read whole, its quantised depth refitted, then streamed from memory.
+    CloudReadOptions read;
+    read.flying_pixels = stream.flying_pixels;
+    read.depth_steps = stream.depth_steps;
+    read.depth_steps.threads = options.threads;
+    CloudReadReport report;
+    const PointCloud cloud = read_cloud(path, &report, read);
+    if (stream.progress) stream.progress(1, {reader.bytes_total(), reader.bytes_total(), report.points_in_file, report.points_in_file});
+    MemoryChunkSource memory(cloud.P, cloud.N, cloud.C, path, stream.chunk_points);
+    StreamedReconstruction out = reconstruct_surface_streamed(static_cast<CloudChunkSource&>(memory), options, stream, progress);
+    out.points_read = report.points_in_file;
+    out.flying_pixels_removed = report.flying_pixels_removed;
+    out.depth_steps = report.depth_steps;
+    return out;
+  }
   if (reader.grid_height() < 2 || !stream.flying_pixels.enabled())
     return reconstruct_surface_streamed(static_cast<CloudChunkSource&>(reader), options, stream, progress);
   // An organised cloud: its flying pixels go (as read_cloud drops them).

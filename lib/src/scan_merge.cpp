@@ -119,6 +119,27 @@ void transform_cloud(PointCloud& cloud, const Eigen::Isometry3d& pose) {
   if (cloud.has_normals()) cloud.N = (cloud.N * R.transpose()).eval();
 }
 
+namespace {
+
+// The depth-step figures of several scans: quantised where one is, moves added up (the axis,
+// levels and step of the first quantised scan).
+void add_depth_steps(DepthStepReport& total, const DepthStepReport& r) {
+  const std::int64_t moved = total.points_moved + r.points_moved;
+  if (moved > 0)
+    total.mean_move_steps = (total.mean_move_steps * static_cast<double>(total.points_moved) +
+                             r.mean_move_steps * static_cast<double>(r.points_moved)) / static_cast<double>(moved);
+  total.points_moved = moved;
+  if (!total.quantised && r.quantised) {
+    total.quantised = true;
+    total.axis = r.axis;
+    total.levels = r.levels;
+    total.distinct_fraction = r.distinct_fraction;
+    total.median_step = r.median_step;
+  }
+}
+
+}  // namespace
+
 PointCloud read_scans(const std::vector<ScanInput>& scans, CloudReadReport* report, const CloudReadOptions& options) {
   if (scans.empty()) throw InvalidInputError("read_scans: no scan given");
   std::vector<PointCloud> clouds;
@@ -136,6 +157,7 @@ PointCloud read_scans(const std::vector<ScanInput>& scans, CloudReadReport* repo
       total.duplicates_merged += r.duplicates_merged;
       total.invalid_normals_zeroed += r.invalid_normals_zeroed;
       total.flying_pixels_removed += r.flying_pixels_removed;
+      add_depth_steps(total.depth_steps, r.depth_steps);
     }
     transform_cloud(clouds.back(), scan.pose);
     n += clouds.back().P.rows();

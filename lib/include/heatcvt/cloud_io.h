@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <string>
 
+#include "heatcvt/depth_steps.h"
 #include "heatcvt/flying_pixels.h"
 #include "heatcvt/normalize.h"
 
@@ -35,6 +36,10 @@ struct CloudReadReport {
   bool normals_all_zero = false;///< the file had normal columns but every normal was zero: treated as absent
   long invalid_normals_zeroed = 0; ///< finite points whose normal was NaN/inf; normal set to zero
   long flying_pixels_removed = 0;  ///< pixels of an organised cloud dropped as flying (flying_pixels.h)
+  /// The sensor position: a PCD file's VIEWPOINT translation, the origin for other formats.
+  Eigen::Vector3d sensor = Eigen::Vector3d::Zero();
+  /// The quantised depth found and refitted (depth_steps.h; CloudReadOptions::depth_steps).
+  DepthStepReport depth_steps;
 };
 
 /// Options of read_cloud.
@@ -43,6 +48,10 @@ struct CloudReadOptions {
   /// ranges measured from the file's VIEWPOINT (flying_pixels.h). Default on (3 % of the range);
   /// neighbour_distance_ratio = 0 keeps every pixel.
   FlyingPixelOptions flying_pixels;
+  /// The refit of quantised depth (depth_steps.h) applied after the clean-up, rays from
+  /// CloudReadReport::sensor: a depth frame in its own sensor frame gets its terraces undone; other
+  /// clouds are left as they are. Default on; max_distinct_fraction = 0 turns it off.
+  DepthStepOptions depth_steps;
 };
 
 /// Reads a point cloud, format by extension (case-insensitive):

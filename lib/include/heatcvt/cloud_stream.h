@@ -57,6 +57,25 @@ class CloudChunkSource {
   virtual const std::string& name() const = 0;
 };
 
+/// A cloud held in memory handed out in chunks of `chunk_points` rows (a cloud read whole and
+/// changed before it is streamed: the quantised depth of a depth frame refitted, depth_steps.h).
+/// Normals and colours are handed out where the cloud has them for every point.
+class MemoryChunkSource : public CloudChunkSource {
+ public:
+  /// `P`, `N` and `C` must outlive the source. \throw InvalidInputError where chunk_points < 1.
+  MemoryChunkSource(const Eigen::MatrixX3d& P, const Eigen::MatrixX3d& N, const Eigen::MatrixX3d& C,
+                    std::string name, std::int64_t chunk_points = 65536);
+  bool next(CloudChunk& chunk) override;
+  void rewind() override { next_ = 0; }
+  const std::string& name() const override { return name_; }
+
+ private:
+  const Eigen::MatrixX3d &P_, &N_, &C_;
+  std::string name_;
+  std::int64_t chunk_points_;
+  Eigen::Index next_ = 0;
+};
+
 /// Options of CloudChunkReader.
 struct StreamReaderOptions {
   /// Points per chunk (>= 1). Default 65536 (1.5 MB of positions per chunk).

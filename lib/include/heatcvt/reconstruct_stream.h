@@ -58,6 +58,11 @@ struct StreamOptions {
   /// The flying-pixel rule applied to an organised PCD file (flying_pixels.h; read_cloud applies
   /// the same). Default on; neighbour_distance_ratio = 0 keeps every pixel.
   FlyingPixelOptions flying_pixels;
+  /// The refit of quantised depth (depth_steps.h) of an organised PCD file (a depth frame, whose
+  /// size its sensor bounds): where it is enabled, such a file is read whole as read_cloud() does
+  /// (flying pixels, clean-up, the refit) and then streamed from memory (path version only).
+  /// Unorganised files are streamed as they are. Default on.
+  DepthStepOptions depth_steps;
   /// The summary's reconstruction stops the CVT's surface Lloyd once the mean site move is below
   /// this · site spacing (ReconstructionOptions::surface_lloyd_mean_tolerance). At tens of
   /// thousands of sites the max-move rule never stops it (a few sites at folds keep swapping
@@ -94,11 +99,12 @@ struct StreamedReconstruction {
   PointCloud cloud;
   bool summarised = false;       ///< true: voxel means; false: the raw points
   double voxel_size = 0;         ///< of the summary (0 when not summarised)
-  std::int64_t points_read = 0;  ///< points handed out by the source (one pass)
+  std::int64_t points_read = 0;  ///< points handed out by the source (one pass); a depth frame read whole: its file's points
   /// Passes over the source: 1 or 2, and one more where dense pieces of the summary
   /// (ReconstructionOptions::dense_pieces) are read again into summaries of their own.
   int passes = 0;
   std::int64_t flying_pixels_removed = 0;  ///< by StreamOptions::flying_pixels (path version only)
+  DepthStepReport depth_steps;  ///< by StreamOptions::depth_steps (path version only)
   /// Noise σ of the cloud in requested site spacings (StreamOptions::max_noise_spacings; 0 when
   /// not estimated: the raw path, an explicit voxel size, or the limit off).
   double noise_spacings = 0;

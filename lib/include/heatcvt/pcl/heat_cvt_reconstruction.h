@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "heatcvt/depth_steps.h"
 #include "heatcvt/flying_pixels.h"
 #include "heatcvt/reconstruct.h"
 
@@ -31,9 +32,10 @@ namespace heatcvt {
 /// Input: the points of `setInputCloud()` restricted to `setIndices()` (all points if none
 /// given). An organised cloud (height > 1, a depth-camera frame) first loses its flying pixels
 /// (flying_pixels.h, ranges from the cloud's sensor_origin_; setFlyingPixels()). Points with a
-/// NaN/inf coordinate are skipped and exact duplicates merged (first occurrence kept), exactly as
-/// `cloud2mesh` does after reading a file, so the same points, options and seed give the same
-/// mesh as `cloud2mesh`.
+/// NaN/inf coordinate are skipped and exact duplicates merged (first occurrence kept), and the
+/// quantised depth of a depth frame is refitted (depth_steps.h, rays from sensor_origin_;
+/// setDepthSteps()), exactly as `cloud2mesh` does after reading a file, so the same points,
+/// options and seed give the same mesh as `cloud2mesh`.
 /// Normals and other fields of the input are not used by the reconstruction (it estimates its
 /// own normals).
 ///
@@ -143,6 +145,12 @@ class HeatCVTReconstruction : public pcl::SurfaceReconstruction<PointT> {
   void setFlyingPixels(const FlyingPixelOptions& options) { flying_ = options; }
   const FlyingPixelOptions& getFlyingPixels() const { return flying_; }
 
+  /// The refit of quantised depth (cloud2mesh --depth-steps). Default on; max_distinct_fraction
+  /// = 0 leaves the depth as it is. getDepthStepReport(): what the last reconstruction found.
+  void setDepthSteps(const DepthStepOptions& options) { depth_steps_ = options; }
+  const DepthStepOptions& getDepthSteps() const { return depth_steps_; }
+  const DepthStepReport& getDepthStepReport() const { return depth_report_; }
+
   /// All options at once (the same struct as reconstruct_surface() and cloud2mesh).
   void setOptions(const ReconstructionOptions& options) { options_ = options; }
   const ReconstructionOptions& getOptions() const { return options_; }
@@ -175,6 +183,8 @@ class HeatCVTReconstruction : public pcl::SurfaceReconstruction<PointT> {
   const typename PointCloud::ConstPtr no_input_{new PointCloud};
   ReconstructionOptions options_;
   FlyingPixelOptions flying_;
+  DepthStepOptions depth_steps_;
+  DepthStepReport depth_report_;
   ReconstructionCallback progress_;
   ReconstructionResult result_;
 };

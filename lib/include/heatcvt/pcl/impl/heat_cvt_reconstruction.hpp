@@ -46,6 +46,7 @@ bool HeatCVTReconstruction<PointT>::run(pcl::PointCloud<PointT>& points, std::ve
   points.height = 1;
   polygons.clear();
   result_ = ReconstructionResult();
+  depth_report_ = DepthStepReport();
   if (input_ == no_input_) {
     PCL_ERROR("[heatcvt::HeatCVTReconstruction::%s] No input cloud given (setInputCloud).\n", method);
     return false;
@@ -93,7 +94,12 @@ bool HeatCVTReconstruction<PointT>::run(pcl::PointCloud<PointT>& points, std::ve
       PCL_ERROR("[heatcvt::HeatCVTReconstruction::%s] Too many sites: %d requested but only %ld usable points.\n",
                 method, options_.sites, static_cast<long>(usable));
     } else {
-      result_ = reconstruct_surface(clean.P, options_, progress_);
+      // Quantised depth refitted in the sensor's frame, as read_cloud() does.
+      Eigen::MatrixX3d P = clean.P;
+      DepthStepOptions depth = depth_steps_;
+      depth.threads = options_.threads;
+      depth_report_ = smooth_depth_steps(P, input_->sensor_origin_.template head<3>().template cast<double>(), depth);
+      result_ = reconstruct_surface(P, options_, progress_);
       const TriangleMesh& mesh = result_.mesh;
       // Attributes: from the nearest input point (search method; a kd-tree over the indexed input
       // unless the user set one), normals from the mesh.
