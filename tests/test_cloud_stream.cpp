@@ -79,12 +79,14 @@ bool identical(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b) {
 
 // The property: streaming with chunk sizes 1, 7 and 1000, then read_cloud's clean-up, gives
 // exactly read_cloud's cloud (positions, normals, colours, order).
-// The reader hands out every point of the file: read_cloud without its flying-pixel rule
-// (test_flying_pixels.cpp compares the filtered stream with read_cloud's defaults).
+// The reader hands out every point of the file as it is: read_cloud without its flying-pixel rule
+// and its refit of quantised depth (test_flying_pixels.cpp compares the filtered stream with
+// read_cloud, test_depth_steps.cpp the refit).
 void expect_stream_matches_read_cloud(const std::string& path) {
   CloudReadReport rep;
   CloudReadOptions every_pixel;
   every_pixel.flying_pixels.neighbour_distance_ratio = 0;
+  every_pixel.depth_steps.max_distinct_fraction = 0;
   const PointCloud whole = read_cloud(path, &rep, every_pixel);
   for (std::int64_t chunk : {1, 7, 1000}) {
     PointCloud streamed = stream_all(path, chunk);

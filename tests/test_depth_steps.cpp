@@ -172,6 +172,11 @@ TEST(DepthSteps, CloudsWithContinuousDepthOrInAWorldFrameAreLeftAsTheyAre) {
   // ... or wider than a camera's field of view from it.
   const Eigen::Vector3d beside(40, 0, 0);
   EXPECT_FALSE(depth_steps_of(quantised, beside).quantised);
+  // ... or millions of metres from it, as UTM coordinates are (a view from afar spanning a few
+  // thousandths of a degree, its steps the float precision there).
+  const Eigen::MatrixX3d far = quantised.rowwise() + Eigen::RowVector3d(0, 0, 5e6);
+  ASSERT_LT(static_cast<double>(depth_steps_of(far, origin).levels), 0.05 * static_cast<double>(far.rows()));
+  EXPECT_FALSE(depth_steps_of(far, origin).quantised);
   // Off by the option.
   DepthStepOptions off;
   off.max_distinct_fraction = 0;
@@ -209,6 +214,8 @@ TEST(DepthSteps, BadOptionsAndInputsAreRefused) {
   refused([](DepthStepOptions& o) { o.start_neighbours = 200; });
   refused([](DepthStepOptions& o) { o.max_neighbours = 5000; });
   refused([](DepthStepOptions& o) { o.max_move_steps = 0; });
+  refused([](DepthStepOptions& o) { o.min_view_extent_deg = -1; });
+  refused([](DepthStepOptions& o) { o.min_relative_step = 1; });
   refused([](DepthStepOptions& o) { o.window_steps = std::numeric_limits<double>::infinity(); });
   Eigen::MatrixX3d bad = P;
   bad(3, 1) = std::nan("");
@@ -247,7 +254,7 @@ TEST(DepthSteps, ReadingAndStreamingADepthFrameRefitIt) {
 TEST(DepthSteps, TheSharedDepthFramesAreRefittedAndWorldFrameScansAreNot) {
   // The Kinect and stereo frames of ../shared/data/clouds (organised or not) are depth frames in
   // their sensor's frame; the lidar tiles and room scans, whose coordinates are rounded in a world
-  // frame, and the scans with continuous depth are not.
+  // frame or held in float far from the origin, and the scans with continuous depth are not.
   for (const char* name : {"pcl_five_people.pcd", "pcl_office1.pcd", "pcldata_capture0001.pcd", "pcl_milk.pcd",
                            "pcl_table_scene_mug_stereo_textured.pcd"}) {
     SCOPED_TRACE(name);
@@ -260,6 +267,7 @@ TEST(DepthSteps, TheSharedDepthFramesAreRefittedAndWorldFrameScansAreNot) {
     EXPECT_LE(rep.depth_steps.mean_move_steps, 1.0);
   }
   for (const char* name : {"pcl_car6.pcd", "pcldata_min_cut_segmentation_tutorial.pcd", "pcldata_room_scan1.pcd",
+                           "pcldata_terrain_samp11-utm.pcd", "pcldata_terrain_CSite1_red2-utm.pcd",
                            "pcldata_biwi_face_model.pcd", "open3d_cloud_bin_0.pcd", "pcl_cturtle.pcd"}) {
     SCOPED_TRACE(name);
     CloudReadOptions off;

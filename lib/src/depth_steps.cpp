@@ -5,17 +5,14 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "heatcvt/errors.h"
-#include "heatcvt/normals.h"
 #include "heatcvt/parallel.h"
 
 namespace heatcvt {
 namespace {
-
-// Queries of one kNN call: bounds the neighbour table to chunk × max_neighbours entries.
-constexpr Eigen::Index kQueryChunk = 65536;
 
 // The distinct values of column `axis` of P, ascending.
 std::vector<double> levels_of(const Eigen::MatrixX3d& P, int axis) {
@@ -67,34 +64,31 @@ struct Frame {
   }
 };
 
-// The neighbours (a prefix of the row `nn`) on the point's surface: the smallest window that
-// spans min_levels levels with min_fit_points points, or the largest one. `r` gets the image
-// distance of the window's last neighbour.
-std::vector<int> fit_window(const Frame& f, Eigen::Index i, const int* nn, int k_max, double s,
-                            const DepthStepOptions& o, double& r) {
+// The fit window of point i among its k nearest image neighbours `nn`: those on its surface
+// (within window_steps steps of its depth). Whether it spans min_levels levels with min_fit_points
+// points goes to `enough`; `r` gets the image distance of the k-th neighbour.
+std::vector<int> fit_window(const Frame& f, Eigen::Index i, const int* nn, int k, double s, const DepthStepOptions& o,
+                            bool& enough, double& r) {
   std::vector<int> window;
-  for (int k = std::min(o.start_neighbours, k_max);; k = std::min(2 * k, k_max)) {
-    window.clear();
-    std::vector<double> seen;
-    for (int q = 0; q < k; ++q) {
-      const int j = nn[q];
-      if (std::abs(f.depth(j) - f.depth(i)) > o.window_steps * s) continue;
-      window.push_back(j);
-      if (std::find(seen.begin(), seen.end(), f.P(j, f.axis)) == seen.end()) seen.push_back(f.P(j, f.axis));
-    }
-    r = (f.UV.row(nn[k - 1]) - f.UV.row(i)).norm();
-    const bool enough = static_cast<int>(seen.size()) >= o.min_levels && static_cast<int>(window.size()) >= o.min_fit_points;
-    if (enough || k == k_max) return window;
+  std::vector<double> seen;
+  for (int q = 0; q < k; ++q) {
+    const int j = nn[q];
+    if (std::abs(f.depth(j) - f.depth(i)) > o.window_steps * s) continue;
+    window.push_back(j);
+    if (static_cast<int>(seen.size()) < o.min_levels && std::find(seen.begin(), seen.end(), f.P(j, f.axis)) == seen.end())
+      seen.push_back(f.P(j, f.axis));
   }
+  r = (f.UV.row(nn[k - 1]) - f.UV.row(i)).norm();
+  enough = static_cast<int>(seen.size()) >= o.min_levels && static_cast<int>(window.size()) >= o.min_fit_points;
+  return window;
 }
 
-// The refitted depth of point i (the file comment of depth_steps.h), or its own where the fit is
-// degenerate. Inverse depth w = a + b·u' + c·v' with (u', v') the image offsets over r.
-double refitted_depth(const Frame& f, Eigen::Index i, const int* nn, int k_max, const DepthStepOptions& o) {
-  const double d = f.depth(i), s = f.step_of(i);
-  if (!(s > 0)) return d;
-  double r = 0;
-  const std::vector<int> window = fit_window(f, i, nn, k_max, s, o, r);
+// The refitted depth of point i over `window` (the file comment of depth_steps.h), or its own
+// where the fit is degenerate. Inverse depth w = a + b·u' + c·v' with (u', v') the image offsets
+// over r.
+double refitted_depth(const Frame& f, Eigen::Index i, const std::vector<int>& window, double r, double s,
+                      const DepthStepOptions& o) {
+  const double d = f.depth(i);
   if (static_cast<int>(window.size()) < o.min_fit_points || !(r > 0)) return d;
   std::vector<char> use(window.size(), 1);
   double fit = 1 / d;
@@ -127,12 +121,111 @@ double refitted_depth(const Frame& f, Eigen::Index i, const int* nn, int k_max, 
   return std::clamp(1 / fit, d - o.max_move_steps * s, d + o.max_move_steps * s);
 }
 
+// Exact nearest neighbours in the image plane: a uniform grid of cells over (u, v) holding about
+// kPointsPerCell points each, searched ring by ring around the query's cell until the k nearest
+// are closer than the ring's inner edge. Ties are ordered by index.
+class ImageGrid {
+ public:
+  static constexpr double kPointsPerCell = 4;
+  explicit ImageGrid(const Eigen::MatrixX3d& UV) : UV_(UV) {
+    const Eigen::Index n = UV.rows();
+    lo_ = UV.colwise().minCoeff().head<2>().transpose();
+    const Eigen::Vector2d span = (UV.colwise().maxCoeff().head<2>().transpose() - lo_).cwiseMax(1e-300);
+    cell_ = std::sqrt(span.x() * span.y() * kPointsPerCell / static_cast<double>(n));
+    cell_ = std::max({cell_, span.maxCoeff() / static_cast<double>(n), 1e-300});
+    nu_ = static_cast<int>(std::min<double>(n, std::floor(span.x() / cell_))) + 1;
+    nv_ = static_cast<int>(std::min<double>(n, std::floor(span.y() / cell_))) + 1;
+    std::vector<int> count(static_cast<size_t>(nu_) * nv_ + 1, 0);
+    for (Eigen::Index i = 0; i < n; ++i) ++count[cell_of(i) + 1];
+    for (size_t c = 1; c < count.size(); ++c) count[c] += count[c - 1];
+    start_ = count;
+    items_.resize(static_cast<size_t>(n));
+    for (Eigen::Index i = 0; i < n; ++i) items_[static_cast<size_t>(count[cell_of(i)]++)] = static_cast<int>(i);
+  }
+  // The k nearest points of row i (itself first), into `out`.
+  void nearest(Eigen::Index i, int k, std::vector<std::pair<double, int>>& found, std::vector<int>& out) const {
+    const int cu = column(UV_(i, 0)), cv = row(UV_(i, 1));
+    found.clear();
+    for (int r = 0;; ++r) {
+      for (int v = cv - r; v <= cv + r; ++v) {
+        if (v < 0 || v >= nv_) continue;
+        const bool edge_row = v == cv - r || v == cv + r;
+        for (int u = cu - r; u <= cu + r; u += edge_row ? 1 : 2 * std::max(r, 1)) {
+          if (u < 0 || u >= nu_) continue;
+          const size_t c = static_cast<size_t>(v) * nu_ + u;
+          for (int q = start_[c]; q < start_[c + 1]; ++q) {
+            const int j = items_[static_cast<size_t>(q)];
+            const double du = UV_(j, 0) - UV_(i, 0), dv = UV_(j, 1) - UV_(i, 1);
+            found.emplace_back(du * du + dv * dv, j);
+          }
+        }
+      }
+      const bool all = r > nu_ && r > nv_;
+      if (static_cast<int>(found.size()) >= k) {
+        std::nth_element(found.begin(), found.begin() + (k - 1), found.end());
+        const double reach = r * cell_;
+        if (all || found[static_cast<size_t>(k - 1)].first <= reach * reach) break;
+      } else if (all) {
+        break;
+      }
+    }
+    const int m = std::min<int>(k, static_cast<int>(found.size()));
+    if (m < static_cast<int>(found.size())) std::nth_element(found.begin(), found.begin() + (m - 1), found.end());
+    std::sort(found.begin(), found.begin() + m);
+    out.resize(static_cast<size_t>(m));
+    for (int q = 0; q < m; ++q) out[static_cast<size_t>(q)] = found[static_cast<size_t>(q)].second;
+  }
+
+ private:
+  int column(double u) const { return std::clamp(static_cast<int>((u - lo_.x()) / cell_), 0, nu_ - 1); }
+  int row(double v) const { return std::clamp(static_cast<int>((v - lo_.y()) / cell_), 0, nv_ - 1); }
+  size_t cell_of(Eigen::Index i) const { return static_cast<size_t>(row(UV_(i, 1))) * nu_ + column(UV_(i, 0)); }
+  const Eigen::MatrixX3d& UV_;
+  Eigen::Vector2d lo_;
+  double cell_ = 1;
+  int nu_ = 1, nv_ = 1;
+  std::vector<int> start_, items_;
+};
+
+// The refitted depth of every point: a window of start_neighbours image neighbours, doubled while
+// it is not enough, up to max_neighbours (most points need the first or the second).
+Eigen::VectorXd refitted_depths(const Frame& f, const DepthStepOptions& o) {
+  const Eigen::Index n = f.P.rows();
+  const int k_max = static_cast<int>(std::min<Eigen::Index>(o.max_neighbours, n));
+  const ImageGrid grid(f.UV);
+  Eigen::VectorXd depth(n);
+#pragma omp parallel num_threads(resolve_threads(o.threads))
+  {
+    std::vector<std::pair<double, int>> found;
+    std::vector<int> nn;
+#pragma omp for schedule(dynamic, 256)
+    for (Eigen::Index i = 0; i < n; ++i) {
+      depth[i] = f.depth(i);
+      const double s = f.step_of(i);
+      if (!(s > 0)) continue;
+      for (int k = std::min(o.start_neighbours, k_max);; k = std::min(2 * k, k_max)) {
+        grid.nearest(i, k, found, nn);
+        bool enough = false;
+        double r = 0;
+        const std::vector<int> window = fit_window(f, i, nn.data(), static_cast<int>(nn.size()), s, o, enough, r);
+        if (enough || k == k_max) {
+          depth[i] = refitted_depth(f, i, window, r, s, o);
+          break;
+        }
+      }
+    }
+  }
+  return depth;
+}
+
 }  // namespace
 
 void check_depth_step_options(const DepthStepOptions& o) {
   auto fail = [](const std::string& what) { throw InvalidInputError("depth steps: " + what); };
   if (!(o.max_distinct_fraction >= 0 && o.max_distinct_fraction <= 1)) fail("max_distinct_fraction must be in [0, 1]");
   if (!(o.max_view_angle_deg > 0 && o.max_view_angle_deg < 90)) fail("max_view_angle_deg must be in (0, 90)");
+  if (!(o.min_view_extent_deg >= 0 && o.min_view_extent_deg < 180)) fail("min_view_extent_deg must be in [0, 180)");
+  if (!(o.min_relative_step >= 0 && o.min_relative_step < 1)) fail("min_relative_step must be in [0, 1)");
   if (o.min_points < 3 || o.min_levels < 2 || o.min_fit_points < 3) fail("min_points, min_levels and min_fit_points must be >= 3, 2 and 3");
   if (o.start_neighbours < 3 || o.start_neighbours > o.max_neighbours || o.max_neighbours > 1024)
     fail("need 3 <= start_neighbours <= max_neighbours <= 1024");
@@ -153,22 +246,29 @@ DepthStepReport depth_steps_of(const Eigen::MatrixX3d& P, const Eigen::Vector3d&
   if (rep.distinct_fraction > o.max_distinct_fraction || rep.levels < 2) return rep;
   // In front of the sensor along the axis, within the field of view.
   const double max_tan = std::tan(o.max_view_angle_deg * M_PI / 180);
-  const Eigen::VectorXd d = P.col(rep.axis).array() - sensor[rep.axis];
-  const double sign = d[0] > 0 ? 1 : -1;
+  const double sign = P(0, rep.axis) - sensor[rep.axis] > 0 ? 1 : -1;
   for (Eigen::Index i = 0; i < P.rows(); ++i) {
     Eigen::Vector3d off = P.row(i).transpose() - sensor;
     const double along = sign * off[rep.axis];
     off[rep.axis] = 0;
     if (!(along > 0) || off.norm() > max_tan * along) return rep;
   }
-  rep.quantised = true;
+  const Eigen::MatrixX3d UV = image_coordinates(P, sensor, rep.axis);
+  const Eigen::RowVector3d extent = UV.colwise().maxCoeff() - UV.colwise().minCoeff();
+  if (extent.maxCoeff() < std::tan(o.min_view_extent_deg * M_PI / 180)) return rep;
   const std::vector<double> levels = levels_of(P, rep.axis), step = level_steps(levels);
-  std::vector<double> per_point(static_cast<size_t>(P.rows()));
-  for (Eigen::Index i = 0; i < P.rows(); ++i)
+  std::vector<double> per_point(static_cast<size_t>(P.rows())), depth(per_point.size());
+  for (Eigen::Index i = 0; i < P.rows(); ++i) {
     per_point[static_cast<size_t>(i)] =
         step[static_cast<size_t>(std::lower_bound(levels.begin(), levels.end(), P(i, rep.axis)) - levels.begin())];
-  std::nth_element(per_point.begin(), per_point.begin() + per_point.size() / 2, per_point.end());
-  rep.median_step = per_point[per_point.size() / 2];
+    depth[static_cast<size_t>(i)] = std::abs(P(i, rep.axis) - sensor[rep.axis]);
+  }
+  const size_t mid = per_point.size() / 2;
+  std::nth_element(per_point.begin(), per_point.begin() + mid, per_point.end());
+  std::nth_element(depth.begin(), depth.begin() + mid, depth.end());
+  if (!(per_point[mid] >= o.min_relative_step * depth[mid])) return rep;
+  rep.median_step = per_point[mid];
+  rep.quantised = true;
   return rep;
 }
 
@@ -178,30 +278,18 @@ DepthStepReport smooth_depth_steps(Eigen::MatrixX3d& P, const Eigen::Vector3d& s
   if (!rep.quantised) return rep;
   const std::vector<double> levels = levels_of(P, rep.axis), step = level_steps(levels);
   const Eigen::MatrixX3d UV = image_coordinates(P, sensor, rep.axis);
-  const int k_max = static_cast<int>(std::min<Eigen::Index>(o.max_neighbours, P.rows()));
   const Frame frame{P, UV, sensor, rep.axis, levels, step};
-  Eigen::VectorXd depth(P.rows()), moved_steps = Eigen::VectorXd::Zero(P.rows());
-  for (Eigen::Index first = 0; first < P.rows(); first += kQueryChunk) {
-    const Eigen::Index count = std::min(kQueryChunk, P.rows() - first);
-    // Row-major neighbour table of the chunk (the point itself first, ties by index).
-    const Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> nn =
-        nearest_neighbors_of(UV, UV.middleRows(first, count), k_max, o.threads);
-#pragma omp parallel for num_threads(resolve_threads(o.threads)) schedule(dynamic, 256)
-    for (Eigen::Index q = 0; q < count; ++q) {
-      const Eigen::Index i = first + q;
-      depth[i] = refitted_depth(frame, i, nn.row(q).data(), k_max, o);
-      const double s = frame.step_of(i);
-      if (s > 0) moved_steps[i] = std::abs(depth[i] - frame.depth(i)) / s;
-    }
-  }
+  const Eigen::VectorXd depth = refitted_depths(frame, o);
   // Each point moves along its ray: p ↦ sensor + (p − sensor) · d' / d.
+  double moved_steps = 0;
   for (Eigen::Index i = 0; i < P.rows(); ++i) {
     const double d = frame.depth(i);
     if (depth[i] == d) continue;
+    moved_steps += std::abs(depth[i] - d) / frame.step_of(i);
     P.row(i) = (sensor + (P.row(i).transpose() - sensor) * (depth[i] / d)).transpose();
     ++rep.points_moved;
   }
-  rep.mean_move_steps = rep.points_moved > 0 ? moved_steps.sum() / static_cast<double>(rep.points_moved) : 0;
+  rep.mean_move_steps = rep.points_moved > 0 ? moved_steps / static_cast<double>(rep.points_moved) : 0;
   return rep;
 }
 

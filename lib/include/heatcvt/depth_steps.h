@@ -10,9 +10,11 @@
 ///
 /// Detection (depth_steps_of()): the coordinate axis with the fewest distinct values holds at most
 /// max_distinct_fraction of the point count as distinct values, and every point lies in front of
-/// the sensor along that axis, within max_view_angle_deg of it. The cloud is then a depth frame in
-/// its own sensor frame. A cloud in a world frame (a registered or merged scan, a lidar tile whose
-/// coordinates are rounded) fails the second test and is left as it is.
+/// the sensor along that axis, within max_view_angle_deg of it, spanning min_view_extent_deg, with
+/// steps of at least min_relative_step of the depth. The cloud is then a depth frame in its own
+/// sensor frame. A cloud in a world frame (a registered or merged scan, a lidar tile whose
+/// coordinates are rounded or held in float far from the origin) fails one of these and is left as
+/// it is.
 ///
 /// Smoothing (smooth_depth_steps()): a pinhole camera maps a plane to an inverse depth that is
 /// linear in the image coordinates (u, v) = (x / z, y / z). Each point's inverse depth is
@@ -39,6 +41,14 @@ struct DepthStepOptions {
   /// Every point must lie within this angle of the depth axis, seen from the sensor: a camera's
   /// field of view. Default 75°.
   double max_view_angle_deg = 75;
+  /// ... and the cloud must span at least this angle in one image direction: a world frame with a
+  /// large offset (UTM coordinates, millions of metres from the origin) looks like a view from
+  /// afar, but spans a few thousandths of a degree. Default 1°.
+  double min_view_extent_deg = 1;
+  /// ... and the median step must be at least this fraction of the median depth: a camera's steps
+  /// are 10⁻⁴-10⁻² of the depth, while the float precision of far coordinates (0.5 m at 5·10⁶ m)
+  /// or their rounding in a world frame is far less. Default 10⁻⁵.
+  double min_relative_step = 1e-5;
   /// The fit window: the nearest points in the image, from start_neighbours and doubling up to
   /// max_neighbours, until the points on the same surface span min_levels levels and number at
   /// least min_fit_points. Defaults 16, 128, 3 and 12.
