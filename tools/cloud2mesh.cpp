@@ -129,6 +129,7 @@ cli::Json make_report(const std::string& cloud_path, const std::vector<std::stri
   j["depth_step_median"] = rr.depth_steps.median_step;
   j["depth_points_moved"] = static_cast<long>(rr.depth_steps.points_moved);
   j["depth_mean_move_steps"] = rr.depth_steps.mean_move_steps;
+  j["depth_steps_s"] = rr.depth_steps.seconds;
   j["points_denoised"] = res.points_denoised;
   j["points_stray"] = res.points_stray;
   j["points_voxel_removed"] = res.points_voxel_removed;
@@ -619,9 +620,9 @@ void print_depth_steps(const DepthStepReport& d) {
   if (!d.quantised) return;
   static const char* const axes[] = {"x", "y", "z"};
   std::printf("  depth steps: the %s depth of this frame takes %ld values (median step %g); %ld points refitted, "
-              "by %.2f steps on average (--depth-steps 0 keeps them)\n",
+              "by %.2f steps on average, in %.2f s (--depth-steps 0 keeps them)\n",
               axes[d.axis], static_cast<long>(d.levels), d.median_step, static_cast<long>(d.points_moved),
-              d.mean_move_steps);
+              d.mean_move_steps, d.seconds);
 }
 
 // Prints the summary of a run on stdout: points, times, the mesh, its quality and border, the checks.

@@ -3,6 +3,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <string>
 #include <utility>
@@ -274,8 +275,13 @@ DepthStepReport depth_steps_of(const Eigen::MatrixX3d& P, const Eigen::Vector3d&
 
 DepthStepReport smooth_depth_steps(Eigen::MatrixX3d& P, const Eigen::Vector3d& sensor, const DepthStepOptions& o) {
   if (!P.allFinite() || !sensor.allFinite()) throw InvalidInputError("depth steps: a NaN or infinite coordinate");
+  const auto started = std::chrono::steady_clock::now();
   DepthStepReport rep = depth_steps_of(P, sensor, o);
-  if (!rep.quantised) return rep;
+  const auto timed = [&] {
+    rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    return rep;
+  };
+  if (!rep.quantised) return timed();
   const std::vector<double> levels = levels_of(P, rep.axis), step = level_steps(levels);
   const Eigen::MatrixX3d UV = image_coordinates(P, sensor, rep.axis);
   const Frame frame{P, UV, sensor, rep.axis, levels, step};
@@ -290,7 +296,7 @@ DepthStepReport smooth_depth_steps(Eigen::MatrixX3d& P, const Eigen::Vector3d& s
     ++rep.points_moved;
   }
   rep.mean_move_steps = rep.points_moved > 0 ? moved_steps / static_cast<double>(rep.points_moved) : 0;
-  return rep;
+  return timed();
 }
 
 }  // namespace heatcvt

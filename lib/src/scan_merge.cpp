@@ -129,6 +129,7 @@ void add_depth_steps(DepthStepReport& total, const DepthStepReport& r) {
     total.mean_move_steps = (total.mean_move_steps * static_cast<double>(total.points_moved) +
                              r.mean_move_steps * static_cast<double>(r.points_moved)) / static_cast<double>(moved);
   total.points_moved = moved;
+  total.seconds += r.seconds;
   if (!total.quantised && r.quantised) {
     total.quantised = true;
     total.axis = r.axis;

@@ -80,6 +80,7 @@ struct DepthStepReport {
   double median_step = 0;       ///< median over the points of their level's step, input units
   std::int64_t points_moved = 0;  ///< points whose depth was refitted
   double mean_move_steps = 0;   ///< their mean move, in their level's steps
+  double seconds = 0;           ///< time of the detection and the refit
 };
 
 /// Detection alone (the file comment): whether the rows of P (finite), seen from `sensor`, are a
