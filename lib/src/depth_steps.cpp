@@ -235,16 +235,27 @@ void check_depth_step_options(const DepthStepOptions& o) {
     fail("window_steps, inlier_steps and max_move_steps must be finite and > 0");
 }
 
-DepthStepReport depth_steps_of(const Eigen::MatrixX3d& P, const Eigen::Vector3d& sensor, const DepthStepOptions& o) {
-  check_depth_step_options(o);
+namespace {
+
+// What the detection found, with the levels, their steps and the image coordinates the refit
+// goes on with (empty where the cloud is not a quantised depth frame).
+struct Detection {
   DepthStepReport rep;
-  if (!o.enabled() || P.rows() < o.min_points) return rep;
+  std::vector<double> levels, step;
+  Eigen::MatrixX3d UV;
+};
+
+Detection detect(const Eigen::MatrixX3d& P, const Eigen::Vector3d& sensor, const DepthStepOptions& o) {
+  check_depth_step_options(o);
+  Detection out;
+  DepthStepReport& rep = out.rep;
+  if (!o.enabled() || P.rows() < o.min_points) return out;
   for (int a = 0; a < 3; ++a) {
     const std::int64_t n = static_cast<std::int64_t>(levels_of(P, a).size());
     if (rep.axis < 0 || n < rep.levels) rep.axis = a, rep.levels = n;
   }
   rep.distinct_fraction = static_cast<double>(rep.levels) / static_cast<double>(P.rows());
-  if (rep.distinct_fraction > o.max_distinct_fraction || rep.levels < 2) return rep;
+  if (rep.distinct_fraction > o.max_distinct_fraction || rep.levels < 2) return out;
   // In front of the sensor along the axis, within the field of view.
   const double max_tan = std::tan(o.max_view_angle_deg * M_PI / 180);
   const double sign = P(0, rep.axis) - sensor[rep.axis] > 0 ? 1 : -1;
@@ -252,12 +263,15 @@ DepthStepReport depth_steps_of(const Eigen::MatrixX3d& P, const Eigen::Vector3d&
     Eigen::Vector3d off = P.row(i).transpose() - sensor;
     const double along = sign * off[rep.axis];
     off[rep.axis] = 0;
-    if (!(along > 0) || off.norm() > max_tan * along) return rep;
+    if (!(along > 0) || off.norm() > max_tan * along) return out;
   }
-  const Eigen::MatrixX3d UV = image_coordinates(P, sensor, rep.axis);
-  const Eigen::RowVector3d extent = UV.colwise().maxCoeff() - UV.colwise().minCoeff();
-  if (extent.maxCoeff() < std::tan(o.min_view_extent_deg * M_PI / 180)) return rep;
-  const std::vector<double> levels = levels_of(P, rep.axis), step = level_steps(levels);
+  out.UV = image_coordinates(P, sensor, rep.axis);
+  const Eigen::RowVector3d extent = out.UV.colwise().maxCoeff() - out.UV.colwise().minCoeff();
+  if (extent.maxCoeff() < std::tan(o.min_view_extent_deg * M_PI / 180)) return out;
+  out.levels = levels_of(P, rep.axis);
+  out.step = level_steps(out.levels);
+  const std::vector<double>& levels = out.levels;
+  const std::vector<double>& step = out.step;
   std::vector<double> per_point(static_cast<size_t>(P.rows())), depth(per_point.size());
   for (Eigen::Index i = 0; i < P.rows(); ++i) {
     per_point[static_cast<size_t>(i)] =
@@ -267,24 +281,29 @@ DepthStepReport depth_steps_of(const Eigen::MatrixX3d& P, const Eigen::Vector3d&
   const size_t mid = per_point.size() / 2;
   std::nth_element(per_point.begin(), per_point.begin() + mid, per_point.end());
   std::nth_element(depth.begin(), depth.begin() + mid, depth.end());
-  if (!(per_point[mid] >= o.min_relative_step * depth[mid])) return rep;
+  if (!(per_point[mid] >= o.min_relative_step * depth[mid])) return out;
   rep.median_step = per_point[mid];
   rep.quantised = true;
-  return rep;
+  return out;
+}
+
+}  // namespace
+
+DepthStepReport depth_steps_of(const Eigen::MatrixX3d& P, const Eigen::Vector3d& sensor, const DepthStepOptions& o) {
+  return detect(P, sensor, o).rep;
 }
 
 DepthStepReport smooth_depth_steps(Eigen::MatrixX3d& P, const Eigen::Vector3d& sensor, const DepthStepOptions& o) {
   if (!P.allFinite() || !sensor.allFinite()) throw InvalidInputError("depth steps: a NaN or infinite coordinate");
   const auto started = std::chrono::steady_clock::now();
-  DepthStepReport rep = depth_steps_of(P, sensor, o);
+  const Detection found = detect(P, sensor, o);
+  DepthStepReport rep = found.rep;
   const auto timed = [&] {
     rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     return rep;
   };
   if (!rep.quantised) return timed();
-  const std::vector<double> levels = levels_of(P, rep.axis), step = level_steps(levels);
-  const Eigen::MatrixX3d UV = image_coordinates(P, sensor, rep.axis);
-  const Frame frame{P, UV, sensor, rep.axis, levels, step};
+  const Frame frame{P, found.UV, sensor, rep.axis, found.levels, found.step};
   const Eigen::VectorXd depth = refitted_depths(frame, o);
   // Each point moves along its ray: p ↦ sensor + (p − sensor) · d' / d.
   double moved_steps = 0;
