@@ -234,8 +234,7 @@ StreamedReconstruction reconstruct_streamed(const std::string& path, const Recon
                                             const CloudReadOptions& read, const StreamOptions& limits, bool quiet) {
   StreamOptions stream = limits;
   stream.flying_pixels = read.flying_pixels;
-  stream.depth_steps = read.depth_steps;
-  stream.depth_steps.threads = opt.threads;
+  stream.depth_steps = read.depth_steps;  // run on opt.threads (reconstruct_surface_streamed)
   // --points-per-site sizes the summary: the voxel points the CVT runs on, per site.
   if (opt.cvt_points_per_site > 0) stream.voxel.points_per_site = opt.cvt_points_per_site;
   std::unique_ptr<cli::Progress> reading;
