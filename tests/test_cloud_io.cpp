@@ -302,6 +302,10 @@ TEST(CloudIO, MissingUnknownEmptyAndMalformed) {
                              "property float z\nend_header\n";
   write_text(tmp.path("more.ply"), header + "0 0 0\n1 0 0\n0 1 0\n");
   expect_error<IOError>([&] { read_cloud(tmp.path("more.ply")); }, tmp.path("more.ply"), "more values than the header");
+  write_text(tmp.path("count.ply"), "ply\nformat ascii 1.0\nelement vertex 2147483647\nproperty float x\n"
+                                    "property float y\nproperty float z\nend_header\n0 0 0\n");
+  expect_error<IOError>([&] { read_cloud(tmp.path("count.ply")); }, tmp.path("count.ply"),
+                        "element 'vertex' count 2147483647 is out of range");
   write_text(tmp.path("blank_tail.ply"), header + "0 0 0\n1 0 0\n\n  \n");
   EXPECT_EQ(read_cloud(tmp.path("blank_tail.ply")).P.rows(), 2);
 }

@@ -12,6 +12,8 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "heatcvt/cloud_io.h"
@@ -344,4 +346,95 @@ TEST(CloudStream, BadInputsGiveReadCloudsErrors) {
   });
   EXPECT_EQ(face_message, error_of([&] { read_cloud(bad_index); }));
   EXPECT_NE(face_message.find("out of range"), std::string::npos) << face_message;
+}
+
+// Text clouds as spreadsheets and other tools export them: comma or semicolon separators (with or
+// without spaces), a first line of column names ("x y z", CloudCompare's "//X,Y,Z"), trailing
+// separators. Both readers give the points of the plain file; a field holding two numbers (a
+// decimal comma: "1,5 2,5 3,5"), an empty field and names after the first line are refused with
+// the line number.
+TEST(CloudStream, CommaSeparatedTextAndHeaderLinesReadLikePlainXyz) {
+  test::ScratchDir dir("cloud_stream_csv");
+  const std::string plain = dir.path("plain.xyz");
+  { std::ofstream(plain) << "0 0 0\n1.5 0 -2\n0 1e-3 4\n2 2 2\n"; }
+  const PointCloud expected = read_cloud(plain);
+  ASSERT_EQ(expected.P.rows(), 4);
+  const std::vector<std::pair<std::string, std::string>> variants = {
+      {"commas.xyz", "0,0,0\n1.5,0,-2\n0,1e-3,4\n2,2,2\n"},
+      {"comma_space.txt", "0, 0, 0\n1.5, 0, -2\n0, 1e-3, 4\n2, 2, 2,\n"},
+      {"semicolons.xyz", "x;y;z\n0;0;0\n1.5;0;-2\n0;1e-3;4\n2;2;2\n"},
+      {"cloudcompare.xyz", "//X,Y,Z\n0,0,0\n1.5,0,-2\n0,1e-3,4\n2,2,2\n"},
+      {"names.xyz", "x y z\n0 0 0 // origin\n1.5 0 -2\n0 1e-3 4\n2 2 2\n"},
+  };
+  for (const auto& [name, text] : variants) {
+    SCOPED_TRACE(name);
+    const std::string path = dir.path(name);
+    { std::ofstream(path) << text; }
+    const PointCloud whole = read_cloud(path);
+    EXPECT_TRUE(identical(whole.P, expected.P));
+    expect_stream_matches_read_cloud(path);
+  }
+  const std::vector<std::tuple<std::string, std::string, std::string>> bad = {
+      {"decimal_comma.xyz", "0 0 0\n1,5 2,5 3,5\n", "line 2: a field holds more than one number"},
+      {"empty_field.xyz", "0,0,0\n1,,3\n", "line 2: empty field"},
+      {"late_names.xyz", "0 0 0\nx y z\n", "line 2: malformed number 'x'"},
+  };
+  for (const auto& [name, text, problem] : bad) {
+    SCOPED_TRACE(name);
+    const std::string path = dir.path(name);
+    { std::ofstream(path) << text; }
+    const std::string message = error_of([&] { read_cloud(path); });
+    EXPECT_EQ(message.rfind(path + ": " + problem, 0), 0u) << message;
+    EXPECT_EQ(message, error_of([&] {
+                CloudChunkReader r(path);
+                CloudChunk c;
+                while (r.next(c)) {
+                }
+              }));
+  }
+}
+
+// PCL's padding fields '_' (a point type's alignment bytes, often several per point: PCL-ROS
+// lidar types) are skipped however many there are: the points are those of the same file without
+// padding, in both encodings.
+TEST(CloudStream, RepeatedPaddingFieldsOfAPcdAreSkipped) {
+  test::ScratchDir dir("cloud_stream_pad");
+  const PointCloud cloud = torus_cloud();
+  const long n = static_cast<long>(cloud.P.rows());
+  const std::string head = "# .PCD v0.7\nVERSION 0.7\nFIELDS x _ y z _ intensity _\nSIZE 4 1 4 4 1 4 1\n"
+                           "TYPE F U F F U F U\nCOUNT 1 4 1 1 1 1 12\nWIDTH " + std::to_string(n) +
+                           "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + std::to_string(n) + "\n";
+  const std::string binary = dir.path("padded_binary.pcd"), ascii = dir.path("padded_ascii.pcd");
+  {
+    std::ofstream out(binary, std::ios::binary);
+    out << head << "DATA binary\n";
+    const char pad[12] = {0};
+    for (long i = 0; i < n; ++i) {
+      const float x = static_cast<float>(cloud.P(i, 0)), y = static_cast<float>(cloud.P(i, 1)),
+                  z = static_cast<float>(cloud.P(i, 2)), intensity = 0.5f;
+      out.write(reinterpret_cast<const char*>(&x), 4);
+      out.write(pad, 4);
+      out.write(reinterpret_cast<const char*>(&y), 4);
+      out.write(reinterpret_cast<const char*>(&z), 4);
+      out.write(pad, 1);
+      out.write(reinterpret_cast<const char*>(&intensity), 4);
+      out.write(pad, 12);
+    }
+  }
+  {
+    std::ofstream out(ascii);
+    out << head << "DATA ascii\n";
+    out.precision(9);
+    for (long i = 0; i < n; ++i)
+      out << static_cast<float>(cloud.P(i, 0)) << " 0 0 0 0 " << static_cast<float>(cloud.P(i, 1)) << ' '
+          << static_cast<float>(cloud.P(i, 2)) << " 0 0.5 0 0 0 0 0 0 0 0 0 0 0 0\n";
+  }
+  PointCloud expected;
+  expected.P = cloud.P.cast<float>().cast<double>();
+  clean_cloud(expected);
+  for (const std::string& path : {binary, ascii}) {
+    SCOPED_TRACE(path);
+    EXPECT_TRUE(identical(read_cloud(path).P, expected.P));
+    expect_stream_matches_read_cloud(path);
+  }
 }

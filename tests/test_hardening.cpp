@@ -10,12 +10,14 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "heatcvt/atomic_file.h"
 #include "heatcvt/cloud_io.h"
+#include "heatcvt/cloud_stream.h"
 #include "heatcvt/errors.h"
 #include "heatcvt/heatcvt.h"
 #include "heatcvt/mesh_io.h"
@@ -112,7 +114,7 @@ TEST(Hardening, NanIndexInFloatFaceListIsAnError) {
   test::write_text_file(dir.path("frac.ply"), frac);
   EXPECT_THROW(read_mesh(dir.path("frac.ply")), IOError);
   test::write_text_file(dir.path("s.txt"), "0 0 0\n1 0 0\n");
-  expect_bad_input(test::run_tool("meshcvt", dir.path("nan.ply") + " -n 2 -o " + dir.path("o.obj")), "meshcvt",
+  expect_bad_input(test::run_tool("meshcvt", dir.path("nan.ply") + " -n 4 -o " + dir.path("o.obj")), "meshcvt",
                    dir.path("nan.ply"), dir, 3);
   expect_bad_input(test::run_tool("heatvoronoi", dir.path("nan.ply") + " --sites 2 -o " + dir.path("o.ply")),
                    "heatvoronoi", dir.path("nan.ply"), dir, 3);
@@ -137,7 +139,7 @@ TEST(Hardening, ZeroAreaMeshIsAnErrorForNaturalNeighbours) {
   // The mesh tools say so before any heat step.
   test::write_text_file(dir.path("point.obj"), "v 1 1 1\nv 1 1 1\nv 1 1 1\nv 1 1 1\nf 1 2 3\nf 1 3 4\n");
   for (const char* mesh : {"needle.obj", "point.obj"}) {
-    const auto r = test::run_tool("meshcvt", dir.path(mesh) + " -n 2 -o " + dir.path("o.obj"));
+    const auto r = test::run_tool("meshcvt", dir.path(mesh) + " -n 4 -o " + dir.path("o.obj"));
     expect_bad_input(r, "meshcvt", dir.path(mesh), dir, 3);
     EXPECT_NE(r.err.find("zero area"), std::string::npos) << r.err;
     expect_bad_input(test::run_tool("heatvoronoi", dir.path(mesh) + " --sites 2 -o " + dir.path("o.ply")), "heatvoronoi",
@@ -456,6 +458,31 @@ TEST(Hardening, AnOutputThatIsNotARegularFileIsRefusedAndKept) {
   EXPECT_EQ(dir.entries(), 2) << "a temporary file was left behind";
   write_atomically(dir.path("plain.txt"), [](std::ostream& o) { o << "data"; });
   EXPECT_EQ(slurp(dir.path("plain.txt")), "data");
+}
+
+// An input that is a FIFO (opening one with no writer blocks for ever), directly or through a
+// symbolic link, or a device: every reader refuses it at once with an IOError naming the path.
+TEST(Hardening, AnInputThatIsNotARegularFileIsRefusedWithoutOpeningIt) {
+  test::ScratchDir dir("hard");
+  const std::string fifo_cloud = dir.path("fifo.xyz"), fifo_mesh = dir.path("fifo.obj"), link = dir.path("link.pcd");
+  ASSERT_EQ(::mkfifo(fifo_cloud.c_str(), 0600), 0);
+  ASSERT_EQ(::mkfifo(fifo_mesh.c_str(), 0600), 0);
+  fs::create_symlink(fifo_cloud, link);
+  const auto expect_refused = [](const std::string& path, const std::function<void()>& read) {
+    SCOPED_TRACE(path);
+    try {
+      read();
+      ADD_FAILURE() << "the read must be refused";
+    } catch (const IOError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(path + ": is not a regular file", 0), 0u) << e.what();
+    }
+  };
+  expect_refused(fifo_cloud, [&] { read_cloud(fifo_cloud); });
+  expect_refused(link, [&] { read_cloud(link); });
+  expect_refused(fifo_cloud, [&] { CloudChunkReader reader(fifo_cloud); });
+  expect_refused(fifo_mesh, [&] { read_mesh(fifo_mesh); });
+  ASSERT_TRUE(fs::is_character_file("/dev/zero"));
+  expect_refused("/dev/zero", [&] { read_mesh("/dev/zero"); });
 }
 
 TEST(Hardening, TransactionCommitsAllOrNothing) {

@@ -287,16 +287,13 @@ TEST(MeshcvtTool, AnOutputOffTheCountSaysWhy) {
 // the file, exit 1 and no output file, instead of a mesh of vertices alone.
 TEST(MeshcvtTool, NoTriangleIsAnErrorWithNoOutput) {
   test::ScratchDir dir("meshcvt");
-  const std::string sphere = dir.path("sphere.obj"), out = dir.path("out.obj");
-  const TriangleMesh ico = test::icosphere(2);
-  write_mesh(sphere, ico.V, ico.F);
-  for (const auto& [in, sites] : {std::make_pair(sphere, 1), std::make_pair(test::data_path("meshes/torus.obj"), 4)}) {
-    SCOPED_TRACE(in);
-    const auto r = test::run_tool("meshcvt", in + " -n " + std::to_string(sites) + " -o " + out);
-    EXPECT_EQ(r.exit_code, 1) << r.err;
-    EXPECT_NE(r.err.find("meshcvt: error: " + in + ": no triangle could be made"), std::string::npos) << r.err;
-    EXPECT_FALSE(std::ifstream(out).good()) << "no output may be written";
-  }
+  const std::string out = dir.path("out.obj");
+  // Four sites on a torus: their cells are bands around it, whose dual has no triangle.
+  const std::string in = test::data_path("meshes/torus.obj");
+  const auto r = test::run_tool("meshcvt", in + " -n 4 -o " + out);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("meshcvt: error: " + in + ": no triangle could be made"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::ifstream(out).good()) << "no output may be written";
 }
 
 TEST(MeshcvtTool, MissingFile) {
@@ -309,7 +306,7 @@ TEST(MeshcvtTool, MissingFile) {
 TEST(MeshcvtTool, UnknownFormat) {
   test::ScratchDir dir("meshcvt");
   test::write_text_file(dir.path("mesh.xyzw"), kTetra);
-  test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", dir.path("mesh.xyzw") + " -n 3 -o " + dir.path("o.ply")),
+  test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", dir.path("mesh.xyzw") + " -n 4 -o " + dir.path("o.ply")),
                             {dir.path("mesh.xyzw")}, dir, 1);
 }
 
@@ -324,15 +321,15 @@ TEST(MeshcvtTool, BrokenFiles) {
   // An OBJ face naming a vertex that does not exist.
   test::write_text_file(dir.path("bad_index.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
   test::expect_tool_failure("meshcvt",
-                            test::run_tool("meshcvt", dir.path("bad_index.obj") + " -n 2 -o " + dir.path("o.ply")),
+                            test::run_tool("meshcvt", dir.path("bad_index.obj") + " -n 4 -o " + dir.path("o.ply")),
                             {dir.path("bad_index.obj")}, dir, 2);
   // Text where numbers should be.
   test::write_text_file(dir.path("words.off"), "OFF\nthree four five\n");
-  test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", dir.path("words.off") + " -n 2 -o " + dir.path("o.ply")),
+  test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", dir.path("words.off") + " -n 4 -o " + dir.path("o.ply")),
                             {dir.path("words.off")}, dir, 3);
   // An empty file.
   test::write_text_file(dir.path("empty.obj"), "");
-  test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", dir.path("empty.obj") + " -n 2 -o " + dir.path("o.ply")),
+  test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", dir.path("empty.obj") + " -n 4 -o " + dir.path("o.ply")),
                             {dir.path("empty.obj")}, dir, 4);
 }
 
@@ -345,31 +342,32 @@ TEST(MeshcvtTool, BadOptions) {
     test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", base + args), {needle}, dir, 1);
   };
   fails("-n 0", "--sites");
+  fails("-n 3", "at least 4");  // no closed dual triangulation has fewer vertices
   fails("-n abc", "abc");
   fails("-n 5 --min-vertices-per-site 0", "exceed");  // more sites than the 4 vertices, refinement off
-  fails("-n 3 --min-vertices-per-site -1", "--min-vertices-per-site");
-  fails("-n 3 -i -1", "--iterations");
-  fails("-n 3 --tolerance -1", "--tolerance");
-  fails("-n 3 --anisotropy -0.5", "--anisotropy");
-  fails("-n 3 --adaptive -1", "--adaptive");
-  fails("-n 3 --adaptive 3", "--adaptive");
-  fails("-n 3 --adaptive 1 --size-ratio 0.5", "--size-ratio");
-  fails("-n 3 --t-coef 0", "--t-coef");
-  fails("-n 3 --t-coef 1e10", "--t-coef");
-  fails("-n 3 --threads -1", "--threads");
-  fails("-n 3 --threads 1000000", "--threads");
-  fails("-n 3 --relaxation 2", "--relaxation");
-  fails("-n 3 --target-phi-m 70", "--target-phi-m");
-  fails("-n 3 --init sideways", "--init");
-  fails("-n 3 --bogus", "bogus");
-  fails("-n 3 --crease-angle 0", "--crease-angle");
-  fails("-n 3 --crease-angle 180", "--crease-angle");
-  test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", dir.path("t.obj") + " -n 3 -o " + dir.path("o.xyz")),
+  fails("-n 4 --min-vertices-per-site -1", "--min-vertices-per-site");
+  fails("-n 4 -i -1", "--iterations");
+  fails("-n 4 --tolerance -1", "--tolerance");
+  fails("-n 4 --anisotropy -0.5", "--anisotropy");
+  fails("-n 4 --adaptive -1", "--adaptive");
+  fails("-n 4 --adaptive 3", "--adaptive");
+  fails("-n 4 --adaptive 1 --size-ratio 0.5", "--size-ratio");
+  fails("-n 4 --t-coef 0", "--t-coef");
+  fails("-n 4 --t-coef 1e10", "--t-coef");
+  fails("-n 4 --threads -1", "--threads");
+  fails("-n 4 --threads 1000000", "--threads");
+  fails("-n 4 --relaxation 2", "--relaxation");
+  fails("-n 4 --target-phi-m 70", "--target-phi-m");
+  fails("-n 4 --init sideways", "--init");
+  fails("-n 4 --bogus", "bogus");
+  fails("-n 4 --crease-angle 0", "--crease-angle");
+  fails("-n 4 --crease-angle 180", "--crease-angle");
+  test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", dir.path("t.obj") + " -n 4 -o " + dir.path("o.xyz")),
                             {"o.xyz"}, dir, 1);
   test::expect_tool_failure("meshcvt",
-                            test::run_tool("meshcvt", dir.path("t.obj") + " -n 3 -o " + dir.path("missing/o.ply")),
+                            test::run_tool("meshcvt", dir.path("t.obj") + " -n 4 -o " + dir.path("missing/o.ply")),
                             {"missing"}, dir, 1);
-  test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", dir.path("t.obj") + " -n 3 -o " + dir.path("o.ply") +
+  test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", dir.path("t.obj") + " -n 4 -o " + dir.path("o.ply") +
                                                          " --report " + dir.path("r.txt")),
                             {"r.txt"}, dir, 1);
 }
@@ -377,7 +375,7 @@ TEST(MeshcvtTool, BadOptions) {
 TEST(MeshcvtTool, FailureLeavesAnExistingOutputUntouched) {
   test::ScratchDir dir("meshcvt");
   test::write_text_file(dir.path("o.ply"), "keep me");
-  test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", dir.path("nope.obj") + " -n 3 -o " + dir.path("o.ply")),
+  test::expect_tool_failure("meshcvt", test::run_tool("meshcvt", dir.path("nope.obj") + " -n 4 -o " + dir.path("o.ply")),
                             {dir.path("nope.obj")}, dir, 1);
   EXPECT_EQ(test::read_file(dir.path("o.ply")), "keep me");
 }

@@ -20,9 +20,11 @@
 #include <vector>
 
 #include "heatcvt/errors.h"
+#include "heatcvt/input_file.h"
 #include "heatcvt/mesh_io.h"
 #include "pcd_format.h"
 #include "text_tokens.h"
+#include "xyz_lines.h"
 
 namespace heatcvt {
 
@@ -39,8 +41,7 @@ std::string lower(std::string s) {
 
 void require_readable_file(const std::string& path) {
   std::error_code ec;
-  if (!fs::exists(path, ec)) fail(path, "file does not exist");
-  if (fs::is_directory(path, ec)) fail(path, "is a directory, not a file");
+  require_regular_file(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, "cannot open file for reading");
   if (fs::file_size(path, ec) == 0) fail(path, "file is empty");
@@ -70,22 +71,11 @@ PointCloud read_xyz(const std::string& path, CloudReadReport& rep) {
     std::string_view line(data.data() + pos, end - pos);
     pos = end + 1;
     ++line_no;
-    const size_t hash = line.find('#');
-    if (hash != std::string_view::npos) line = line.substr(0, hash);
     int cols = 0;
-    for_each_token(line, [&](std::string_view tok) {
-      double v = 0;
-      if (!parse_double(tok, v))
-        fail(path, "line " + std::to_string(line_no) + ": malformed number " + quote_excerpt(tok));
-      if (cols < 6) vals[cols] = v;
-      ++cols;
-    });
-    if (cols == 0) continue;
-    if (first_data_line && cols == 1 && vals[0] >= 0 && vals[0] == std::floor(vals[0])) {
-      first_data_line = false;  // a leading point count
-      continue;
-    }
+    const detail::XyzLineKind kind = detail::read_xyz_line(line, first_data_line, path, line_no, vals, cols);
+    if (kind == detail::XyzLineKind::blank) continue;
     first_data_line = false;
+    if (kind != detail::XyzLineKind::values) continue;  // a column-name line or a point count
     if (cols < 3)
       fail(path, "line " + std::to_string(line_no) + ": expected at least 3 numbers (x y z), found " + std::to_string(cols));
     xyz.insert(xyz.end(), vals, vals + 3);

@@ -13,6 +13,8 @@
 #include <utility>
 
 #include "cloud_stream_detail.h"
+#include "xyz_lines.h"
+#include "heatcvt/input_file.h"
 
 namespace heatcvt {
 
@@ -23,8 +25,7 @@ namespace fs = std::filesystem;
 ByteSource::ByteSource(const std::string& path, std::size_t buffer_bytes)
     : path_(path), buf_(std::max<std::size_t>(buffer_bytes, 4096)) {
   std::error_code ec;
-  if (!fs::exists(path, ec)) fail(path, "file does not exist");
-  if (fs::is_directory(path, ec)) fail(path, "is a directory, not a file");
+  require_regular_file(path);
   in_.open(path, std::ios::binary);
   if (!in_) fail(path, "cannot open file for reading");
   const auto sz = fs::file_size(path, ec);
@@ -104,7 +105,7 @@ class XyzDecoder : public CloudChunkReader::Decoder {
     format = "xyz";
     // Normals are carried when the first data line has >= 6 columns: look ahead to it.
     while (next_line()) {
-      if (cols_ == 0 || skip_count_line()) continue;
+      if (cols_ == 0) continue;
       pending_ = true;
       normals = cols_ >= 6;
       break;
@@ -116,7 +117,7 @@ class XyzDecoder : public CloudChunkReader::Decoder {
     while (n < max) {
       if (!pending_) {
         if (!next_line()) break;
-        if (cols_ == 0 || skip_count_line()) continue;
+        if (cols_ == 0) continue;
       }
       pending_ = false;
       if (cols_ < 3)
@@ -137,24 +138,11 @@ class XyzDecoder : public CloudChunkReader::Decoder {
   bool next_line() {
     if (!src.getline(line_)) return false;
     ++line_no_;
-    std::string_view line(line_);
-    const size_t hash = line.find('#');
-    if (hash != std::string_view::npos) line = line.substr(0, hash);
-    cols_ = 0;
-    for_each_token(line, [&](std::string_view tok) {
-      double v = 0;
-      if (!parse_double(tok, v))
-        fail(src.path(), "line " + std::to_string(line_no_) + ": malformed number " + quote_excerpt(tok));
-      if (cols_ < 6) vals_[cols_] = v;
-      ++cols_;
-    });
+    const detail::XyzLineKind kind = detail::read_xyz_line(line_, first_data_line_, src.path(), line_no_, vals_, cols_);
+    if (kind != detail::XyzLineKind::blank) first_data_line_ = false;
+    // Column names and a point count on the first line are not points.
+    if (kind != detail::XyzLineKind::values) cols_ = 0;
     return true;
-  }
-  // A single non-negative integer on the first data line is a point count, not a point.
-  bool skip_count_line() {
-    const bool first = first_data_line_;
-    first_data_line_ = false;
-    return first && cols_ == 1 && vals_[0] >= 0 && vals_[0] == std::floor(vals_[0]);
   }
 
   std::string line_;

@@ -22,6 +22,7 @@
 
 #include "heatcvt/atomic_file.h"
 #include "heatcvt/errors.h"
+#include "heatcvt/input_file.h"
 #include "ply_format.h"
 #include "text_tokens.h"
 
@@ -44,9 +45,7 @@ std::string lower(std::string s) {
 std::string extension_of(const std::string& path) { return lower(fs::path(path).extension().string()); }
 
 void require_existing_file(const std::string& path) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) fail(path, "file does not exist");
-  if (fs::is_directory(path, ec)) fail(path, "is a directory, not a file");
+  require_regular_file(path);
 }
 
 std::string read_whole_file(const std::string& path) {

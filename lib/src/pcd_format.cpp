@@ -46,8 +46,9 @@ PcdHeader read_pcd_header(const std::string& path, const std::function<bool(std:
     if (key == "FIELDS" || key == "COLUMNS") {
       std::string f;
       while (ls >> f) {
-        // A repeated name (two 'x' fields) would silently read one of them for both.
-        if (std::find(h.field_names.begin(), h.field_names.end(), f) != h.field_names.end())
+        // A repeated name (two 'x' fields) would silently read one of them for both. '_' is
+        // PCL's padding field (bytes skipped, never read), which may appear any number of times.
+        if (f != "_" && std::find(h.field_names.begin(), h.field_names.end(), f) != h.field_names.end())
           fail(path, "malformed PCD header: the field " + quote_excerpt(f) + " is listed twice");
         h.field_names.push_back(f);
       }

@@ -102,8 +102,10 @@ PlyHeader read_ply_header(const std::string& path, const std::function<bool(std:
     } else if (key == "element") {
       long long count = -1;
       if (tok.size() >= 2) require_printable_name(tok[1]);
-      if (tok.size() < 3 || !parse_int(tok[2], count) || count < 0 || count > kPlyMaxCount)
-        throw hdr("malformed element line");
+      if (tok.size() < 3 || !parse_int(tok[2], count)) throw hdr("malformed element line");
+      if (count < 0 || count > kPlyMaxCount)
+        throw hdr("element " + quote_excerpt(tok[1]) + " count " + std::string(tok[2]) + " is out of range (0 to " +
+                  std::to_string(kPlyMaxCount) + ")");
       h.elements.push_back({std::string(tok[1]), count, {}});
     } else if (key == "property") {
       if (h.elements.empty()) throw hdr("property before any element");

@@ -1,3 +1,4 @@
+#include "heatcvt/input_file.h"
 #include "heatcvt/scan_merge.h"
 
 #include <Eigen/Dense>
@@ -12,9 +13,7 @@ namespace heatcvt {
 namespace {
 
 std::string read_text(const std::string& path, const char* what) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw IOError(path + ": no such " + what);
-  if (std::filesystem::is_directory(path, ec)) throw IOError(path + ": is a directory, not a " + what);
+  require_regular_file(path, what);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IOError(path + ": cannot open the " + what);
   std::ostringstream s;

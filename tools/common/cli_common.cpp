@@ -11,6 +11,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "heatcvt/input_file.h"
 #include "heatcvt/atomic_file.h"
 #include "heatcvt/errors.h"
 #include "heatcvt/parallel.h"
@@ -201,8 +202,7 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 }
 
 std::vector<std::vector<double>> read_number_rows(const std::string& path, int columns, const std::string& what) {
-  if (std::filesystem::is_directory(path)) throw IOError(path + ": is a directory, not a " + what + " file");
-  if (!std::filesystem::exists(path)) throw IOError(path + ": the " + what + " file does not exist");
+  require_regular_file(path, what + " file");
   std::ifstream in(path);
   if (!in) throw IOError(path + ": cannot open the " + what + " file");
   std::vector<std::vector<double>> rows;

@@ -93,10 +93,12 @@ struct RemeshOptions {
   /// φm ≥ 51°, φmin ≥ 25° with no heat iteration; max_planck_decimated at 1,000 sites misses it at
   /// 5.3 per site and meets it at 21; knot1, fandisk, spot and torus meet it from 3.2–9.8.
   double min_vertices_per_site = 8.0;
-  /// At most this many midpoint subdivisions (each multiplies #F by 4); 0 also turns
+  /// At most this many midpoint subdivisions (each multiplies #F by 4; they stop as soon as
+  /// min_vertices_per_site is reached, so the cap only binds on inputs far coarser than the
+  /// count: a 2-face square reaches about 10^6 vertices, 130,000 sites); 0 also turns
   /// refine_surface() off, which otherwise refines to min_vertices_per_site vertices per site
-  /// whatever the input's count (a 12-face box reaches any count). Default 4.
-  int max_refinement_levels = 4;
+  /// whatever the input's count (a 12-face box reaches any count). Default 10.
+  int max_refinement_levels = 10;
   /// How the input is refined: by refine_surface() where it has needles (default), or always by
   /// midpoint subdivision (the triangles keep their shapes, needles included).
   enum class Refinement { splits_and_flips, midpoint };
