@@ -349,10 +349,10 @@ TEST(CloudStream, BadInputsGiveReadCloudsErrors) {
 }
 
 // Text clouds as spreadsheets and other tools export them: comma or semicolon separators (with or
-// without spaces), a first line of column names ("x y z", CloudCompare's "//X,Y,Z"), trailing
-// separators. Both readers give the points of the plain file; a field holding two numbers (a
-// decimal comma: "1,5 2,5 3,5"), an empty field and names after the first line are refused with
-// the line number.
+// without spaces), a first line of column names ("x y z", with units, after a byte-order mark;
+// CloudCompare's "//X,Y,Z" is a comment), trailing separators. Both readers give the points of the
+// plain file; decimal commas ("1,5 2,5 3,5", "1,5;2,5;3,5"), an empty field and names after the
+// first line are refused with the line number.
 TEST(CloudStream, CommaSeparatedTextAndHeaderLinesReadLikePlainXyz) {
   test::ScratchDir dir("cloud_stream_csv");
   const std::string plain = dir.path("plain.xyz");
@@ -365,6 +365,7 @@ TEST(CloudStream, CommaSeparatedTextAndHeaderLinesReadLikePlainXyz) {
       {"semicolons.xyz", "x;y;z\n0;0;0\n1.5;0;-2\n0;1e-3;4\n2;2;2\n"},
       {"cloudcompare.xyz", "//X,Y,Z\n0,0,0\n1.5,0,-2\n0,1e-3,4\n2,2,2\n"},
       {"names.xyz", "x y z\n0 0 0 // origin\n1.5 0 -2\n0 1e-3 4\n2 2 2\n"},
+      {"units.txt", "\xEF\xBB\xBFX (m); Y (m); Z (m)\n0;0;0\n1.5;0;-2\n0;1e-3;4\n2;2;2\n"},
   };
   for (const auto& [name, text] : variants) {
     SCOPED_TRACE(name);
@@ -376,6 +377,7 @@ TEST(CloudStream, CommaSeparatedTextAndHeaderLinesReadLikePlainXyz) {
   }
   const std::vector<std::tuple<std::string, std::string, std::string>> bad = {
       {"decimal_comma.xyz", "0 0 0\n1,5 2,5 3,5\n", "line 2: a field holds more than one number"},
+      {"decimal_comma.txt", "0;0;0\n1,5;2,5;3,5\n", "line 2: malformed number '1,5'"},
       {"empty_field.xyz", "0,0,0\n1,,3\n", "line 2: empty field"},
       {"late_names.xyz", "0 0 0\nx y z\n", "line 2: malformed number 'x'"},
   };

@@ -341,6 +341,10 @@ TEST(Reconstruct, BadInputsThrowWithAMessage) {
   expect_throw(P.topRows(20), o, "usable points");
   // Degenerate clouds: all points identical after merging duplicates -> too few points.
   expect_throw(Eigen::MatrixX3d::Ones(100, 3), o, "usable points");
+  // A voxel grid coarser than the cloud leaves too few points: the message names it.
+  ReconstructionOptions coarse = o;
+  coarse.voxel_size = 1.5;
+  expect_throw(P, coarse, "usable points after the voxel grid of size 1.5");
 }
 
 TEST(Reconstruct, SampleSurfaceAndDistanceHelpers) {

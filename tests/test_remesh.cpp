@@ -232,6 +232,23 @@ TEST(RemeshCvt, UpsamplesInputsOfAFewTrianglesToAnyCount) {
     }
 }
 
+// The refinement stops before a subdivision would pass max_refined_vertices, however many
+// vertices per site are asked for: the torus of 300 vertices is subdivided once (1,200), not
+// twice (4,800 > 3,000), and remeshed on that.
+TEST(RemeshCvt, TheRefinementKeepsWithinItsVertexBudget) {
+  const TriangleMesh input = test::torus(20, 15);
+  RemeshOptions opt;
+  opt.cvt.sites = 500;
+  opt.cvt.threads = 2;
+  opt.max_refined_vertices = 3000;
+  ASSERT_GT(opt.min_vertices_per_site * opt.cvt.sites, opt.max_refined_vertices);
+  const RemeshResult r = remesh_cvt(input, opt);
+  EXPECT_EQ(r.refinement_levels, 1);
+  EXPECT_EQ(r.cvt_vertices, 1200);
+  opt.max_refined_vertices = -1;
+  EXPECT_THROW(remesh_cvt(input, opt), InvalidInputError);
+}
+
 TEST(RemeshCvt, WithoutRefinementMoreSitesThanVerticesIsAnError) {
   const TriangleMesh input = test::torus(20, 15);
   RemeshOptions opt;

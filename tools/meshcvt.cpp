@@ -199,7 +199,7 @@ void check_settings(const Settings& s) {
   if (!(s.relaxation >= 1 && s.relaxation < 2)) throw InvalidInputError("--relaxation must be in [1, 2)");
   if (s.graph_lloyd < 0) throw InvalidInputError("--graph-lloyd must be >= 0");
   if (s.surface_lloyd < 0) throw InvalidInputError("--surface-lloyd must be >= 0");
-  // Fewer than 4 sites have no closed dual triangulation (a tetrahedron is the smallest).
+  // Fewer than 4 sites make at most one triangle (a tetrahedron is the smallest closed dual).
   if (s.sites < 4) throw InvalidInputError("--sites must be at least 4, got " + std::to_string(s.sites));
   if (s.iterations < 0) throw InvalidInputError("--iterations must be >= 0, got " + std::to_string(s.iterations));
   if (!(s.tolerance >= 0) || !std::isfinite(s.tolerance)) throw InvalidInputError("--tolerance must be >= 0");

@@ -193,10 +193,8 @@ CloudChunkReader::~CloudChunkReader() = default;
 void CloudChunkReader::open() {
   using namespace stream_detail;
   decoder_.reset();
-  std::error_code ec;
-  // The checks of read_cloud, in its order: existence before the extension.
-  if (!std::filesystem::exists(path_, ec)) fail(path_, "file does not exist");
-  if (std::filesystem::is_directory(path_, ec)) fail(path_, "is a directory, not a file");
+  // The checks of read_cloud, in its order: a regular file before the extension.
+  require_regular_file(path_);
   const std::string ext = lower(std::filesystem::path(path_).extension().string());
   if (ext != ".pcd" && ext != ".ply" && ext != ".xyz" && ext != ".pwn" && ext != ".txt")
     fail(path_, "unknown point-cloud format " + quote_excerpt(ext) + " (expected .pcd, .ply, .xyz, .pwn or .txt)");

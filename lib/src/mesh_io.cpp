@@ -44,12 +44,8 @@ std::string lower(std::string s) {
 
 std::string extension_of(const std::string& path) { return lower(fs::path(path).extension().string()); }
 
-void require_existing_file(const std::string& path) {
-  require_regular_file(path);
-}
-
 std::string read_whole_file(const std::string& path) {
-  require_existing_file(path);
+  require_regular_file(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, std::string("cannot open file: ") + std::strerror(errno));
   in.seekg(0, std::ios::end);
@@ -537,7 +533,7 @@ PolygonSoup read_polygon_soup(const std::string& path, MeshReadReport* report) {
   MeshReadReport local;
   MeshReadReport& rep = report ? *report : local;
   rep = MeshReadReport();
-  require_existing_file(path);  // before the extension: a directory is not "an unknown format"
+  require_regular_file(path);  // before the extension: a directory is not "an unknown format"
   const std::string ext = extension_of(path);
   if (ext != ".obj" && ext != ".off" && ext != ".ply" && ext != ".stl")
     fail(path, "unknown mesh format '" + ext + "' (expected .obj, .off, .ply or .stl)");

@@ -15,7 +15,7 @@
 namespace heatcvt::detail {
 
 struct PcdHeader {
-  std::vector<std::string> field_names;  // FIELDS (or COLUMNS), each name once
+  std::vector<std::string> field_names;  // FIELDS (or COLUMNS), each name once but '_' (padding)
   std::vector<long long> sizes;          // SIZE, one per field
   std::vector<long long> counts;         // COUNT, one per field, or empty (1 each)
   std::vector<char> kinds;               // TYPE entries ('?' for one that is not a single letter)

@@ -19,6 +19,7 @@
 #include <memory>
 #include <numeric>
 #include <random>
+#include <sstream>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -760,12 +761,20 @@ ReconstructionResult reconstruct_with_retries(const Eigen::MatrixX3d& P_in, cons
   const Eigen::MatrixX3d& P = cloud.P;
   const int n = static_cast<int>(P.rows());
   res.points_used = n;
+  // Where the clean-up's options took points away, the message says which did.
+  std::string after;
+  if (options.voxel_size > 0) {
+    std::ostringstream size;
+    size << options.voxel_size;
+    after += " after the voxel grid of size " + size.str();
+  }
+  if (options.denoise) after += std::string(after.empty() ? " after" : " and") + " the outlier removal";
   if (n < options.neighbors + 1)
-    throw InvalidInputError("reconstruct_surface: only " + std::to_string(n) + " usable points, need at least " +
-                            std::to_string(options.neighbors + 1) + " (neighbors + 1)");
+    throw InvalidInputError("reconstruct_surface: only " + std::to_string(n) + " usable points" + after +
+                            ", need at least " + std::to_string(options.neighbors + 1) + " (neighbors + 1)");
   if (options.sites > n)
     throw InvalidInputError("reconstruct_surface: " + std::to_string(options.sites) + " sites requested but only " +
-                            std::to_string(n) + " usable points");
+                            std::to_string(n) + " usable points" + after);
   CvtPoints cp = choose_cvt_points(P, options);
   res.points_cvt = static_cast<int>(cp.sub.size());
   stage.done("preprocess");

@@ -948,7 +948,7 @@ void refine_for_cvt(CvtInput& in, RemeshResult& out) {
       options.min_vertices_per_site > 0 && options.max_refinement_levels > 0 &&
       needle_area_share(in.mesh, options.needle_angle_deg) > options.needle_area_share) {
     SurfaceRefinementOptions o = options.refinement;
-    o.target_vertices = wanted;
+    o.target_vertices = std::min(wanted, static_cast<double>(options.max_refined_vertices));
     SurfaceRefinement r = refine_surface(in.mesh, o);
     if (r.splits + r.flips == 0) return;
     if (degenerate_face_count(r.mesh) <= degenerate_face_count(in.mesh)) {
@@ -958,8 +958,10 @@ void refine_for_cvt(CvtInput& in, RemeshResult& out) {
       return;
     }
   }
+  // A midpoint subdivision makes about 4 times the vertices; none goes beyond the budget.
   while (options.min_vertices_per_site > 0 && out.refinement_levels < options.max_refinement_levels &&
-         static_cast<double>(in.work().V.rows()) < wanted) {
+         static_cast<double>(in.work().V.rows()) < wanted &&
+         4.0 * static_cast<double>(in.work().V.rows()) <= options.max_refined_vertices) {
     in.refined = midpoint_subdivide(in.work());
     in.is_refined = true;
     ++out.refinement_levels;
@@ -975,6 +977,8 @@ void cvt_of_input(CvtInput& in, const CvtCallback& progress, RemeshResult& out) 
   if (sites < 1) throw InvalidInputError("remesh_cvt: the number of sites must be >= 1, got " + std::to_string(sites));
   if (!(options.min_vertices_per_site >= 0) || !std::isfinite(options.min_vertices_per_site))
     throw InvalidInputError("remesh_cvt: min_vertices_per_site must be a number >= 0");
+  if (options.max_refined_vertices < 0)
+    throw InvalidInputError("remesh_cvt: max_refined_vertices must be >= 0, got " + std::to_string(options.max_refined_vertices));
   if (options.max_refinement_levels < 0 || options.repair_rounds < 0 || options.repair_iterations < 0 ||
       !(options.max_repair_fraction >= 0))
     throw InvalidInputError(

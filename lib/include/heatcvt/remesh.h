@@ -99,6 +99,10 @@ struct RemeshOptions {
   /// refine_surface() off, which otherwise refines to min_vertices_per_site vertices per site
   /// whatever the input's count (a 12-face box reaches any count). Default 10.
   int max_refinement_levels = 10;
+  /// The refinement stops before it would pass this many vertices (memory: the Laplacian and its
+  /// factor grow with them), whatever min_vertices_per_site asks for; 4,000,000 is 8 per site for
+  /// 500,000 sites. Default 4,000,000.
+  int max_refined_vertices = 4000000;
   /// How the input is refined: by refine_surface() where it has needles (default), or always by
   /// midpoint subdivision (the triangles keep their shapes, needles included).
   enum class Refinement { splits_and_flips, midpoint };
