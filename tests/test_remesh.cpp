@@ -622,6 +622,45 @@ TEST(RemeshCvt, ANonManifoldInputGetsAManifoldRemesh) {
   EXPECT_NEAR(static_cast<double>(r.mesh.V.rows()), 3000, 0.02 * 3000);
 }
 
+// Three square fins on one edge (a non-manifold edge no manifold remesh can follow): the result
+// leaves a share of the fins out, measured independently as its area against the input's, and
+// the check "covers_input" fails on it; an icosphere's remesh covers it and passes.
+TEST(RemeshCvt, AResultThatLeavesPartOfTheInputOutFailsCoversInput) {
+  constexpr int n = 30;  // grid cells along each side of a fin
+  TriangleMesh fins;
+  fins.V.resize((n + 1) + 3 * (n + 1) * n, 3);
+  for (int i = 0; i <= n; ++i) fins.V.row(i) << static_cast<double>(i) / n, 0, 0;  // the shared edge
+  std::vector<Eigen::Vector3i> faces;
+  for (int k = 0; k < 3; ++k) {
+    const double angle = 2.0 * M_PI * k / 3.0;
+    const auto id = [&](int i, int j) { return j == 0 ? i : (n + 1) + k * (n + 1) * n + (j - 1) * (n + 1) + i; };
+    for (int j = 1; j <= n; ++j)
+      for (int i = 0; i <= n; ++i)
+        fins.V.row(id(i, j)) << static_cast<double>(i) / n, std::cos(angle) * j / n, std::sin(angle) * j / n;
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        faces.emplace_back(id(i, j), id(i + 1, j), id(i + 1, j + 1));
+        faces.emplace_back(id(i, j), id(i + 1, j + 1), id(i, j + 1));
+      }
+  }
+  fins.F.resize(static_cast<Eigen::Index>(faces.size()), 3);
+  for (std::size_t f = 0; f < faces.size(); ++f) fins.F.row(static_cast<Eigen::Index>(f)) = faces[f].transpose();
+  ASSERT_GT(describe_surface(fins).topology.nonmanifold_edges, 0);
+  const RemeshResult r = remesh_cvt(fins, remesh_options(300));
+  const double kept = surface_area(r.mesh.V, r.mesh.F) / surface_area(fins.V, fins.F);
+  ASSERT_LT(kept, 0.9) << "the precondition: the result leaves part of the fins out";
+  const MeshCheck* covers = r.checks.find("covers_input");
+  ASSERT_NE(covers, nullptr);
+  EXPECT_FALSE(covers->passed);
+  EXPECT_GT(r.uncovered_area_share, RemeshOptions{}.max_uncovered_area_share);
+  EXPECT_NE(covers->detail.find("of the input's area is farther than"), std::string::npos) << covers->detail;
+
+  const RemeshResult sphere = remesh_cvt(test::icosphere(4), remesh_options(500));
+  ASSERT_NE(sphere.checks.find("covers_input"), nullptr);
+  EXPECT_TRUE(sphere.checks.find("covers_input")->passed) << sphere.checks.find("covers_input")->detail;
+  EXPECT_LT(sphere.uncovered_area_share, 1e-9);
+}
+
 // armadillo_cgal at 1,000 sites: the stages' first result rounds the claws and toes off and is
 // refused for coverage (the output is then the dual or the fallback's, short of φmin 30° and
 // φm 52°). The second run with the tips held (tip_defect_deg) keeps them and meets every target:

@@ -421,6 +421,7 @@ cli::Json make_report(const Settings& s, const TriangleMesh& mesh, int input_gen
                      {"ring_dragged", res.coverage_ring_dragged}};
   rep["tips_held_deg"] = res.tips_held_deg;
   rep["refinement_levels"] = res.refinement_levels;
+  rep["uncovered_area_share"] = res.uncovered_area_share;
   rep["refinement_splits"] = res.refinement_splits;
   rep["refinement_flips"] = res.refinement_flips;
   rep["reoriented_faces"] = res.reoriented_faces;

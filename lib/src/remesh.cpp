@@ -11,6 +11,7 @@
 #include <memory>
 #include <mutex>
 #include <set>
+#include <sstream>
 #include <string>
 #include <system_error>
 #include <thread>
@@ -347,6 +348,44 @@ double farthest_input_vertex(const Eigen::MatrixX3d& samples, const TriangleMesh
   for (Eigen::Index v = 0; v < samples.rows(); ++v)
     farthest = std::max(farthest, (position(mesh.V, mesh.F, nearest[static_cast<std::size_t>(v)]) - samples.row(v).transpose()).norm());
   return farthest;
+}
+
+// The share of the area of `input` (each vertex a third of its faces' area) farther than
+// `distance` from `mesh`; 1 where `mesh` has no faces.
+double uncovered_area_share(const TriangleMesh& input, const TriangleMesh& mesh, double distance) {
+  if (mesh.F.rows() == 0) return 1.0;
+  Eigen::VectorXd weight = Eigen::VectorXd::Zero(input.V.rows());
+  for (Eigen::Index f = 0; f < input.F.rows(); ++f) {
+    const Eigen::Vector3d a = input.V.row(input.F(f, 0)), b = input.V.row(input.F(f, 1)), c = input.V.row(input.F(f, 2));
+    const double third = (b - a).cross(c - a).norm() / 6.0;
+    for (int k = 0; k < 3; ++k) weight(input.F(f, k)) += third;
+  }
+  const double total = weight.sum();
+  if (!(total > 0)) return 0.0;
+  const std::vector<SurfacePoint> nearest = closest_surface_points(mesh.V, mesh.F, input.V);
+  double uncovered = 0;
+  for (Eigen::Index v = 0; v < input.V.rows(); ++v)
+    if ((position(mesh.V, mesh.F, nearest[static_cast<std::size_t>(v)]) - input.V.row(v).transpose()).norm() > distance)
+      uncovered += weight(v);
+  return uncovered / total;
+}
+
+// The final check "covers_input" (RemeshOptions::max_uncovered_area_share) added to out.checks,
+// the share in out.uncovered_area_share; `input` in the frame of out.mesh. Not for a bare dual
+// that was not built.
+void add_input_coverage_check(const TriangleMesh& input, const RemeshOptions& options, RemeshResult& out) {
+  if (!options.cvt.build_dual) return;
+  const double spacing = site_spacing(input, options.cvt.sites);
+  out.uncovered_area_share = uncovered_area_share(input, out.mesh, options.covered_spacings * spacing);
+  MeshCheck c;
+  c.name = "covers_input";
+  c.passed = out.uncovered_area_share <= options.max_uncovered_area_share;
+  std::ostringstream detail;
+  detail.precision(3);
+  detail << out.uncovered_area_share * 100 << " % of the input's area is farther than " << options.covered_spacings
+         << " site spacings from the result";
+  c.detail = c.passed ? "ok" : detail.str();
+  out.checks.checks.push_back(c);
 }
 
 // The first check that `before` ran and passed and `after` does not pass; null where none.
@@ -977,6 +1016,8 @@ void cvt_of_input(CvtInput& in, const CvtCallback& progress, RemeshResult& out) 
   if (sites < 1) throw InvalidInputError("remesh_cvt: the number of sites must be >= 1, got " + std::to_string(sites));
   if (!(options.min_vertices_per_site >= 0) || !std::isfinite(options.min_vertices_per_site))
     throw InvalidInputError("remesh_cvt: min_vertices_per_site must be a number >= 0");
+  if (!(options.covered_spacings > 0) || !(options.max_uncovered_area_share >= 0 && options.max_uncovered_area_share <= 1))
+    throw InvalidInputError("remesh_cvt: covered_spacings must be > 0 and max_uncovered_area_share in [0, 1]");
   if (options.max_refined_vertices < 0)
     throw InvalidInputError("remesh_cvt: max_refined_vertices must be >= 0, got " + std::to_string(options.max_refined_vertices));
   if (options.max_refinement_levels < 0 || options.repair_rounds < 0 || options.repair_iterations < 0 ||
@@ -1106,6 +1147,7 @@ RemeshResult remesh_cvt(const TriangleMesh& mesh, const RemeshOptions& options, 
       out.stage_seconds.emplace_back("stages without the retries, not kept", seconds_since(t));
     }
   }
+  add_input_coverage_check(unit, options, out);
   for (Eigen::MatrixX3d* V : {&out.mesh.V, &out.cvt.positions, &out.cvt.diagram.V, &out.cvt.dual.V})
     if (V->rows() > 0) restore_frame(*V, frame);
   return out;

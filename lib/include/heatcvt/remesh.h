@@ -243,6 +243,13 @@ struct RemeshOptions {
   /// farther than from the mesh before (snapping a tip's vertex onto a short crease near the tip
   /// of an organic shape cuts the tip off). Default 1.1.
   double max_crease_gap_growth = 1.1;
+  /// The final check "covers_input": the share of the input's area (each input vertex weighs a
+  /// third of its faces' area) farther than covered_spacings site spacings (sqrt(input area /
+  /// sites)) from the result must not exceed max_uncovered_area_share. A remesh that passes every
+  /// other check can still leave surface out: fins of a non-manifold edge, a piece the dual lost.
+  /// Defaults 1 and 0.05.
+  double covered_spacings = 1.0;
+  double max_uncovered_area_share = 0.05;
 };
 
 /// Result of remesh_cvt().
@@ -255,6 +262,9 @@ struct RemeshResult {
   /// validate_triangle_mesh() of `mesh` against the input's topology; a dual without triangles
   /// gets the one failed check "has_triangles" instead.
   ValidationReport checks;
+  /// Share of the input's area farther than RemeshOptions::covered_spacings site spacings from
+  /// `mesh` (the check "covers_input"); 1 for a result without faces.
+  double uncovered_area_share = 0;
   SurfaceDescription input;          ///< topology of the input
   int iterations = 0;                ///< heat Lloyd iterations run (last CVT)
   bool converged = false;            ///< stopped by the tolerance (last CVT)
