@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Writes meshes built from formulas into a directory, as inputs for bench_remesh --dir that no
 file of ../shared/data resembles: thin parts, pole fans of slivers, sharp edges across a plate
-thinner than a cell, many holes, open sheets with corners, far-off coordinates, and meshes as CAD
-systems export them (float coordinates, flat faces fanned into needles, strips of slivers along
+thinner than a cell, many holes, open sheets with corners, far-off coordinates, meshes of a few
+triangles far coarser than any count (a square of 2, a box of 12), and meshes as CAD systems export
+them (float coordinates, flat faces fanned into needles, strips of slivers along
 cylinders, some faces written with the opposite orientation).
 
 Usage: scripts/make_shapes.py OUT_DIR [SHARED_MESHES_DIR]
@@ -245,6 +246,7 @@ def main():
         "cad_cylinder": cad_cylinder(), "cad_gear": cad_gear(), "cad_plate_hole": cad_plate_with_hole(),
         "cad_cylinder_flipped_faces": with_flipped_faces(cad_cylinder()),
         "cad_cylinder_dense": cad_cylinder(2048), "cad_beam": extruded([(0, 0), (10, 0), (10, 0.1), (0, 0.1)], 0.1),
+        "square_2_faces": grid(1, 1, lambda u, v: (u, v, 0.0)), "box_12_faces": box((1, 1, 1), 1.0),
     }
     if len(sys.argv) == 3:
         for name in ("spot.obj", "kitten.obj"):

@@ -202,8 +202,8 @@ TEST(RemeshCvt, UpsamplesAnIcosahedronToAValidSphere) {
 
 // Inputs far coarser than the count (a square of 2 triangles, a box of 12) are refined until
 // every cell has enough vertices under it, however many subdivisions that takes: at 300 and 3,000
-// sites each gives a valid remesh with the input's topology, the count within 2 % and no angle
-// below 25° (the floor every output of the library keeps; meshcvt aims at 30°, which the box's
+// sites each gives a valid remesh with the input's topology, its corners, the count within 2 % and
+// no angle below 25° (the floor every output of the library keeps; meshcvt aims at 30°, which the box's
 // corners, where three crease lines meet, miss at 3,000: 27.7°).
 TEST(RemeshCvt, UpsamplesInputsOfAFewTrianglesToAnyCount) {
   TriangleMesh square;
@@ -229,6 +229,10 @@ TEST(RemeshCvt, UpsamplesInputsOfAFewTrianglesToAnyCount) {
       EXPECT_NEAR(static_cast<double>(r.mesh.V.rows()), sites, 0.02 * sites);
       EXPECT_GE(r.quality.min_angle_deg, 25.0);
       EXPECT_LT(max_distance_to_surface(r.mesh.V, input), 1e-9);
+      // Every corner of the input (a border corner of the square, a crease corner of the box) is
+      // a vertex of the output.
+      for (Eigen::Index c = 0; c < input.V.rows(); ++c)
+        EXPECT_LT((r.mesh.V.rowwise() - input.V.row(c)).rowwise().norm().minCoeff(), 1e-9) << "corner " << c;
     }
 }
 

@@ -199,20 +199,20 @@ double CreaseLines::length(const Eigen::MatrixX3d& V, int line) const { return p
 namespace {
 
 // Walks the border from v through its neighbour `first` until `reach` arc length (at least one
-// edge); calls visit(w) on every vertex passed. Stops early at a vertex with other
-// than two border neighbours or back at v. Returns the last vertex reached.
+// edge); calls visit(w, arc) on every vertex passed, with its arc length from v. Stops early at a
+// vertex with other than two border neighbours or back at v. Returns the last vertex reached.
 template <typename Visit>
 int walk_border(const Eigen::MatrixX3d& V, const std::vector<std::vector<int>>& border, int v, int first, double reach,
                 Visit visit) {
   int prev = v, at = first;
   double done = (V.row(at) - V.row(v)).norm();
-  visit(at);
+  visit(at, done);
   while (done < reach && at != v && border[at].size() == 2) {
     const int go = border[at][0] == prev ? border[at][1] : border[at][0];
     done += (V.row(go) - V.row(at)).norm();
     prev = at;
     at = go;
-    visit(at);
+    visit(at, done);
   }
   return at;
 }
@@ -220,12 +220,14 @@ int walk_border(const Eigen::MatrixX3d& V, const std::vector<std::vector<int>>& 
 // Corners of the border seen at the output's scale: the turn of a border vertex is the angle
 // between the chords to the border points `reach` behind and ahead of it (the edges themselves
 // where reach is 0), so a border ragged finer than the output has no corners; of the vertices
-// turning by more than max_turn, the one turning most within `reach` each way is the corner.
+// turning by more than max_turn, the one turning most within `reach` each way is the corner (a
+// border neighbour farther than `reach` is no rival: each corner of a square of two triangles is
+// one).
 std::vector<int> border_corners(const Eigen::MatrixX3d& V, const std::vector<std::vector<int>>& border, double reach,
                                 double max_turn) {
   const int nv = static_cast<int>(V.rows());
   std::vector<double> turn(nv, 0.0);
-  const auto none = [](int) {};
+  const auto none = [](int, double) {};
   for (int v = 0; v < nv; ++v) {
     if (border[v].size() != 2) continue;
     const int behind = walk_border(V, border, v, border[v][0], reach, none);
@@ -238,8 +240,14 @@ std::vector<int> border_corners(const Eigen::MatrixX3d& V, const std::vector<std
   for (int v = 0; v < nv; ++v) {
     if (!(turn[v] > max_turn)) continue;
     bool top = true;
-    const auto beaten = [&](int w) { top = top && (turn[w] < turn[v] || (turn[w] == turn[v] && w >= v)); };
-    for (int first : border[v]) walk_border(V, border, v, first, reach, beaten);
+    for (int first : border[v]) {
+      // The walk's first step is taken whatever its length; a neighbour beyond `reach` is no rival.
+      const auto beaten = [&](int w, double arc) {
+        if (w == first && arc > reach) return;
+        top = top && (turn[w] < turn[v] || (turn[w] == turn[v] && w >= v));
+      };
+      walk_border(V, border, v, first, reach, beaten);
+    }
     if (top) corners.push_back(v);
   }
   return corners;
