@@ -1,4 +1,3 @@
-#include "heatcvt/input_file.h"
 #include "heatcvt/scan_merge.h"
 
 #include <Eigen/Dense>
@@ -8,6 +7,7 @@
 #include <sstream>
 
 #include "heatcvt/errors.h"
+#include "heatcvt/input_file.h"
 
 namespace heatcvt {
 namespace {

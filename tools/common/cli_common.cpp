@@ -11,9 +11,9 @@
 #include <fstream>
 #include <sstream>
 
-#include "heatcvt/input_file.h"
 #include "heatcvt/atomic_file.h"
 #include "heatcvt/errors.h"
+#include "heatcvt/input_file.h"
 #include "heatcvt/parallel.h"
 #include <exception>
 #include <iostream>
